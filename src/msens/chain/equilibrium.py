@@ -1,0 +1,66 @@
+"""Static equilibrium of the chain before impact.
+
+The striker (index 0) touches particle 2 with zero force; particles 2..n rest on the wall
+under gravity and the static forces. In a chain the contact forces follow exactly from
+cumulative sums of the loads above each contact, and each approach from inverting Hertz,
+delta = (F/A)^{2/3}; no iteration is needed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from msens.chain.model import Chain
+
+
+def static_contact_forces(chain: Chain) -> np.ndarray:
+    """Static force in each contact, N, compressive positive.
+
+    Contact 0 (striker on particle 2) carries zero force; contact k >= 1 carries the load
+    (weight + static force) of particles 1..k (0-based).
+
+    Parameters
+    ----------
+    chain : Chain
+
+    Returns
+    -------
+    ndarray, shape (n,)
+
+    Raises
+    ------
+    ValueError
+        If the loads would put a contact in tension (the chain would come apart).
+    """
+    load = chain.load()
+    force = np.zeros(chain.n_particles)
+    force[1:] = np.cumsum(load[1:])
+    scale = np.cumsum(np.abs(load[1:]))
+    # Forces at rounding level of the loads above them count as zero, not as tension.
+    tension = force[1:] < -1e-12 * np.maximum(scale, 1e-300)
+    if np.any(tension):
+        k = int(np.flatnonzero(tension)[0]) + 1
+        what = "the wall" if k == chain.n_particles - 1 else f"particle {k + 2}"
+        raise ValueError(
+            f"static loads put contact c_{k + 1} (particle {k + 1} on {what}) in tension "
+            f"({force[k]:.6g} N): the chain cannot be in static equilibrium")
+    return np.maximum(force, 0.0)
+
+
+def static_equilibrium(chain: Chain) -> np.ndarray:
+    """Displacements u0 (m, +x) of the pre-impact static equilibrium.
+
+    Parameters
+    ----------
+    chain : Chain
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        u0 with u0[n-1] = delta_wall, u0[k] = u0[k+1] + delta_k, and u0[0] = u0[1]
+        (striker just touching).
+    """
+    delta = (static_contact_forces(chain) / chain.stiffness) ** (2.0 / 3.0)
+    delta[0] = 0.0
+    # u_k = sum_{j >= k} delta_j, summed from the wall up.
+    return np.cumsum(delta[::-1])[::-1]

@@ -1,0 +1,92 @@
+"""The ``msens`` command.
+
+Each sub-command is a thin wrapper over the public Python API (:mod:`msens.api`), so a
+script or notebook gets the same numbers as the terminal. Bad input ends with one message
+on stderr and exit status 2, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from msens.errors import InputError
+
+EXIT_INPUT = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports usage errors as InputError (exit 2, one line)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise InputError(f"{self.prog}: {message}")
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="msens", description="Magnetostrictive sensors on granular chains.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    run = sub.add_parser("run", help="run a study (default: the built-in default study)")
+    run.add_argument("study", nargs="?", help="study .toml file (default: built-in)")
+    run.add_argument("--out", default=None, help="output directory (default: out/<name>)")
+    run.add_argument("--no-figures", action="store_true", help="write summary.json only")
+
+    field = sub.add_parser("field", help="solve the sensor's magnetostatic field model")
+    field.add_argument("study", help="study .toml file with an mss sensor")
+    field.add_argument("--out", required=True, help="output directory")
+
+    sub.add_parser("verify", help="run the field solver's verification problems")
+    return p
+
+
+def _run(args: argparse.Namespace) -> int:
+    from msens import api
+
+    study = api.load(args.study) if args.study else api.load_default()
+    out = Path(args.out) if args.out else Path("out") / study.name
+    result = api.run(study)
+    written = api.write_outputs(result, out, figures=not args.no_figures)
+    print(api.format_summary(result))
+    print(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
+    return 0
+
+
+def _field(args: argparse.Namespace) -> int:
+    from msens import api
+
+    study = api.load(args.study)
+    report = api.field(study, Path(args.out))
+    print(report)
+    return 0
+
+
+def _verify(args: argparse.Namespace) -> int:
+    from msens.field.verify import format_table, run_all
+
+    rows = run_all()
+    print(format_table(rows))
+    return 0 if all(r.passed for r in rows) else 1
+
+
+_COMMANDS = {"run": _run, "field": _field, "verify": _verify}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``msens`` console script; returns the exit status."""
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    try:
+        args = _parser().parse_args(argv)
+        return _COMMANDS[args.command](args)
+    except InputError as exc:
+        print(f"msens: error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        print("msens: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

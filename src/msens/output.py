@@ -1,0 +1,110 @@
+"""Result directories: atomic writes that never overwrite what a user wrote.
+
+msens keeps a manifest (``.msens-manifest.json``) of the files it wrote into a directory.
+A later run may replace those, but a file that exists and is not in the manifest is the
+user's: writing over it is refused with an :class:`~msens.errors.InputError`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from msens.errors import InputError
+
+MANIFEST = ".msens-manifest.json"
+
+
+def atomic_write(path: Path, write: Callable[[Path], None]) -> None:
+    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it into place."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def to_json(data: Any) -> str:
+    """JSON text of ``data`` (numpy arrays and scalars allowed), NaN written as null."""
+    text = json.dumps(data, indent=2, default=_json_default, allow_nan=True)
+    return text.replace("NaN", "null")
+
+
+class OutputDir:
+    """A directory msens writes results into.
+
+    Parameters
+    ----------
+    path : str or Path
+        Created if missing. Must not be an existing file.
+    """
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        if self.path.exists() and not self.path.is_dir():
+            raise InputError(f"--out '{self.path}' is a file, expected a directory")
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(f"--out '{self.path}' cannot be created: {exc}") from None
+        self._manifest_path = self.path / MANIFEST
+        self._owned = set(self._read_manifest())
+
+    def _read_manifest(self) -> list[str]:
+        try:
+            return list(json.loads(self._manifest_path.read_text())["files"])
+        except (FileNotFoundError, ValueError, KeyError, TypeError):
+            return []
+
+    def target(self, name: str) -> Path:
+        """Path for ``name``, checked against overwriting a user's file."""
+        path = self.path / name
+        if path.exists() and name not in self._owned:
+            raise InputError(f"refusing to overwrite '{path}': it was not written by msens "
+                             f"(choose another --out directory)")
+        return path
+
+    def _record(self, name: str) -> None:
+        if name not in self._owned:
+            self._owned.add(name)
+            text = json.dumps({"files": sorted(self._owned)}, indent=1)
+            atomic_write(self._manifest_path, lambda p: p.write_text(text))
+
+    def write(self, name: str, write: Callable[[Path], None]) -> Path:
+        """Write ``name`` atomically with ``write(tmp_path)``; returns the final path."""
+        path = self.target(name)
+        self._record(name)
+        atomic_write(path, write)
+        return path
+
+    def write_text(self, name: str, text: str) -> Path:
+        return self.write(name, lambda p: p.write_text(text))
+
+    def write_json(self, name: str, data: Any) -> Path:
+        text = to_json(data)
+        return self.write_text(name, text + "\n")
+
+    def savefig(self, name: str, fig: Any, **kwargs: Any) -> Path:
+        """Save a matplotlib figure atomically (format from ``name``'s suffix)."""
+        fmt = Path(name).suffix.lstrip(".") or "png"
+        return self.write(name, lambda p: fig.savefig(p, format=fmt, **kwargs))

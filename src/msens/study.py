@@ -1,0 +1,589 @@
+"""Study files (TOML, schema ``msens.study/1``) parsed once into frozen dataclasses.
+
+This module is the single place where a study's input is validated: every later stage
+receives typed, checked values. A study describes one chain (beads, wall, striker) and one
+or more *setups* — the sensors, inserted rods and static precompressions of one experiment.
+A plain study has its ``[[sensor]]``, ``[[chain.insert]]`` and ``[[precompression]]`` at top
+level (one setup, named after the study); a comparison study such as the paper's Table 2
+lists ``[[setup]]`` tables instead, each with its own ``sensor``/``insert``/``precompression``.
+
+Units are SI throughout and appear in the key names.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+from msens.errors import InputError
+from msens.materials import BEAD_STEEL, MAGNET_GRADES, PIEZO_ROD, PIEZO_ROD_LENGTH, PIEZO_ROD_MASS
+from msens.tomlreader import Table
+from msens.units import G0
+
+SCHEMA = "msens.study/1"
+DEFAULT_STUDY = "paper-table2"
+
+
+class SensorKind(enum.Enum):
+    """What a sensor observes."""
+
+    BEAD = "bead"
+    ROD = "rod"
+    MSS = "mss"
+
+
+class MssModel(enum.Enum):
+    """How a magnetostrictive sensor's signal is modelled."""
+
+    FOUR_CONTACT = "four-contact"  # the paper's hypothesis: mean of four contact forces
+    PHYSICS = "physics"  # field model + Villari law + reciprocity
+
+
+class Damping(enum.Enum):
+    """Contact dissipation law (paper Eq. 6, or Hertz–Kuwabara–Kono)."""
+
+    LINEAR = "linear"
+    HERTZ_KUWABARA_KONO = "hertz-kuwabara-kono"
+
+
+@dataclass(frozen=True)
+class WallSpec:
+    """The half-space the chain stands on. Moduli in Pa."""
+
+    youngs_modulus_pa: float = 200e9
+    poisson_ratio: float = 0.29
+
+
+@dataclass(frozen=True)
+class ChainSpec:
+    """The bead chain below the striker.
+
+    Attributes
+    ----------
+    beads : int
+        Number of beads below the striker (the paper: 29); particles are numbered
+        1 (striker) to ``beads + 1`` (on the wall).
+    bead_diameter_m, bead_mass_kg : float
+        Bead diameter (m) and mass (kg); the striker is an identical bead.
+    youngs_modulus_pa, poisson_ratio : float
+        Bead elastic constants.
+    gravity_m_per_s2 : float
+        Acceleration of gravity along the chain, toward the wall.
+    damping : Damping
+        Dissipation law in the contacts.
+    gamma_contact, gamma_wall : float
+        Damping coefficients: kg/s for the linear law, kg/(s m^0.5) for
+        Hertz–Kuwabara–Kono.
+    wall : WallSpec
+    """
+
+    beads: int = 29
+    bead_diameter_m: float = 4.76e-3
+    bead_mass_kg: float = 0.45e-3
+    material: str = BEAD_STEEL.name
+    youngs_modulus_pa: float = BEAD_STEEL.youngs_modulus
+    poisson_ratio: float = BEAD_STEEL.poisson_ratio
+    gravity_m_per_s2: float = G0
+    damping: Damping = Damping.LINEAR
+    gamma_contact: float = 0.0
+    gamma_wall: float = 0.0
+    wall: WallSpec = field(default_factory=WallSpec)
+
+    @property
+    def n_particles(self) -> int:
+        """Particles including the striker."""
+        return self.beads + 1
+
+
+@dataclass(frozen=True)
+class InsertSpec:
+    """A cylinder (piezo rod) that replaces the bead at ``particle``."""
+
+    particle: int
+    kind: str = "rod"
+    mass_kg: float = PIEZO_ROD_MASS
+    youngs_modulus_pa: float = PIEZO_ROD.youngs_modulus
+    poisson_ratio: float = PIEZO_ROD.poisson_ratio
+    length_m: float = PIEZO_ROD_LENGTH
+
+
+@dataclass(frozen=True)
+class PrecompressionSpec:
+    """A static compression ``force_n`` (N) added to contacts ``first``..``last``.
+
+    Contact c_i joins particles i and i+1 (1-based). The compression is applied as a pair of
+    equal and opposite static forces on particles ``first`` and ``last + 1``.
+    """
+
+    first: int
+    last: int
+    force_n: float
+
+
+@dataclass(frozen=True)
+class CoilSpec:
+    """Receiver coil wound around the tube, centred on its sensor's particle."""
+
+    turns: int = 1100
+    length_m: float = 7e-3
+    inner_radius_m: float = 7.95e-3
+    wire: str = "AWG36"
+    axial_offset_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class MagnetSpec:
+    """Bias magnet: an axially magnetised ring with two steel pole pieces.
+
+    Dimensions left as ``None`` take the field model's documented defaults.
+    """
+
+    enabled: bool = True
+    grade: str | None = "ceramic8"
+    remanence_t: float | None = None
+    recoil_permeability: float | None = None
+    inner_radius_m: float | None = None
+    outer_radius_m: float | None = None
+    length_m: float | None = None
+    pole_inner_radius_m: float | None = None
+    pole_thickness_m: float | None = None
+    axial_offset_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class SensorSpec:
+    """One sensor at ``particle`` (1-based, striker = 1)."""
+
+    kind: SensorKind
+    particle: int
+    model: MssModel | None = None
+    coil: CoilSpec | None = None
+    magnet: MagnetSpec | None = None
+
+
+@dataclass(frozen=True)
+class SetupSpec:
+    """One experimental configuration of the chain."""
+
+    name: str
+    sensors: tuple[SensorSpec, ...]
+    inserts: tuple[InsertSpec, ...] = ()
+    precompression: tuple[PrecompressionSpec, ...] = ()
+
+
+@dataclass(frozen=True)
+class StrikerSpec:
+    """Striker impact: a drop height (m) or a velocity (m/s)."""
+
+    velocity_m_per_s: float
+    drop_height_m: float | None = None
+
+
+@dataclass(frozen=True)
+class ElectronicsSpec:
+    """Coil read-out chain. Capacitances in F, resistance in Ohm, rate in Hz."""
+
+    cable_capacitance_f: float = 100e-12
+    input_resistance_ohm: float = 1e6
+    input_capacitance_f: float = 20e-12
+    sample_rate_hz: float = 10e6
+
+
+@dataclass(frozen=True)
+class SimulationSpec:
+    """Time span (s), output sampling (Hz) and optional fixed step (s) of the chain run."""
+
+    t_end_s: float = 1e-3
+    sample_rate_hz: float = 10e6
+    dt_s: float | None = None
+
+
+@dataclass(frozen=True)
+class DissipationFitSpec:
+    """Fit γc, γw ≥ 0 to measured amplitude ratios (paper Eq. 10) on ``setup``."""
+
+    setup: str
+    ar_top: float
+    ar_bottom: float
+
+
+@dataclass(frozen=True)
+class ReferenceRow:
+    """A published row to compare with (e.g. paper Table 2): experiment and its model."""
+
+    setup: str
+    position: str
+    tof_us: float
+    tof_std_us: float
+    ar: float
+    ar_std: float
+    model_tof_us: float | None = None
+    model_ar: float | None = None
+
+
+@dataclass(frozen=True)
+class Study:
+    """A validated study."""
+
+    name: str
+    chain: ChainSpec
+    striker: StrikerSpec
+    setups: tuple[SetupSpec, ...]
+    simulation: SimulationSpec = field(default_factory=SimulationSpec)
+    electronics: ElectronicsSpec = field(default_factory=ElectronicsSpec)
+    dissipation_fit: DissipationFitSpec | None = None
+    reference: tuple[ReferenceRow, ...] = ()
+    measurement_file: Path | None = None
+    source: str = "<memory>"
+
+    def setup(self, name: str) -> SetupSpec:
+        """The setup called ``name``."""
+        for s in self.setups:
+            if s.name == name:
+                return s
+        raise KeyError(name)
+
+
+# --------------------------------------------------------------------------- parsing
+
+def load_study(path: str | Path) -> Study:
+    """Read and validate a study file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.toml`` file following schema ``msens.study/1``.
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file, bad TOML, or any invalid key or value.
+    """
+    path = Path(path)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise InputError(f"study file '{path}' does not exist") from None
+    except IsADirectoryError:
+        raise InputError(f"study file '{path}' is a directory, expected a .toml file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"study file '{path}' cannot be read: {exc}") from None
+    return parse_study(text, source=str(path), base_dir=path.parent)
+
+
+def default_study_path() -> Path:
+    """The built-in default study shipped with the package."""
+    return Path(str(resources.files("msens") / "data" / f"{DEFAULT_STUDY}.toml"))
+
+
+def parse_study(text: str, *, source: str = "<memory>", base_dir: Path | None = None) -> Study:
+    """Validate the TOML ``text`` of a study (see :func:`load_study`)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{source}: not valid TOML: {exc}") from None
+    root = Table(data, "", source)
+    schema = root.string("schema", required=True)
+    if schema != SCHEMA:
+        raise root.error("schema", f"must be {SCHEMA!r}, got {schema!r}")
+    name = root.string("name", required=True)
+    chain_t = root.table("chain", required=True)
+    chain = _chain(chain_t)
+    top_inserts = chain_t.tables("insert")
+    chain_t.finish()
+    striker = _striker(root.table("striker", required=True))
+    setups = _setups(root, chain, name, top_inserts)
+    simulation = _simulation(root.table("simulation"))
+    electronics = _electronics(root.table("electronics"))
+    calib = root.table("calibration")
+    fit = _dissipation_fit(calib, setups) if calib is not None else None
+    reference = _reference(root.table("reference"), setups)
+    measurement_file = _measurement(root.table("measurement"), base_dir)
+    root.finish()
+    return Study(name=name, chain=chain, striker=striker, setups=setups, simulation=simulation,
+                 electronics=electronics, dissipation_fit=fit, reference=reference,
+                 measurement_file=measurement_file, source=source)
+
+
+def _chain(t: Table) -> ChainSpec:
+    d = ChainSpec()
+    damping = t.string("damping", d.damping.value, choices=[m.value for m in Damping])
+    law = Damping(damping)
+    # The linear law's coefficients are in kg/s, the HKK law's in kg/(s m^0.5): distinct keys
+    # keep a number from being read in the wrong unit.
+    if law is Damping.LINEAR:
+        gc = t.number("gamma_contact_kg_per_s", 0.0, low=0.0)
+        gw = t.number("gamma_wall_kg_per_s", 0.0, low=0.0)
+    else:
+        gc = t.number("hkk_contact_kg_per_s_sqrt_m", 0.0, low=0.0)
+        gw = t.number("hkk_wall_kg_per_s_sqrt_m", 0.0, low=0.0)
+    wall_t = t.table("wall")
+    wall = WallSpec()
+    if wall_t is not None:
+        wall = WallSpec(
+            youngs_modulus_pa=wall_t.number("youngs_modulus_pa", wall.youngs_modulus_pa,
+                                            low=0.0, low_open=True),
+            poisson_ratio=wall_t.number("poisson_ratio", wall.poisson_ratio, low=-1.0,
+                                        high=0.5, low_open=True),
+        )
+        wall_t.finish()
+    return ChainSpec(
+        beads=t.integer("beads", d.beads, low=2, high=10000),
+        bead_diameter_m=t.number("bead_diameter_m", d.bead_diameter_m, low=0.0, high=1.0,
+                                 low_open=True),
+        bead_mass_kg=t.number("bead_mass_kg", d.bead_mass_kg, low=0.0, high=100.0,
+                              low_open=True),
+        material=t.string("material", d.material),
+        youngs_modulus_pa=t.number("youngs_modulus_pa", d.youngs_modulus_pa, low=0.0,
+                                   low_open=True),
+        poisson_ratio=t.number("poisson_ratio", d.poisson_ratio, low=-1.0, high=0.5,
+                               low_open=True),
+        gravity_m_per_s2=t.number("gravity", d.gravity_m_per_s2, low=0.0, high=1000.0),
+        damping=law, gamma_contact=gc, gamma_wall=gw, wall=wall,
+    )
+
+
+def _striker(t: Table) -> StrikerSpec:
+    has_h, has_v = t.has("drop_height_m"), t.has("velocity_m_per_s")
+    if has_h == has_v:
+        raise t.error("drop_height_m", "or 'striker.velocity_m_per_s': give exactly one")
+    if has_h:
+        h = t.number("drop_height_m", low=0.0, high=10.0, low_open=True)
+        t.finish()
+        return StrikerSpec(velocity_m_per_s=math.sqrt(2.0 * G0 * h), drop_height_m=h)
+    v = t.number("velocity_m_per_s", low=0.0, high=100.0, low_open=True)
+    t.finish()
+    return StrikerSpec(velocity_m_per_s=v)
+
+
+def _particle(t: Table, name: str, chain: ChainSpec, *, first: int = 2) -> int:
+    n = chain.n_particles
+    p = t.integer(name, required=True)
+    if not first <= p <= n:
+        raise t.error(name, f"must be a particle from {first} to {n} (1 is the striker, "
+                            f"{n} stands on the wall), got {p}")
+    return p
+
+
+def _insert(t: Table, chain: ChainSpec) -> InsertSpec:
+    d = InsertSpec(particle=0)
+    spec = InsertSpec(
+        particle=_particle(t, "particle", chain),
+        kind=t.string("kind", "rod", choices=["rod"]),
+        mass_kg=t.number("mass_kg", d.mass_kg, low=0.0, high=100.0, low_open=True),
+        youngs_modulus_pa=t.number("youngs_modulus_pa", d.youngs_modulus_pa, low=0.0,
+                                   low_open=True),
+        poisson_ratio=t.number("poisson_ratio", d.poisson_ratio, low=-1.0, high=0.5,
+                               low_open=True),
+        length_m=t.number("length_m", d.length_m, low=0.0, high=1.0, low_open=True),
+    )
+    t.finish()
+    return spec
+
+
+def _precompression(t: Table, chain: ChainSpec) -> PrecompressionSpec:
+    contacts = t.raw("contacts")
+    n = chain.n_particles
+    ok = (isinstance(contacts, list) and len(contacts) == 2
+          and all(isinstance(c, int) and not isinstance(c, bool) for c in contacts))
+    if not ok or not 1 <= contacts[0] <= contacts[1] <= n - 1:
+        raise t.error("contacts", f"must be [first, last] contact numbers with "
+                                  f"1 <= first <= last <= {n - 1}, got {contacts!r}")
+    force = t.number("force_N", required=True, low=0.0)
+    t.finish()
+    return PrecompressionSpec(first=contacts[0], last=contacts[1], force_n=force)
+
+
+def _coil(t: Table) -> CoilSpec:
+    d = CoilSpec()
+    spec = CoilSpec(
+        turns=t.integer("turns", d.turns, low=1, high=10**6),
+        length_m=t.number("length_m", d.length_m, low=0.0, high=1.0, low_open=True),
+        inner_radius_m=t.number("inner_radius_m", d.inner_radius_m, low=0.0, high=1.0,
+                                low_open=True),
+        wire=t.string("wire", d.wire),
+        axial_offset_m=t.number("axial_offset_m", 0.0, low=-1.0, high=1.0),
+    )
+    if not spec.wire.upper().startswith("AWG") or not spec.wire[3:].isdigit() \
+            or not 10 <= int(spec.wire[3:]) <= 50:
+        raise t.error("wire", f"must be an AWG gauge from 'AWG10' to 'AWG50', got {spec.wire!r}")
+    t.finish()
+    return spec
+
+
+def _magnet(t: Table) -> MagnetSpec:
+    dims = {}
+    for key in ("inner_radius_m", "outer_radius_m", "length_m", "pole_inner_radius_m",
+                "pole_thickness_m"):
+        dims[key] = t.number(key, None, low=0.0, high=1.0, low_open=True, allow_none=True)
+    grade = t.string("grade", None, choices=sorted(MAGNET_GRADES))
+    br = t.number("remanence_T", None, low=0.0, high=2.0, low_open=True, allow_none=True)
+    mu = t.number("recoil_permeability", None, low=1.0, high=100.0, allow_none=True)
+    if grade is not None and (br is not None or mu is not None):
+        raise t.error("grade", "cannot be combined with remanence_T/recoil_permeability: "
+                               "give a grade or both values")
+    if grade is None and (br is None or mu is None):
+        if br is None and mu is None:
+            grade = "ceramic8"
+        else:
+            raise t.error("remanence_T", "and 'recoil_permeability' must be given together")
+    spec = MagnetSpec(enabled=t.boolean("enabled", True), grade=grade, remanence_t=br,
+                      recoil_permeability=mu,
+                      axial_offset_m=t.number("axial_offset_m", 0.0, low=-1.0, high=1.0),
+                      **dims)
+    t.finish()
+    return spec
+
+
+def _sensor(t: Table, chain: ChainSpec) -> SensorSpec:
+    kind = SensorKind(t.string("kind", required=True, choices=[k.value for k in SensorKind]))
+    particle = _particle(t, "particle", chain, first=3 if kind is SensorKind.MSS else 2)
+    model = coil = magnet = None
+    if kind is SensorKind.MSS:
+        model = MssModel(t.string("model", MssModel.FOUR_CONTACT.value,
+                                  choices=[m.value for m in MssModel]))
+        if model is MssModel.FOUR_CONTACT and particle > chain.n_particles - 1:
+            raise t.error("particle", f"of a four-contact MsS must be at most "
+                                      f"{chain.n_particles - 1}, got {particle}")
+        ct, mt = t.table("coil"), t.table("magnet")
+        coil = _coil(ct) if ct is not None else CoilSpec()
+        magnet = _magnet(mt) if mt is not None else MagnetSpec()
+    t.finish()
+    return SensorSpec(kind=kind, particle=particle, model=model, coil=coil, magnet=magnet)
+
+
+def _setup(t: Table, name: str, chain: ChainSpec, inserts: list[Table],
+           sensors: list[Table], pre: list[Table]) -> SetupSpec:
+    ins = tuple(_insert(i, chain) for i in inserts)
+    sens = tuple(_sensor(s, chain) for s in sensors)
+    if not sens:
+        raise t.error("sensor", "is missing: a setup needs at least one [[sensor]]")
+    seen = set()
+    for s in sens:
+        if (s.kind, s.particle) in seen:
+            raise t.error("sensor", f"lists {s.kind.value}@{s.particle} twice")
+        seen.add((s.kind, s.particle))
+    rods = {i.particle for i in ins}
+    if len(rods) != len(ins):
+        raise t.error("insert", "replaces the same particle twice")
+    for s in sens:
+        if s.kind is SensorKind.ROD and s.particle not in rods:
+            raise t.error("sensor", f"rod sensor at particle {s.particle} needs an "
+                                    f"[[insert]] rod at that particle")
+    return SetupSpec(name=name, sensors=sens, inserts=ins,
+                     precompression=tuple(_precompression(p, chain) for p in pre))
+
+
+def _setups(root: Table, chain: ChainSpec, name: str,
+            top_inserts: list[Table]) -> tuple[SetupSpec, ...]:
+    setup_tables = root.tables("setup")
+    sensors, pre = root.tables("sensor"), root.tables("precompression")
+    if setup_tables:
+        if sensors or pre or top_inserts:
+            raise root.error("setup", "cannot be combined with top-level [[sensor]], "
+                                      "[[precompression]] or [[chain.insert]]")
+        out = []
+        for st in setup_tables:
+            sname = st.string("name", required=True)
+            out.append(_setup(st, sname, chain, st.tables("insert"), st.tables("sensor"),
+                              st.tables("precompression")))
+            st.finish()
+        names = [s.name for s in out]
+        if len(set(names)) != len(names):
+            raise root.error("setup", f"names must be unique, got {names}")
+        return tuple(out)
+    return (_setup(root, name, chain, top_inserts, sensors, pre),)
+
+
+def _simulation(t: Table | None) -> SimulationSpec:
+    if t is None:
+        return SimulationSpec()
+    d = SimulationSpec()
+    spec = SimulationSpec(
+        t_end_s=t.number("t_end_s", d.t_end_s, low=0.0, high=1.0, low_open=True),
+        sample_rate_hz=t.number("sample_rate_hz", d.sample_rate_hz, low=1e3, high=1e10),
+        dt_s=t.number("dt_s", None, low=0.0, high=1e-5, low_open=True, allow_none=True),
+    )
+    if spec.t_end_s * spec.sample_rate_hz > 5e7:
+        raise t.error("t_end_s", "times sample_rate_hz gives more than 5e7 samples")
+    t.finish()
+    return spec
+
+
+def _electronics(t: Table | None) -> ElectronicsSpec:
+    if t is None:
+        return ElectronicsSpec()
+    d = ElectronicsSpec()
+    spec = ElectronicsSpec(
+        cable_capacitance_f=t.number("cable_capacitance_F", d.cable_capacitance_f, low=0.0,
+                                     high=1e-3),
+        input_resistance_ohm=t.number("input_resistance_ohm", d.input_resistance_ohm,
+                                      low=0.0, low_open=True),
+        input_capacitance_f=t.number("input_capacitance_F", d.input_capacitance_f, low=0.0,
+                                     high=1e-3),
+        sample_rate_hz=t.number("sample_rate_hz", d.sample_rate_hz, low=1e3, high=1e10),
+    )
+    t.finish()
+    return spec
+
+
+def _two_sensor_setup(t: Table, key: str, setups: tuple[SetupSpec, ...]) -> str:
+    name = t.string(key, required=True)
+    names = [s.name for s in setups]
+    if name not in names:
+        raise t.error(key, f"must name a setup ({', '.join(names)}), got {name!r}")
+    return name
+
+
+def _dissipation_fit(t: Table, setups: tuple[SetupSpec, ...]) -> DissipationFitSpec | None:
+    dt = t.table("dissipation")
+    t.finish()
+    if dt is None:
+        return None
+    setup = _two_sensor_setup(dt, "setup", setups)
+    spec = DissipationFitSpec(
+        setup=setup,
+        ar_top=dt.number("ar_top", required=True, low=0.0, high=1.0, low_open=True),
+        ar_bottom=dt.number("ar_bottom", required=True, low=0.0, high=1.0, low_open=True),
+    )
+    dt.finish()
+    if len(next(s for s in setups if s.name == setup).sensors) < 2:
+        raise dt.error("setup", f"{setup!r} needs two sensors (top and bottom) for Eq. 10")
+    return spec
+
+
+def _reference(t: Table | None, setups: tuple[SetupSpec, ...]) -> tuple[ReferenceRow, ...]:
+    if t is None:
+        return ()
+    rows = []
+    for rt in t.tables("row"):
+        rows.append(ReferenceRow(
+            setup=_two_sensor_setup(rt, "setup", setups),
+            position=rt.string("position", required=True, choices=["top", "bottom"]),
+            tof_us=rt.number("tof_us", required=True, low=0.0),
+            tof_std_us=rt.number("tof_std_us", 0.0, low=0.0),
+            ar=rt.number("ar", required=True, low=0.0),
+            ar_std=rt.number("ar_std", 0.0, low=0.0),
+            model_tof_us=rt.number("model_tof_us", None, low=0.0, allow_none=True),
+            model_ar=rt.number("model_ar", None, low=0.0, allow_none=True),
+        ))
+        rt.finish()
+    t.finish()
+    return tuple(rows)
+
+
+def _measurement(t: Table | None, base_dir: Path | None) -> Path | None:
+    if t is None:
+        return None
+    name = t.string("file", required=True)
+    t.finish()
+    path = Path(name)
+    if not path.is_absolute() and base_dir is not None:
+        path = base_dir / path
+    if not path.is_file():
+        raise t.error("file", f"names '{path}', which does not exist")
+    return path

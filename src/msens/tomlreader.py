@@ -1,0 +1,142 @@
+"""Typed access to one TOML table, with messages that name the key.
+
+Every study key is read through :class:`Table`, which knows its dotted path in the file,
+checks type and range, and remembers which keys were used so that unknown keys (typos) are
+reported instead of silently ignored.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from msens.errors import InputError
+
+_TYPE_NAMES = {bool: "a boolean", int: "an integer", float: "a number", str: "a string"}
+
+
+class Table:
+    """One TOML table of a study file.
+
+    Parameters
+    ----------
+    data : Mapping
+        The parsed table.
+    path : str
+        Dotted location used in messages, e.g. ``"chain.wall"`` or ``"sensor[2].coil"``.
+    source : str
+        File name used in messages.
+    """
+
+    def __init__(self, data: Mapping[str, Any], path: str, source: str):
+        if not isinstance(data, Mapping):
+            raise InputError(f"{source}: '{path}' must be a table, got {type(data).__name__}")
+        self._data = data
+        self._path = path
+        self._source = source
+        self._used: set[str] = set()
+
+    def key(self, name: str) -> str:
+        """Dotted name of ``name`` in this table, for messages."""
+        return f"{self._path}.{name}" if self._path else name
+
+    def error(self, name: str, message: str) -> InputError:
+        """An :class:`InputError` about key ``name``."""
+        return InputError(f"{self._source}: '{self.key(name)}' {message}")
+
+    def has(self, name: str) -> bool:
+        return name in self._data
+
+    def _raw(self, name: str, default: Any, required: bool) -> Any:
+        self._used.add(name)
+        if name not in self._data:
+            if required:
+                raise self.error(name, "is missing")
+            return default
+        return self._data[name]
+
+    def number(self, name: str, default: float | None = None, *, required: bool = False,
+               low: float | None = None, high: float | None = None,
+               low_open: bool = False, allow_none: bool = False) -> float:
+        """A finite real number within ``[low, high]`` (``(low, high]`` if ``low_open``)."""
+        value = self._raw(name, default, required)
+        if value is None and allow_none:
+            return None  # type: ignore[return-value]
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.error(name, f"must be a number, got {value!r}")
+        value = float(value)
+        if not math.isfinite(value):
+            raise self.error(name, f"must be finite, got {value!r}")
+        if low is not None and (value <= low if low_open else value < low):
+            rel = ">" if low_open else ">="
+            raise self.error(name, f"must be {rel} {low:g}, got {value:g}")
+        if high is not None and value > high:
+            raise self.error(name, f"must be <= {high:g}, got {value:g}")
+        return value
+
+    def integer(self, name: str, default: int | None = None, *, required: bool = False,
+                low: int | None = None, high: int | None = None) -> int:
+        """An integer within ``[low, high]``."""
+        value = self._raw(name, default, required)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.error(name, f"must be an integer, got {value!r}")
+        if low is not None and value < low:
+            raise self.error(name, f"must be >= {low}, got {value}")
+        if high is not None and value > high:
+            raise self.error(name, f"must be <= {high}, got {value}")
+        return value
+
+    def string(self, name: str, default: str | None = None, *, required: bool = False,
+               choices: Sequence[str] | None = None) -> str:
+        """A string, optionally one of ``choices``."""
+        value = self._raw(name, default, required)
+        if value is None and default is None and not required:
+            return None  # type: ignore[return-value]
+        if not isinstance(value, str):
+            raise self.error(name, f"must be a string, got {value!r}")
+        if choices is not None and value not in choices:
+            allowed = ", ".join(repr(c) for c in choices)
+            raise self.error(name, f"must be one of {allowed}, got {value!r}")
+        return value
+
+    def boolean(self, name: str, default: bool | None = None, *, required: bool = False) -> bool:
+        value = self._raw(name, default, required)
+        if not isinstance(value, bool):
+            raise self.error(name, f"must be true or false, got {value!r}")
+        return value
+
+    def table(self, name: str, *, required: bool = False) -> Table | None:
+        """A sub-table, or None when absent and not required."""
+        value = self._raw(name, None, required)
+        if value is None:
+            return None
+        if not isinstance(value, Mapping):
+            raise self.error(name, "must be a table ([...])")
+        return Table(value, self.key(name), self._source)
+
+    def tables(self, name: str) -> list[Table]:
+        """An array of tables (``[[name]]``); empty when absent."""
+        value = self._raw(name, [], False)
+        if isinstance(value, Mapping) or not isinstance(value, list):
+            raise self.error(name, "must be an array of tables ([[...]])")
+        out = []
+        for i, item in enumerate(value):
+            if not isinstance(item, Mapping):
+                raise self.error(f"{name}[{i + 1}]", "must be a table")
+            out.append(Table(item, f"{self.key(name)}[{i + 1}]", self._source))
+        return out
+
+    def raw(self, name: str, default: Any = None) -> Any:
+        """The untyped value (for values checked by the caller)."""
+        return self._raw(name, default, False)
+
+    def finish(self) -> None:
+        """Raise on keys that were never read: they are typos or unsupported."""
+        unknown = sorted(set(self._data) - self._used)
+        if unknown:
+            known = ", ".join(sorted(self._used)) or "(none)"
+            raise InputError(
+                f"{self._source}: unknown key '{self.key(unknown[0])}'; "
+                f"allowed keys here: {known}"
+            )

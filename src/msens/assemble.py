@@ -10,11 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from msens.chain.contact import hertz_sphere_flat, hertz_sphere_sphere
-from msens.chain.model import Chain, DampingLaw
-from msens.study import Damping, PrecompressionSpec, SetupSpec, Study
-
-_LAW = {Damping.LINEAR: DampingLaw.LINEAR,
-        Damping.HERTZ_KUWABARA_KONO: DampingLaw.HERTZ_KUWABARA_KONO}
+from msens.chain.model import Chain
+from msens.study import PrecompressionSpec, SetupSpec, Study
 
 
 def precompression_forces(n_particles: int,
@@ -92,7 +89,7 @@ def build_chain(study: Study, setup: SetupSpec, *, gamma_contact: float | None =
     if static_force is not None:
         force = force + np.asarray(static_force, dtype=float)
     return Chain(mass=mass, stiffness=stiffness, damping=damping, static_force=force,
-                 gravity=c.gravity_m_per_s2, damping_law=_LAW[c.damping], length=length)
+                 gravity=c.gravity_m_per_s2, damping_law=c.damping, length=length)
 
 
 def sensor_positions(chain: Chain) -> np.ndarray:

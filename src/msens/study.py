@@ -19,8 +19,10 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
+from msens.chain.model import DampingLaw as Damping
 from msens.errors import InputError
 from msens.materials import BEAD_STEEL, MAGNET_GRADES, PIEZO_ROD, PIEZO_ROD_LENGTH, PIEZO_ROD_MASS
+from msens.sensors import SensorKind
 from msens.tomlreader import Table
 from msens.units import G0
 
@@ -28,26 +30,11 @@ SCHEMA = "msens.study/1"
 DEFAULT_STUDY = "paper-table2"
 
 
-class SensorKind(enum.Enum):
-    """What a sensor observes."""
-
-    BEAD = "bead"
-    ROD = "rod"
-    MSS = "mss"
-
-
 class MssModel(enum.Enum):
     """How a magnetostrictive sensor's signal is modelled."""
 
     FOUR_CONTACT = "four-contact"  # the paper's hypothesis: mean of four contact forces
     PHYSICS = "physics"  # field model + Villari law + reciprocity
-
-
-class Damping(enum.Enum):
-    """Contact dissipation law (paper Eq. 6, or Hertz–Kuwabara–Kono)."""
-
-    LINEAR = "linear"
-    HERTZ_KUWABARA_KONO = "hertz-kuwabara-kono"
 
 
 @dataclass(frozen=True)

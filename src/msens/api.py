@@ -1,0 +1,112 @@
+"""Public Python API: load a study, run it, write and print its results.
+
+The ``msens`` command is a thin layer over these functions, so scripts and notebooks get
+exactly the numbers the terminal prints::
+
+    import msens.api as ms
+    study = ms.load("studies/paper-table2.toml")
+    result = ms.run(study)
+    result.rows()          # Table-2 rows as dicts
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from msens.output import OutputDir
+from msens.pipeline import StudyResult, run_study
+from msens.study import Study, default_study_path, load_study
+
+
+def load(path: str | Path) -> Study:
+    """Read and validate a study file (raises :class:`msens.errors.InputError`)."""
+    return load_study(path)
+
+
+def load_default() -> Study:
+    """The built-in default study."""
+    return load_study(default_study_path())
+
+
+def run(study: Study) -> StudyResult:
+    """Calibrate, simulate and observe every setup of ``study``."""
+    return run_study(study)
+
+
+def summary(result: StudyResult) -> dict:
+    """The content of ``summary.json``: study, calibrated parameters, Table-2 rows."""
+    fit = result.fit
+    calibration = {
+        "gamma_contact_kg_per_s": result.gamma_contact,
+        "gamma_wall_kg_per_s": result.gamma_wall,
+        "fitted": fit is not None,
+    }
+    if fit is not None:
+        calibration.update({
+            "objective_eq10": fit.objective,
+            "ar_top_model": fit.ar_top_model,
+            "ar_bottom_model": fit.ar_bottom_model,
+            "simulations": fit.n_simulations,
+            "paper_gamma_contact_kg_per_s": 4.8,
+            "paper_gamma_wall_kg_per_s": 0.0,
+        })
+    static = {
+        s.setup.name: {
+            "precompression": [{"contacts": [p.first, p.last], "force_N": p.force_n}
+                               for p in s.setup.precompression],
+        }
+        for s in result.setups
+    }
+    return {
+        "study": result.study.name,
+        "source": result.study.source,
+        "striker_velocity_m_per_s": result.study.striker.velocity_m_per_s,
+        "calibration": calibration,
+        "setups": static,
+        "rows": result.rows(),
+    }
+
+
+def write_outputs(result: StudyResult, out: str | Path, *, figures: bool = True) -> list[Path]:
+    """Write ``summary.json`` and the figures into ``out``; returns the written paths."""
+    from msens import plots
+
+    d = OutputDir(out)
+    written = [d.write_json("summary.json", summary(result))]
+    if figures:
+        makers = {
+            "contact_forces.png": lambda: plots.contact_profiles(result),
+            "sensor_profiles.png": lambda: plots.sensor_profiles(result),
+            "sensor_records.png": lambda: plots.sensor_records(result),
+            "table2.png": lambda: plots.table2(result.rows()),
+        }
+        for name, make in makers.items():
+            fig = make()
+            written.append(d.savefig(name, fig, dpi=150))
+            plots.close(fig)
+    return written
+
+
+def format_summary(result: StudyResult) -> str:
+    """A short plain-text table of the rows, for the terminal."""
+    lines = [f"study {result.study.name}: gamma_c = {result.gamma_contact:.3g} kg/s, "
+             f"gamma_w = {result.gamma_wall:.3g} kg/s"
+             + (" (fitted, paper Eq. 10)" if result.fit is not None else "")]
+    head = f"{'setup':<6} {'pos':<7} {'part':>4} {'TOF us':>8} {'AR':>6} {'peak N':>7} " \
+           f"{'speed m/s':>9} {'exp TOF':>8} {'exp AR':>6}"
+    lines += [head, "-" * len(head)]
+    for r in result.rows():
+        ref = r.get("reference", {})
+        lines.append(
+            f"{r['setup']:<6} {r['position']:<7} {r['particle']:>4} {r['tof_us']:>8.1f} "
+            f"{r['ar']:>6.3f} {r['incident_peak_N']:>7.2f} {r['speed_m_per_s']:>9.1f} "
+            f"{ref.get('experiment_tof_us', float('nan')):>8.1f} "
+            f"{ref.get('experiment_ar', float('nan')):>6.2f}")
+    return "\n".join(lines)
+
+
+def field(study: Study, out: Path) -> str:
+    """Solve the field model of the study's MsS sensors and write ``field.json``."""
+    from msens.fieldrun import run_field
+
+    return run_field(study, out)

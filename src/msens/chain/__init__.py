@@ -1,0 +1,29 @@
+"""Discrete particle chain (paper Eq. 6-9): contact laws, model, static equilibrium and the
+compiled time integrator. Knows nothing of fields, sensors or studies."""
+
+from msens.chain.contact import hertz_energy, hertz_sphere_flat, hertz_sphere_sphere
+from msens.chain.equilibrium import static_contact_forces, static_equilibrium
+from msens.chain.integrate import (
+    ChainResult,
+    simulate,
+    simulate_batch,
+    simulate_reference,
+    stable_step,
+)
+from msens.chain.model import Chain, DampingLaw, uniform_chain
+
+__all__ = [
+    "Chain",
+    "ChainResult",
+    "DampingLaw",
+    "hertz_energy",
+    "hertz_sphere_flat",
+    "hertz_sphere_sphere",
+    "simulate",
+    "simulate_batch",
+    "simulate_reference",
+    "stable_step",
+    "static_contact_forces",
+    "static_equilibrium",
+    "uniform_chain",
+]

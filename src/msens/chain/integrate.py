@@ -1,0 +1,282 @@
+"""Time integration of the chain after the striker's impact.
+
+``simulate`` / ``simulate_batch`` run the compiled fixed-step DOP853 scheme with contact
+events (see :mod:`msens.chain.kernel`); ``simulate_reference`` runs SciPy's adaptive
+``solve_ivp(DOP853)`` on the same equations, for checking.
+
+Initial state (t = 0, the impact): u = :func:`static_equilibrium`, all velocities zero except
+the striker's, ``striker_velocity`` along +x (toward the chain).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.integrate import solve_ivp
+
+from msens.chain import kernel
+from msens.chain.equilibrium import static_contact_forces, static_equilibrium
+from msens.chain.model import Chain, DampingLaw
+
+#: Default steps per Hertz collision time of the stiffest, lightest contact at the impact
+#: speed. With 10, the paper chain (t_c = 13.9 us, dt = 1.39 us) has a peak-force error of
+#: ~5e-8 against a converged reference (benchmarks/chain_speed.py); 7 still meets 1e-6.
+STEPS_PER_CONTACT_TIME = 10
+#: Steps per period of the highest linearised (precompressed) chain frequency.
+STEPS_PER_LINEAR_PERIOD = 10
+#: Hertz collision time of two bodies, t_c = C (mu^2 / (A^2 v))^{1/5}, C = 2.8683
+#: (Johnson, *Contact Mechanics*, §11.4; Landau & Lifshitz, *Theory of Elasticity*, §9).
+_HERTZ_TIME = 2.8683
+
+_LAW_CODE = {DampingLaw.LINEAR: kernel.LAW_LINEAR,
+             DampingLaw.HERTZ_KUWABARA_KONO: kernel.LAW_HKK}
+
+
+@dataclass(frozen=True)
+class ChainResult:
+    """Sampled response of one chain or a batch of chains.
+
+    Attributes
+    ----------
+    t : ndarray, shape (nt,)
+        Output times, s, from the impact (t = 0).
+    force : ndarray, shape (nt, n) or (runs, nt, n)
+        Total contact forces (static + dynamic), N, compressive positive; contact index as in
+        :class:`~msens.chain.model.Chain` (last = wall).
+    approach : ndarray, shape (nt, n) or (runs, nt, n)
+        Contact approach delta >= 0, m.
+    displacement : ndarray, shape (nt, n), or None
+        Particle displacements u, m, +x (single runs only).
+    velocity : ndarray, shape (nt, n), or None
+        Particle velocities, m/s, +x (single runs only).
+    dt : float or ndarray, shape (runs,)
+        Nominal step used, s (nan for the adaptive reference).
+    steps : int or ndarray, shape (runs,)
+        Runge-Kutta steps taken, including those cut at contact events.
+    """
+
+    t: np.ndarray
+    force: np.ndarray
+    approach: np.ndarray
+    displacement: np.ndarray | None = None
+    velocity: np.ndarray | None = None
+    dt: float | np.ndarray = float("nan")
+    steps: int | np.ndarray = 0
+
+
+def _reduced_masses(chain: Chain) -> np.ndarray:
+    m = chain.mass
+    mu = np.empty(chain.n_contacts)
+    mu[:-1] = m[:-1] * m[1:] / (m[:-1] + m[1:])
+    mu[-1] = m[-1]  # a wall is an infinite mass
+    return mu
+
+
+def stable_step(chain: Chain, striker_velocity: float) -> float:
+    """Default nominal step of the fixed-step scheme, s.
+
+    The smallest of: the Hertz collision time of the stiffest contact with the lightest
+    reduced mass at the striker speed over ``STEPS_PER_CONTACT_TIME``; the period of the
+    highest linearised frequency of the statically compressed chain (Gershgorin bound)
+    over ``STEPS_PER_LINEAR_PERIOD``; and half the fastest dashpot time mu/gamma (far
+    inside the real stability interval of DOP853, about [-6, 0]).
+
+    Parameters
+    ----------
+    chain : Chain
+    striker_velocity : float
+        Impact speed, m/s.
+
+    Returns
+    -------
+    float
+    """
+    mu = _reduced_masses(chain)
+    times = []
+    v = abs(float(striker_velocity))
+    if v > 0.0:
+        times.append(_HERTZ_TIME * (np.min(mu) ** 2 / (np.max(chain.stiffness) ** 2 * v)) ** 0.2
+                     / STEPS_PER_CONTACT_TIME)
+    f0 = static_contact_forces(chain)
+    k_lin = 1.5 * chain.stiffness ** (2.0 / 3.0) * f0 ** (1.0 / 3.0)  # dF/d(delta), N/m
+    k_pad = np.concatenate([[0.0], k_lin])
+    omega2 = 2.0 * np.max((k_pad[:-1] + k_pad[1:]) / chain.mass)
+    if omega2 > 0.0:
+        times.append(2.0 * np.pi / np.sqrt(omega2) / STEPS_PER_LINEAR_PERIOD)
+    if chain.damping_law is DampingLaw.LINEAR and np.any(chain.damping > 0):
+        times.append(0.5 * np.min(mu[chain.damping > 0] / chain.damping[chain.damping > 0]))
+    if not times:
+        raise ValueError("no time scale: zero striker velocity and no static compression")
+    return float(min(times))
+
+
+def _check_times(t_out: ArrayLike) -> np.ndarray:
+    t = np.ascontiguousarray(t_out, dtype=float)
+    if t.ndim != 1 or t.size == 0:
+        raise ValueError(f"t_out must be a non-empty 1-D array, got shape {t.shape}")
+    if not np.all(np.isfinite(t)) or t[0] < 0.0 or np.any(np.diff(t) < 0.0):
+        raise ValueError("t_out must be finite, non-decreasing and start at t >= 0 (the impact)")
+    return t
+
+
+def _initial_state(chain: Chain, striker_velocity: float) -> tuple[np.ndarray, np.ndarray]:
+    u0 = static_equilibrium(chain)
+    v0 = np.zeros(chain.n_particles)
+    v0[0] = float(striker_velocity)
+    return u0, v0
+
+
+def _check_dt(dt: float) -> float:
+    dt = float(dt)
+    if not (np.isfinite(dt) and dt > 0.0):
+        raise ValueError(f"dt must be a positive finite time step in s, got {dt}")
+    return dt
+
+
+def simulate(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
+             dt: float | None = None) -> ChainResult:
+    """Integrate one chain with the compiled fixed-step scheme.
+
+    Parameters
+    ----------
+    chain : Chain
+    striker_velocity : float
+        Striker speed at impact, m/s, along +x (e.g. sqrt(2 g h) for a drop height h).
+    t_out : array_like, shape (nt,)
+        Output times, s, non-decreasing, from 0 (the impact).
+    dt : float, optional
+        Nominal step, s; default :func:`stable_step`.
+
+    Returns
+    -------
+    ChainResult
+        With ``displacement`` and ``velocity``.
+    """
+    t = _check_times(t_out)
+    dt = stable_step(chain, striker_velocity) if dt is None else _check_dt(dt)
+    u0, v0 = _initial_state(chain, striker_velocity)
+    n = chain.n_particles
+    out = [np.empty((t.size, n)) for _ in range(4)]
+    steps = kernel.integrate(u0, v0, chain.mass, chain.stiffness, chain.damping,
+                             _LAW_CODE[chain.damping_law], chain.load(), t, dt, True, *out)
+    return ChainResult(t=t, force=out[0], approach=out[1], displacement=out[2],
+                       velocity=out[3], dt=dt, steps=int(steps))
+
+
+def simulate_batch(chains: Sequence[Chain], striker_velocities: ArrayLike, t_out: ArrayLike, *,
+                   dt: float | ArrayLike | None = None) -> ChainResult:
+    """Integrate many chains in parallel (numba threads over runs).
+
+    Parameters
+    ----------
+    chains : sequence of Chain, length runs
+        All with the same number of particles and damping law.
+    striker_velocities : float or array_like, shape (runs,)
+        Impact speeds, m/s.
+    t_out : array_like, shape (nt,)
+        Common output times, s.
+    dt : float or array_like (runs,), optional
+        Nominal steps, s; default :func:`stable_step` of each run.
+
+    Returns
+    -------
+    ChainResult
+        ``force`` and ``approach`` of shape (runs, nt, n); no displacement/velocity.
+    """
+    chains = list(chains)
+    if not chains:
+        raise ValueError("simulate_batch needs at least one chain")
+    n = chains[0].n_particles
+    law = chains[0].damping_law
+    if any(c.n_particles != n for c in chains) or any(c.damping_law is not law for c in chains):
+        raise ValueError("all chains of a batch must have the same n_particles and damping_law")
+    runs = len(chains)
+    v = np.broadcast_to(np.asarray(striker_velocities, dtype=float), (runs,)).copy()
+    t = _check_times(t_out)
+    if dt is None:
+        steps_dt = np.array([stable_step(c, vi) for c, vi in zip(chains, v, strict=True)])
+    else:
+        steps_dt = np.broadcast_to(np.asarray(dt, dtype=float), (runs,)).copy()
+        for d in steps_dt:
+            _check_dt(d)
+    init = [_initial_state(c, vi) for c, vi in zip(chains, v, strict=True)]
+    u0 = np.array([i[0] for i in init])
+    v0 = np.array([i[1] for i in init])
+    stack = {name: np.array([getattr(c, name) for c in chains])
+             for name in ("mass", "stiffness", "damping")}
+    load = np.array([c.load() for c in chains])
+    force = np.empty((runs, t.size, n))
+    approach = np.empty((runs, t.size, n))
+    steps = kernel.integrate_batch(u0, v0, stack["mass"], stack["stiffness"], stack["damping"],
+                                   _LAW_CODE[law], load, t, steps_dt, force, approach)
+    return ChainResult(t=t, force=force, approach=approach, dt=steps_dt, steps=steps)
+
+
+def _numpy_forces(chain: Chain, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Contact forces of Eq. 6-9 (dashpot only while delta > 0), shape (n,) or (n, m)."""
+    gap = np.concatenate([u[:-1] - u[1:], u[-1:]])
+    rate = np.concatenate([v[:-1] - v[1:], v[-1:]])
+    closed = gap > 0.0
+    d = np.where(closed, gap, 0.0)
+    A = chain.stiffness.reshape((-1,) + (1,) * (u.ndim - 1))
+    g = chain.damping.reshape(A.shape)
+    if chain.damping_law is DampingLaw.LINEAR:
+        return A * d**1.5 + np.where(closed, g * rate, 0.0)
+    return np.sqrt(d) * (A * d + g * rate)
+
+
+def simulate_reference(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
+                       rtol: float = 1e-10, atol: float | np.ndarray | None = None,
+                       ) -> ChainResult:
+    """Integrate one chain with SciPy's adaptive ``solve_ivp(method="DOP853")``.
+
+    Slow; for checking :func:`simulate`. The contact states are not tracked as events: the
+    adaptive step control resolves the contact switches.
+
+    Parameters
+    ----------
+    chain : Chain
+    striker_velocity : float
+        m/s.
+    t_out : array_like, shape (nt,)
+        s, from 0.
+    rtol : float
+        Relative tolerance.
+    atol : float or ndarray (2n,), optional
+        Absolute tolerance on (u, v); default rtol times the Hertz approach scale (m) for u
+        and rtol times the striker speed for v.
+
+    Returns
+    -------
+    ChainResult
+    """
+    t = _check_times(t_out)
+    n = chain.n_particles
+    u0, v0 = _initial_state(chain, striker_velocity)
+    load = chain.load()
+    if atol is None:
+        mu = float(np.min(_reduced_masses(chain)))
+        vs = max(abs(float(striker_velocity)), 1e-3)
+        d_scale = (1.25 * mu * vs**2 / float(np.max(chain.stiffness))) ** 0.4
+        atol = np.concatenate([np.full(n, rtol * d_scale), np.full(n, rtol * vs)])
+
+    def rhs(_t, y):
+        u, v = y[:n], y[n:]
+        F = _numpy_forces(chain, u, v)
+        a = load.copy()
+        a[1:] += F[:-1]
+        a -= F
+        return np.concatenate([v, a / chain.mass])
+
+    sol = solve_ivp(rhs, (0.0, float(t[-1])), np.concatenate([u0, v0]), method="DOP853",
+                    t_eval=t, rtol=rtol, atol=atol)
+    if not sol.success:
+        raise RuntimeError(f"solve_ivp failed: {sol.message}")
+    u, v = sol.y[:n], sol.y[n:]
+    gap = np.concatenate([u[:-1] - u[1:], u[-1:]])
+    force = _numpy_forces(chain, u, v)
+    return ChainResult(t=t, force=force.T.copy(), approach=np.maximum(gap, 0.0).T.copy(),
+                       displacement=u.T.copy(), velocity=v.T.copy(), steps=int(sol.nfev))

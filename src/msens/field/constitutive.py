@@ -1,0 +1,140 @@
+"""Per-element material data and the constitutive law H(B) at quadrature points.
+
+Every region kind is reduced to H = ν B − H_c e_z with a per-element linear reluctivity ν and
+coercivity H_c, except nonlinear soft regions whose ν depends on |B| (see :mod:`.bh`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from msens.errors import InputError
+from msens.field.bh import MonotoneBH, monotone_bh
+from msens.field.mesh import AxiMesh
+from msens.field.regions import (
+    Air,
+    LinearMagnetic,
+    NonlinearSoft,
+    PermanentMagnet,
+    Region,
+    Winding,
+)
+from msens.units import MU0
+
+NU0 = 1.0 / MU0
+
+
+@dataclass(frozen=True)
+class Materials:
+    """Material fields per element.
+
+    Attributes
+    ----------
+    nu : ndarray, shape (n_elements,)
+        Linear reluctivity, m/H (the initial-guess value in nonlinear elements).
+    hc : ndarray, shape (n_elements,)
+        Coercivity along +z, A/m (B_r/(μ0 μ_rec) in magnets).
+    br : ndarray, shape (n_elements,)
+        Remanence along +z, T.
+    j : ndarray, shape (n_elements,)
+        Azimuthal current density, A/m².
+    soft : tuple of (ndarray, MonotoneBH)
+        Element indices and B–H law of each nonlinear region.
+    """
+
+    nu: np.ndarray
+    hc: np.ndarray
+    br: np.ndarray
+    j: np.ndarray
+    soft: tuple[tuple[np.ndarray, MonotoneBH], ...]
+
+    @property
+    def nonlinear(self) -> bool:
+        """Whether any region is nonlinear."""
+        return bool(self.soft)
+
+
+def material_fields(mesh: AxiMesh, regions: Mapping[str, Region]) -> Materials:
+    """Reduce the region records to per-element arrays."""
+    ne = mesh.n_elements
+    nu = np.full(ne, NU0)
+    hc, br, j = np.zeros(ne), np.zeros(ne), np.zeros(ne)
+    soft = []
+    for name, reg in regions.items():
+        el = mesh.subdomains[name]
+        if isinstance(reg, Air):
+            continue
+        if isinstance(reg, LinearMagnetic):
+            nu[el] = NU0 / reg.mu_r
+        elif isinstance(reg, PermanentMagnet):
+            nu[el] = NU0 / reg.recoil_permeability
+            hc[el] = reg.remanence * NU0 / reg.recoil_permeability
+            br[el] = reg.remanence
+        elif isinstance(reg, Winding):
+            j[el] = reg.current_density
+        elif isinstance(reg, NonlinearSoft):
+            law = monotone_bh(reg.curve)
+            nu[el] = float(law.reluctivity(np.array(1.0)))  # initial guess: secant at 1 T
+            soft.append((el, law))
+        else:
+            raise InputError(f"region '{name}': unknown region kind {type(reg).__name__}")
+    return Materials(nu=nu, hc=hc, br=br, j=j, soft=tuple(soft))
+
+
+def reluctivities(mat: Materials, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Secant and differential reluctivity at quadrature points.
+
+    Parameters
+    ----------
+    b : ndarray, shape (n_elements, n_qp, 2)
+        Flux density, T.
+
+    Returns
+    -------
+    nu, nu_d : ndarray, shape (n_elements, n_qp)
+        H = ν B − H_c e_z; dH/dB along B is ν_d (equal to ν in linear elements), m/H.
+    """
+    nu = np.broadcast_to(mat.nu[:, None], b.shape[:2]).copy()
+    nu_d = nu.copy()
+    if mat.soft:
+        bmag = np.sqrt(np.sum(b**2, axis=-1))
+        for el, law in mat.soft:
+            nu[el] = law.reluctivity(bmag[el])
+            nu_d[el] = law.differential_reluctivity(bmag[el])
+    return nu, nu_d
+
+
+def field_strength(mat: Materials, b: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """H = ν B − H_c e_z, A/m, shape like ``b`` (n_elements, n_qp, 2)."""
+    h = nu[..., None] * b
+    h[..., 1] -= mat.hc[:, None]
+    return h
+
+
+def tangent(b: np.ndarray, nu: np.ndarray, nu_d: np.ndarray) -> np.ndarray:
+    """Tangent reluctivity tensor dH/dB = ν I + (ν_d − ν) b̂ b̂ᵀ, shape (..., 2, 2)."""
+    bmag = np.sqrt(np.sum(b**2, axis=-1))
+    bhat = b / np.where(bmag > 0, bmag, 1.0)[..., None]
+    out = (nu_d - nu)[..., None, None] * bhat[..., :, None] * bhat[..., None, :]
+    out[..., 0, 0] += nu
+    out[..., 1, 1] += nu
+    return out
+
+
+def energy_density(mat: Materials, b: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """Stored energy density w(B), J/m³, shape (n_elements, n_qp).
+
+    Linear parts: ν |B − B_r e_z|²/2 (for a magnet the recoil-line energy, zero at B = B_r);
+    nonlinear parts: ∫_0^|B| H dB'. ``nu`` is only used in the linear elements.
+    """
+    d = b.copy()
+    d[..., 1] -= mat.br[:, None]
+    w = 0.5 * nu * np.sum(d**2, axis=-1)
+    if mat.soft:
+        bmag = np.sqrt(np.sum(b**2, axis=-1))
+        for el, law in mat.soft:
+            w[el] = law.energy_density(bmag[el])
+    return w

@@ -1,0 +1,492 @@
+"""Axisymmetric geometry of the magnetostrictive sensor (MsS): beads, coils, bias magnets.
+
+Coordinates are (r, z) in metres, r >= 0 the distance from the chain axis and z upwards with
+the wall (the chain's base) at z = 0. Particles are numbered as in the paper (Hurley et al.,
+§2): 1 is the striker (above the chain, never in the field model), 2..N rest in the tube and
+N (30 in the paper) sits on the wall.
+
+Beads are spheres of radius R truncated by a flat of radius ``a`` at every contact: the flat is
+the Hertz contact circle, so neighbour centres are ``2 sqrt(R^2 - a^2)`` apart and neighbours
+share the flat as an interface (they touch; no air gap). An optional uniform ``contact_gap``
+separates the flats by a thin air layer; it exists for cross-checks (isolated bodies) only.
+
+The plastic tube and the coil former are non-magnetic; they constrain the geometry (validated
+here) but are not separate mesh regions (their permeability is that of air).
+
+The bias magnet is an *equivalent*, not the paper's part: the paper's bridge magnet
+(McMaster-Carr 5841K12) is undocumented, so it is replaced by an axially magnetised ring magnet
+outside the coil between two annular 1018-steel pole pieces that reach in to the tube (design.md
+§5). Every dimension is a parameter.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+from msens.errors import InputError, require
+from msens.materials import BEAD_STEEL, MAGNET_GRADES
+from msens.units import G0
+
+#: Bead diameter of the paper, m (McMaster-Carr 96455K51, paper §2).
+BEAD_DIAMETER = 4.76e-3
+#: Bead mass of the paper, kg (paper §2).
+BEAD_MASS = 0.45e-3
+#: Magnetic static force per sensor contact estimated in the paper (§4.1), N.
+PAPER_MAGNETIC_FORCE = 1.8
+
+
+@dataclass(frozen=True)
+class Wire:
+    """Round enamelled magnet wire.
+
+    Attributes
+    ----------
+    name : str
+    bare_diameter : float
+        Copper diameter, m.
+    insulated_diameter : float
+        Outer diameter over the insulation, m.
+    """
+
+    name: str
+    bare_diameter: float
+    insulated_diameter: float
+
+    def __post_init__(self) -> None:
+        require(0 < self.bare_diameter < self.insulated_diameter,
+                f"wire {self.name!r}: need 0 < bare_diameter < insulated_diameter, got "
+                f"{self.bare_diameter} and {self.insulated_diameter} m")
+
+
+#: AWG 36: bare copper 0.127 mm (ASTM B258, 0.0050 in). Heavy-build (double) film insulation:
+#: overall diameter 0.0060 in max / ~0.152 mm (NEMA MW 1000, heavy build AWG 36).
+WIRES: dict[str, Wire] = {
+    "AWG36": Wire("AWG36", 0.127e-3, 0.152e-3),
+    "AWG34": Wire("AWG34", 0.160e-3, 0.191e-3),
+    "AWG38": Wire("AWG38", 0.101e-3, 0.124e-3),
+}
+
+#: Packing factor of a layered (square-packed) winding: fraction pi/4 of the winding
+#: cross-section filled by insulated round wire. Orthocyclic windings reach pi/(2 sqrt 3) =
+#: 0.907 and wild (random) windings are lower, about 0.7-0.8 (Hagedorn, Sell-Le Blanc &
+#: Fleischer, *Handbook of Coil Winding*, Springer 2018, ch. 2). pi/4 is a documented guess.
+SQUARE_PACKING = math.pi / 4
+
+
+def hertz_flat_radius(load: float, radius: float = BEAD_DIAMETER / 2,
+                      youngs_modulus: float = BEAD_STEEL.youngs_modulus,
+                      poisson_ratio: float = BEAD_STEEL.poisson_ratio) -> float:
+    """Hertz contact radius of two identical spheres pressed together.
+
+    a = (3 F R* / (4 E*))^(1/3), R* = R/2, E* = E / (2 (1 - nu^2)) (Johnson, *Contact
+    Mechanics*, 1985, eq. 4.22).
+
+    Parameters
+    ----------
+    load : float
+        Contact force F, N (> 0).
+    radius : float
+        Sphere radius R, m.
+    youngs_modulus, poisson_ratio : float
+        E in Pa and nu of both spheres.
+
+    Returns
+    -------
+    float
+        Contact radius a, m.
+    """
+    require(load > 0, f"contact load must be > 0 N, got {load}")
+    r_star = radius / 2
+    e_star = youngs_modulus / (2 * (1 - poisson_ratio**2))
+    return (3 * load * r_star / (4 * e_star)) ** (1 / 3)
+
+
+#: Default contact load for the flat radius, N: the weight of beads 2..13 resting on the upper
+#: sensor's middle contact (12 x 0.45 g x g) plus the paper's magnetic estimate of 1.8 N.
+DEFAULT_CONTACT_LOAD = 12 * BEAD_MASS * G0 + PAPER_MAGNETIC_FORCE
+
+
+@dataclass(frozen=True)
+class BeadChain:
+    """The modelled part of the chain.
+
+    Attributes
+    ----------
+    first, last : int
+        First (top) and last (bottom) particle in the field model, paper numbering,
+        2 <= first <= last <= count.
+    count : int
+        Particle count including the striker (30 in the paper); particle ``count`` rests on
+        the wall at z = 0.
+    diameter : float
+        Bead diameter, m.
+    contact_load : float
+        Static load used for the Hertz flat radius, N.
+    min_flat_radius : float
+        Lower bound of the flat radius, m (the flat is max(Hertz(load), this)).
+    contact_gap : float
+        Air gap between neighbour flats, m; 0 (default) means the beads touch.
+    """
+
+    first: int = 8
+    last: int = 23
+    count: int = 30
+    diameter: float = BEAD_DIAMETER
+    contact_load: float = DEFAULT_CONTACT_LOAD
+    min_flat_radius: float = 0.0
+    contact_gap: float = 0.0
+
+    def __post_init__(self) -> None:
+        require(self.count >= 2, f"chain count must be >= 2 particles, got {self.count}")
+        require(2 <= self.first <= self.last <= self.count,
+                f"modelled beads must satisfy 2 <= first <= last <= count={self.count}, got "
+                f"first={self.first}, last={self.last} (particle 1 is the striker)")
+        require(self.diameter > 0, f"bead diameter must be > 0 m, got {self.diameter}")
+        require(self.contact_load > 0, f"contact_load must be > 0 N, got {self.contact_load}")
+        require(self.min_flat_radius >= 0,
+                f"min_flat_radius must be >= 0 m, got {self.min_flat_radius}")
+        require(self.contact_gap >= 0, f"contact_gap must be >= 0 m, got {self.contact_gap}")
+        require(self.flat_radius < 0.2 * self.radius,
+                f"contact flat radius {self.flat_radius:.3g} m must be < 0.2 x bead radius")
+
+    @property
+    def radius(self) -> float:
+        """Bead radius R, m."""
+        return self.diameter / 2
+
+    @property
+    def flat_radius(self) -> float:
+        """Contact flat radius a, m."""
+        return max(hertz_flat_radius(self.contact_load, self.radius), self.min_flat_radius)
+
+    @property
+    def half_height(self) -> float:
+        """Half the axial height of a truncated bead, sqrt(R^2 - a^2), m."""
+        return math.sqrt(self.radius**2 - self.flat_radius**2)
+
+    @property
+    def pitch(self) -> float:
+        """Distance between neighbour bead centres, m."""
+        return 2 * self.half_height + self.contact_gap
+
+    @property
+    def particles(self) -> range:
+        """Modelled particle numbers, top to bottom."""
+        return range(self.first, self.last + 1)
+
+    def center(self, particle: int) -> float:
+        """Axial position of a particle's centre, m (any particle 2..count, modelled or not)."""
+        require(2 <= particle <= self.count,
+                f"particle {particle} is not in the chain 2..{self.count}")
+        return self.half_height + (self.count - particle) * self.pitch
+
+    def contact_z(self, upper: int) -> float:
+        """Axial position of the contact plane between ``upper`` and ``upper + 1``, m."""
+        return self.center(upper) - self.half_height - self.contact_gap / 2
+
+    @property
+    def contacts(self) -> tuple[tuple[int, int], ...]:
+        """Modelled contacts (upper, lower), top to bottom."""
+        return tuple((p, p + 1) for p in range(self.first, self.last))
+
+    @property
+    def z_span(self) -> tuple[float, float]:
+        """(bottom, top) of the modelled beads, m."""
+        return (self.center(self.last) - self.half_height,
+                self.center(self.first) + self.half_height)
+
+
+@dataclass(frozen=True)
+class Tube:
+    """Plastic tube holding the chain (non-magnetic).
+
+    Attributes
+    ----------
+    inner_radius, outer_radius : float
+        m; paper §2: inner diameter 4.8 mm, outer diameter 12.7 mm.
+    """
+
+    inner_radius: float = 2.4e-3
+    outer_radius: float = 6.35e-3
+
+    def __post_init__(self) -> None:
+        require(0 < self.inner_radius < self.outer_radius,
+                f"tube needs 0 < inner_radius < outer_radius, got {self.inner_radius} and "
+                f"{self.outer_radius} m")
+
+
+@dataclass(frozen=True)
+class Coil:
+    """A pick-up coil wound on a former around the tube, centred on a particle.
+
+    Attributes
+    ----------
+    particle : int
+        The particle at the coil's centre (paper: 13 and 18).
+    turns : int
+        Number of turns N (paper: 1100).
+    length : float
+        Winding length, m (paper: 7 mm).
+    inner_radius : float
+        Winding inner radius, m: former inner radius 6.35 mm + wall 1.6 mm = 7.95 mm.
+    wire : Wire
+    packing_factor : float
+        Fraction of the winding cross-section filled by insulated wire circles (see
+        :data:`SQUARE_PACKING`).
+    axial_offset : float
+        Shift of the coil centre from the particle centre, m (+ = up).
+    """
+
+    particle: int = 13
+    turns: int = 1100
+    length: float = 7e-3
+    inner_radius: float = 7.95e-3
+    wire: Wire = WIRES["AWG36"]
+    packing_factor: float = SQUARE_PACKING
+    axial_offset: float = 0.0
+
+    def __post_init__(self) -> None:
+        require(isinstance(self.turns, int) and self.turns > 0,
+                f"coil at particle {self.particle}: turns must be a positive integer, got "
+                f"{self.turns!r}")
+        require(self.length > 0, f"coil length must be > 0 m, got {self.length}")
+        require(self.inner_radius > 0, f"coil inner_radius must be > 0 m, got "
+                f"{self.inner_radius}")
+        require(0 < self.packing_factor <= math.pi / (2 * math.sqrt(3)) + 1e-12,
+                f"coil packing_factor must be in (0, 0.907] (hexagonal limit), got "
+                f"{self.packing_factor}")
+        require(self.length >= self.wire.insulated_diameter,
+                "coil length must hold at least one turn")
+
+    @property
+    def thickness(self) -> float:
+        """Radial winding depth, m: N (pi d^2/4) / (packing L)."""
+        d = self.wire.insulated_diameter
+        return self.turns * math.pi * d**2 / 4 / (self.packing_factor * self.length)
+
+    @property
+    def outer_radius(self) -> float:
+        """Winding outer radius, m."""
+        return self.inner_radius + self.thickness
+
+    @property
+    def mean_turn_length(self) -> float:
+        """Mean length of one turn, m."""
+        return math.pi * (self.inner_radius + self.outer_radius)
+
+    @property
+    def area(self) -> float:
+        """Winding cross-section in the (r, z) plane, m^2."""
+        return self.thickness * self.length
+
+
+@dataclass(frozen=True)
+class BiasMagnet:
+    """Equivalent bias magnet: axial ring magnet between two annular steel pole pieces.
+
+    EQUIVALENT, NOT THE REAL PART: the paper's bridge magnet (McMaster-Carr 5841K12) is not
+    documented; this ring + pole-piece assembly reproduces its role (an axial bias field over
+    about four contacts). The default is ceramic 8 (Br 0.39 T, mu_rec 1.4, MMPA 0100-00), the
+    typical material of such cheap bridge/horseshoe magnets (an assumption).
+
+    The pole pieces touch the magnet's end faces; their centres are
+    ``length/2 + pole_thickness/2`` above and below the magnet centre, which sits at the
+    particle's centre plus ``axial_offset``. Defaults: pole centres 19 mm apart (four bead
+    diameters, spanning the four contacts around the sensor bead).
+
+    Attributes
+    ----------
+    particle : int
+        Particle at the assembly's nominal centre.
+    grade : str
+        Name of the magnet grade (for reports).
+    remanence : float
+        B_r, T; sign = direction along +z.
+    recoil_permeability : float
+        mu_rec, relative.
+    inner_radius, outer_radius, length : float
+        Ring magnet, m.
+    pole_inner_radius, pole_outer_radius, pole_thickness : float
+        Annular 1018-steel pole pieces, m.
+    axial_offset : float
+        Shift of the assembly centre from the particle centre, m (+ = up).
+    """
+
+    particle: int = 13
+    grade: str = "ceramic8"
+    remanence: float = MAGNET_GRADES["ceramic8"].remanence
+    recoil_permeability: float = MAGNET_GRADES["ceramic8"].recoil_permeability
+    inner_radius: float = 12.5e-3
+    outer_radius: float = 20.0e-3
+    length: float = 16.0e-3
+    pole_inner_radius: float = 6.5e-3
+    pole_outer_radius: float = 20.0e-3
+    pole_thickness: float = 3.0e-3
+    axial_offset: float = 0.0
+
+    def __post_init__(self) -> None:
+        where = f"magnet at particle {self.particle}"
+        require(0 < self.inner_radius < self.outer_radius,
+                f"{where}: need 0 < inner_radius < outer_radius, got {self.inner_radius} and "
+                f"{self.outer_radius} m")
+        require(self.length > 0, f"{where}: length must be > 0 m, got {self.length}")
+        require(0 < self.pole_inner_radius < self.pole_outer_radius,
+                f"{where}: need 0 < pole_inner_radius < pole_outer_radius, got "
+                f"{self.pole_inner_radius} and {self.pole_outer_radius} m")
+        require(self.pole_thickness >= 0, f"{where}: pole_thickness must be >= 0 m")
+        require(self.recoil_permeability > 0,
+                f"{where}: recoil_permeability must be > 0, got {self.recoil_permeability}")
+        require(math.isfinite(self.remanence) and abs(self.remanence) < 2.0,
+                f"{where}: remanence must be a finite value below 2 T, got {self.remanence}")
+
+
+@dataclass(frozen=True)
+class SensorUnit:
+    """One MsS: a coil and (optionally) its bias magnet."""
+
+    coil: Coil
+    magnet: BiasMagnet | None = None
+
+    def __post_init__(self) -> None:
+        if self.magnet is not None:
+            require(self.magnet.particle == self.coil.particle,
+                    f"magnet particle {self.magnet.particle} differs from its coil's "
+                    f"particle {self.coil.particle}")
+
+
+@dataclass(frozen=True)
+class AirBox:
+    """Truncation of open space: A = 0 on r = radius and on z planes ``margin`` beyond the parts.
+
+    Attributes
+    ----------
+    radius : float
+        Outer radius of the model, m.
+    margin : float
+        Axial distance from the lowest/highest part to the box's ends, m.
+    """
+
+    radius: float = 0.08
+    margin: float = 0.06
+
+    def __post_init__(self) -> None:
+        require(self.radius > 0 and self.margin > 0,
+                f"air box radius and margin must be > 0 m, got {self.radius}, {self.margin}")
+
+
+@dataclass(frozen=True)
+class Rect:
+    """Axis-aligned rectangle in the (r, z) half-plane, m."""
+
+    name: str
+    r0: float
+    r1: float
+    z0: float
+    z1: float
+
+    def overlaps(self, other: Rect) -> bool:
+        """True when the two rectangles share an area (touching edges do not count)."""
+        tol = 1e-12
+        return (min(self.r1, other.r1) - max(self.r0, other.r0) > tol
+                and min(self.z1, other.z1) - max(self.z0, other.z0) > tol)
+
+
+def _default_sensors() -> tuple[SensorUnit, ...]:
+    return tuple(SensorUnit(Coil(particle=p), BiasMagnet(particle=p)) for p in (13, 18))
+
+
+@dataclass(frozen=True)
+class SensorGeometry:
+    """Complete axisymmetric model: beads, tube, sensors (coil + magnet), air box.
+
+    Validation (raises :class:`msens.errors.InputError`): parts may not overlap, beads must fit
+    in the tube, coils and magnets must lie outside the tube, each coil must sit at a modelled
+    particle, and the air box must enclose everything.
+    """
+
+    beads: BeadChain = field(default_factory=BeadChain)
+    tube: Tube = field(default_factory=Tube)
+    sensors: tuple[SensorUnit, ...] = field(default_factory=_default_sensors)
+    air: AirBox = field(default_factory=AirBox)
+
+    def __post_init__(self) -> None:
+        b, t = self.beads, self.tube
+        require(b.radius <= t.inner_radius,
+                f"beads of diameter {b.diameter} m do not fit in the tube of inner radius "
+                f"{t.inner_radius} m")
+        particles = [s.coil.particle for s in self.sensors]
+        require(len(set(particles)) == len(particles),
+                f"two sensors at the same particle: {particles}")
+        for s in self.sensors:
+            c = s.coil
+            require(c.particle in b.particles,
+                    f"coil at particle {c.particle} is outside the modelled chain "
+                    f"{b.first}..{b.last}")
+            require(c.inner_radius >= t.outer_radius,
+                    f"coil at particle {c.particle}: inner_radius {c.inner_radius} m is inside "
+                    f"the tube (outer radius {t.outer_radius} m)")
+            m = s.magnet
+            if m is not None:
+                require(m.inner_radius >= t.outer_radius and m.pole_inner_radius
+                        >= t.outer_radius,
+                        f"magnet at particle {m.particle} reaches inside the tube (outer radius "
+                        f"{t.outer_radius} m): inner_radius {m.inner_radius} m, "
+                        f"pole_inner_radius {m.pole_inner_radius} m")
+        rects = self.rectangles()
+        for i, p in enumerate(rects):
+            for q in rects[i + 1:]:
+                if p.overlaps(q):
+                    raise InputError(f"parts overlap: {p.name} and {q.name} "
+                                     f"(r {p.r0:.4g}..{p.r1:.4g} / {q.r0:.4g}..{q.r1:.4g} m, "
+                                     f"z {p.z0:.4g}..{p.z1:.4g} / {q.z0:.4g}..{q.z1:.4g} m)")
+        r_max = max(q.r1 for q in rects)
+        require(self.air.radius > 1.5 * r_max,
+                f"air box radius {self.air.radius} m must exceed 1.5 x the largest part "
+                f"radius {r_max} m")
+
+    def coil_rect(self, unit: SensorUnit) -> Rect:
+        """Winding cross-section of a sensor's coil."""
+        c = unit.coil
+        zc = self.beads.center(c.particle) + c.axial_offset
+        return Rect(f"coil_{c.particle}", c.inner_radius, c.outer_radius,
+                    zc - c.length / 2, zc + c.length / 2)
+
+    def magnet_rects(self, unit: SensorUnit) -> tuple[Rect, ...]:
+        """Ring magnet, lower pole and upper pole of a sensor (empty without magnet)."""
+        m = unit.magnet
+        if m is None:
+            return ()
+        zc = self.beads.center(m.particle) + m.axial_offset
+        h = m.length / 2
+        out = [Rect(f"magnet_{m.particle}", m.inner_radius, m.outer_radius, zc - h, zc + h)]
+        if m.pole_thickness > 0:
+            out += [Rect(f"pole_{m.particle}_lower", m.pole_inner_radius, m.pole_outer_radius,
+                         zc - h - m.pole_thickness, zc - h),
+                    Rect(f"pole_{m.particle}_upper", m.pole_inner_radius, m.pole_outer_radius,
+                         zc + h, zc + h + m.pole_thickness)]
+        return tuple(out)
+
+    def rectangles(self) -> list[Rect]:
+        """Bounding rectangles of all parts, the bead column first."""
+        z0, z1 = self.beads.z_span
+        out = [Rect("beads", 0.0, self.beads.radius, z0, z1)]
+        for s in self.sensors:
+            out.append(self.coil_rect(s))
+            out.extend(self.magnet_rects(s))
+        return out
+
+    def parts_z_span(self) -> tuple[float, float]:
+        """(bottom, top) of all parts, m."""
+        rects = self.rectangles()
+        return min(q.z0 for q in rects), max(q.z1 for q in rects)
+
+    def box(self) -> Rect:
+        """The truncation box [0, radius] x [bottom - margin, top + margin]."""
+        z0, z1 = self.parts_z_span()
+        return Rect("air", 0.0, self.air.radius, z0 - self.air.margin, z1 + self.air.margin)
+
+    def iter_units(self) -> Iterator[SensorUnit]:
+        """Sensor units in particle order."""
+        return iter(sorted(self.sensors, key=lambda s: s.coil.particle))

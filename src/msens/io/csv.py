@@ -1,0 +1,229 @@
+"""Waveform CSV files (design.md §8).
+
+::
+
+    # msens-waveform: 1
+    # drop_height_m: 0.0072
+    time_s,bead@13,bead@18
+    -1e-05,0.0012,-0.0003
+
+Rules the reader enforces, each failure an :class:`~msens.errors.InputError` naming
+``file:line``:
+
+- lines starting with ``#`` before the header are metadata ``key: value`` (a bare ``#`` is
+  ignored); ``# msens-waveform: 1`` is the format version, checked and not kept;
+- the header's first column is ``time_s``, the others channel names (see
+  :class:`~msens.io.waveform.Channel`), no duplicates;
+- every data line has as many comma-separated cells as the header, each a decimal number
+  (NaN and infinity rejected); blank lines are skipped;
+- the time column passes :func:`~msens.io.waveform.check_time`.
+
+Text is UTF-8 (a byte-order mark is allowed); line ends may be LF or CRLF. The writer
+prints floats with ``repr`` (shortest text that reads back to the same float64), so a
+write-read round trip is exact.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from msens.errors import InputError
+from msens.io._files import atomic_write_bytes, read_bytes
+from msens.io.waveform import (
+    TIME_NAME,
+    VERSION,
+    VERSION_KEY,
+    Channel,
+    Waveform,
+    check_channels,
+    check_metadata_item,
+    check_time,
+    check_values,
+)
+
+
+def read_csv(path: str | os.PathLike[str]) -> Waveform:
+    """Read a waveform CSV file.
+
+    Parameters
+    ----------
+    path : path-like
+        File to read.
+
+    Returns
+    -------
+    Waveform
+
+    Raises
+    ------
+    InputError
+        On any malformed content, naming the file and line.
+    """
+    raw = read_bytes(path)
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not UTF-8 text (byte {exc.start})") from None
+    return parse_csv(text, str(path))
+
+
+def parse_csv(text: str, source: str) -> Waveform:
+    """Parse waveform CSV ``text``; ``source`` names it in messages (e.g. the path)."""
+    # Split on LF only: str.splitlines also breaks on form feeds and the like, which would
+    # shift the line numbers in messages away from what an editor shows.
+    lines = [line.removesuffix("\r") for line in text.split("\n")]
+    metadata, header_index = _parse_metadata(lines, source)
+    if header_index is None:
+        raise InputError(
+            f"{source}: empty file: no header line (expected '{TIME_NAME},<channel>,...')"
+        )
+    channels = _parse_header(lines[header_index], source, header_index + 1)
+    rows, line_numbers = _parse_rows(lines, header_index + 1, len(channels) + 1, channels, source)
+
+    def locate(i: int) -> str:
+        return f"{source}:{line_numbers[i]}"
+
+    table = np.array(rows, dtype=np.float64)
+    check_time(table[:, 0], source, locate)
+    for j, ch in enumerate(channels):
+        check_values(table[:, j + 1], ch.name, source, locate)
+    try:
+        return Waveform(table[:, 0], table[:, 1:], channels, metadata)
+    except InputError as exc:  # pragma: no cover - the checks above come first
+        raise InputError(f"{source}: {exc}") from None
+
+
+def _parse_metadata(lines: list[str], source: str) -> tuple[dict[str, str], int | None]:
+    """Metadata before the header, and the header's index (None if there is no header)."""
+    metadata: dict[str, str] = {}
+    version_seen = False
+    for index, line in enumerate(lines):
+        where = f"{source}:{index + 1}"
+        if not line.strip():
+            continue
+        if not line.startswith("#"):
+            return metadata, index
+        body = line[1:].strip()
+        if not body:
+            continue
+        key, sep, value = body.partition(":")
+        key, value = key.strip(), value.strip()
+        if not sep or not key:
+            raise InputError(
+                f"{where}: bad metadata line {line!r}: lines before the header must be "
+                "'# key: value'"
+            )
+        if key in metadata or (key == VERSION_KEY and version_seen):
+            raise InputError(f"{where}: metadata key {key!r} given twice")
+        if key == VERSION_KEY:
+            if value != VERSION:
+                raise InputError(
+                    f"{where}: unsupported {VERSION_KEY} version {value!r}; this reader "
+                    f"reads version {VERSION}"
+                )
+            version_seen = True
+            continue
+        check_metadata_item(key, value, where)
+        metadata[key] = value
+    return metadata, None
+
+
+def _parse_header(line: str, source: str, lineno: int) -> tuple[Channel, ...]:
+    where = f"{source}:{lineno}"
+    cells = [cell.strip() for cell in line.split(",")]
+    if cells[0] != TIME_NAME:
+        raise InputError(
+            f"{where}: no time column: the header's first column must be {TIME_NAME!r}, "
+            f"got {cells[0]!r}"
+        )
+    if len(cells) < 2:
+        raise InputError(f"{where}: the header names no channel after {TIME_NAME!r}")
+    channels = []
+    for column, cell in enumerate(cells[1:], start=2):
+        try:
+            channels.append(Channel.parse(cell))
+        except InputError as exc:
+            raise InputError(f"{where}: column {column}: {exc}") from None
+    check_channels(channels, where)
+    return tuple(channels)
+
+
+def _parse_rows(
+    lines: list[str],
+    start: int,
+    ncol: int,
+    channels: tuple[Channel, ...],
+    source: str,
+) -> tuple[list[list[float]], list[int]]:
+    names = (TIME_NAME, *(ch.name for ch in channels))
+    rows: list[list[float]] = []
+    line_numbers: list[int] = []
+    for index in range(start, len(lines)):
+        line = lines[index]
+        if not line.strip():
+            continue
+        lineno = index + 1
+        if line.startswith("#"):
+            raise InputError(
+                f"{source}:{lineno}: metadata line after the header; '# key: value' lines "
+                "must come before it"
+            )
+        cells = line.split(",")
+        if len(cells) != ncol:
+            raise InputError(
+                f"{source}:{lineno}: {len(cells)} cells, but the header has {ncol} columns "
+                "(unequal lengths)"
+            )
+        try:
+            rows.append([_number(cell) for cell in cells])
+        except ValueError:
+            column = next(j for j, cell in enumerate(cells) if not _is_number(cell))
+            raise InputError(
+                f"{source}:{lineno}: column {names[column]!r}: non-numeric cell "
+                f"{cells[column].strip()!r}"
+            ) from None
+        line_numbers.append(lineno)
+    if not rows:
+        raise InputError(f"{source}: empty file: the header is followed by no data lines")
+    return rows, line_numbers
+
+
+def _number(cell: str) -> float:
+    # float() also takes '1_000'; a CSV number has no digit separators.
+    if "_" in cell:
+        raise ValueError(cell)
+    return float(cell)
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        _number(cell)
+    except ValueError:
+        return False
+    return True
+
+
+def format_csv(waveform: Waveform) -> str:
+    """CSV text of ``waveform`` (version line, metadata, header, repr-exact rows)."""
+    out = [f"# {VERSION_KEY}: {VERSION}"]
+    out += [f"# {key}: {value}" if value else f"# {key}:" for key, value in
+            waveform.metadata.items()]
+    out.append(",".join((TIME_NAME, *waveform.names)))
+    table = np.column_stack((waveform.time, waveform.data)).tolist()
+    out += [",".join(map(repr, row)) for row in table]
+    return "\n".join(out) + "\n"
+
+
+def write_csv(
+    waveform: Waveform, path: str | os.PathLike[str], *, overwrite: bool = False
+) -> None:
+    """Write ``waveform`` to a CSV file atomically; never replaces a file unless asked.
+
+    Raises
+    ------
+    InputError
+        If ``path`` exists and ``overwrite`` is false.
+    """
+    atomic_write_bytes(path, format_csv(waveform).encode("utf-8"), overwrite)

@@ -1,0 +1,122 @@
+"""Figures of chain studies (matplotlib, Agg). Each function returns a Figure."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from msens.pipeline import SetupResult, StudyResult  # noqa: E402
+
+_US = 1e6
+
+
+def contact_profiles(result: StudyResult, contacts: tuple[int, ...] = (8, 11, 12, 13),
+                     t_max_s: float = 400e-6) -> Figure:
+    """Dynamic force at some contacts for every setup (like the paper's Fig. 4).
+
+    Parameters
+    ----------
+    contacts : tuple of int
+        1-based contact numbers (c_i joins particles i and i+1).
+    """
+    fig, axes = plt.subplots(len(contacts), 1, figsize=(7, 2.0 * len(contacts)), sharex=True)
+    for ax, c in zip(np.atleast_1d(axes), contacts, strict=True):
+        for s in result.setups:
+            t = s.history.t
+            m = t <= t_max_s
+            f = s.history.force[:, c - 1] - s.static_force[c - 1]
+            ax.plot(t[m] * _US, f[m], label=s.setup.name, lw=1.1)
+        ax.set_ylabel(f"c{c} force (N)")
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("time (µs)")
+    fig.suptitle("Dynamic contact forces")
+    fig.tight_layout()
+    return fig
+
+
+def _sensor_contacts(setup: SetupResult, particle: int) -> list[int]:
+    from msens.sensors import sensor_contacts
+
+    kind = next(s.sensor.kind for s in setup.sensors if s.sensor.particle == particle)
+    return [int(k) + 1 for k in sensor_contacts(kind, particle, setup.chain.n_particles)]
+
+
+def sensor_profiles(result: StudyResult, particle: int = 13,
+                    window_s: tuple[float, float] = (50e-6, 250e-6)) -> Figure:
+    """Each setup's sensor at ``particle``: its contacts (dashed) and its reading (solid),
+    like the paper's Fig. 5."""
+    setups = [s for s in result.setups if any(r.sensor.particle == particle for r in s.sensors)]
+    fig, axes = plt.subplots(1, len(setups), figsize=(4.0 * len(setups), 3.2), sharey=True,
+                             squeeze=False)
+    for ax, s in zip(axes[0], setups, strict=True):
+        t = s.history.t
+        m = (t >= window_s[0]) & (t <= window_s[1])
+        for c in _sensor_contacts(s, particle):
+            f = s.history.force[:, c - 1] - s.static_force[c - 1]
+            ax.plot(t[m] * _US, f[m], "--", lw=0.9, label=f"c{c}")
+        reading = next(r for r in s.sensors if r.sensor.particle == particle)
+        ax.plot(t[m] * _US, reading.force[m], "k", lw=1.6, label="sensor")
+        ax.set_title(f"{s.setup.name} at particle {particle}")
+        ax.set_xlabel("time (µs)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[0][0].set_ylabel("dynamic force (N)")
+    fig.tight_layout()
+    return fig
+
+
+def sensor_records(result: StudyResult) -> Figure:
+    """Full records of every sensor, with the incident and reflected peaks marked."""
+    fig, axes = plt.subplots(len(result.setups), 1, figsize=(7, 2.4 * len(result.setups)),
+                             sharex=True, squeeze=False)
+    for ax, s in zip(axes[:, 0], result.setups, strict=True):
+        t = s.history.t * _US
+        for r in s.sensors:
+            (line,) = ax.plot(t, r.force, lw=1.0,
+                              label=f"{r.sensor.kind.value}@{r.sensor.particle}")
+            f = r.features
+            ax.plot([f.t_incident * _US, f.t_reflected * _US], [f.f_incident, f.f_reflected],
+                    "o", color=line.get_color(), ms=4)
+        ax.set_ylabel("force (N)")
+        ax.set_title(s.setup.name, fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1, 0].set_xlabel("time since impact (µs)")
+    fig.tight_layout()
+    return fig
+
+
+def table2(rows: list[dict]) -> Figure:
+    """Model TOF and AR against the published experiment and the published model."""
+    labels = [f"{r['setup']} {r['position']}" for r in rows]
+    x = np.arange(len(rows))
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 3.6))
+    for ax, key, unit in ((a1, "tof", "µs"), (a2, "ar", "")):
+        model = [r[f"{key}_us" if key == "tof" else key] for r in rows]
+        ref = [r.get("reference", {}) for r in rows]
+        exp = [c.get(f"experiment_{key}_us" if key == "tof" else f"experiment_{key}", np.nan)
+               for c in ref]
+        std = [c.get(f"experiment_{key}_std_us" if key == "tof" else f"experiment_{key}_std",
+                     0.0) for c in ref]
+        paper = [c.get(f"paper_model_{key}_us" if key == "tof" else f"paper_model_{key}",
+                       np.nan) for c in ref]
+        ax.errorbar(x - 0.15, exp, yerr=std, fmt="ks", ms=4, label="experiment (paper)")
+        ax.plot(x, paper, "b^", ms=5, label="model (paper)")
+        ax.plot(x + 0.15, model, "ro", ms=5, label="model (msens)")
+        ax.set_xticks(x, labels, rotation=30, ha="right", fontsize=8)
+        ax.set_ylabel(f"{key.upper()} ({unit})" if unit else key.upper())
+        ax.grid(alpha=0.3)
+    a1.legend(fontsize=7)
+    fig.suptitle("Table 2: time of flight and amplitude ratio")
+    fig.tight_layout()
+    return fig
+
+
+def close(fig: Figure) -> None:
+    """Release a figure's memory."""
+    plt.close(fig)

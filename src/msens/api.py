@@ -67,19 +67,30 @@ def summary(result: StudyResult) -> dict:
     }
 
 
-def write_outputs(result: StudyResult, out: str | Path, *, figures: bool = True) -> list[Path]:
+FIGURES = ("contact_forces.png", "sensor_profiles.png", "sensor_records.png", "table2.png")
+
+
+def prepare_outputs(out: str | Path, *, figures: bool = True) -> OutputDir:
+    """Open ``out`` and check, before any work, that no user file would be overwritten."""
+    d = OutputDir(out)
+    d.check(["summary.json", *(FIGURES if figures else ())])
+    return d
+
+
+def write_outputs(result: StudyResult, out: str | Path | OutputDir, *,
+                  figures: bool = True) -> list[Path]:
     """Write ``summary.json`` and the figures into ``out``; returns the written paths."""
     from msens import plots
 
-    d = OutputDir(out)
+    d = out if isinstance(out, OutputDir) else prepare_outputs(out, figures=figures)
     written = [d.write_json("summary.json", summary(result))]
     if figures:
-        makers = {
-            "contact_forces.png": lambda: plots.contact_profiles(result),
-            "sensor_profiles.png": lambda: plots.sensor_profiles(result),
-            "sensor_records.png": lambda: plots.sensor_records(result),
-            "table2.png": lambda: plots.table2(result.rows()),
-        }
+        makers = dict(zip(FIGURES, (
+            lambda: plots.contact_profiles(result),
+            lambda: plots.sensor_profiles(result),
+            lambda: plots.sensor_records(result),
+            lambda: plots.table2(result.rows()),
+        ), strict=True))
         for name, make in makers.items():
             fig = make()
             written.append(d.savefig(name, fig, dpi=150))

@@ -47,8 +47,9 @@ def _run(args: argparse.Namespace) -> int:
 
     study = api.load(args.study) if args.study else api.load_default()
     out = Path(args.out) if args.out else Path("out") / study.name
+    target = api.prepare_outputs(out, figures=not args.no_figures)
     result = api.run(study)
-    written = api.write_outputs(result, out, figures=not args.no_figures)
+    written = api.write_outputs(result, target, figures=not args.no_figures)
     print(api.format_summary(result))
     print(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
     return 0

@@ -84,6 +84,11 @@ class OutputDir:
                              f"(choose another --out directory)")
         return path
 
+    def check(self, names: list[str]) -> None:
+        """Fail early, before any work, if one of ``names`` would overwrite a user's file."""
+        for name in names:
+            self.target(name)
+
     def _record(self, name: str) -> None:
         if name not in self._owned:
             self._owned.add(name)

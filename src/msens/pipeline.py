@@ -142,7 +142,7 @@ def _compare(row: dict, ref: ReferenceRow) -> dict:
 def output_times(study: Study) -> np.ndarray:
     """Uniform output times from impact, s, at the study's sample rate."""
     sim = study.simulation
-    n = int(round(sim.t_end_s * sim.sample_rate_hz)) + 1
+    n = round(sim.t_end_s * sim.sample_rate_hz) + 1
     return np.arange(n) / sim.sample_rate_hz
 
 
@@ -168,8 +168,10 @@ def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult) -> Setup
     if "top" in by_pos and "bottom" in by_pos:
         top, bot = by_pos["top"], by_pos["bottom"]
         d = centre_distance(chain.length, top.sensor.particle, bot.sensor.particle)
-        speed_in = float(wave_speed(d, top.features.t_incident, bot.features.t_incident))
-        speed_out = float(wave_speed(d, bot.features.t_reflected, top.features.t_reflected))
+        with np.errstate(divide="ignore", invalid="ignore"):  # features may be missing: NaN
+            speed_in = float(wave_speed(d, top.features.t_incident, bot.features.t_incident))
+            speed_out = float(wave_speed(d, bot.features.t_reflected,
+                                         top.features.t_reflected))
     return SetupResult(setup=setup, chain=chain, history=history,
                        static_force=static_contact_forces(chain), sensors=tuple(results),
                        speed_incident=speed_in, speed_reflected=speed_out)

@@ -16,20 +16,23 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
+from scipy.special import beta
 
 from msens.chain import kernel
 from msens.chain.equilibrium import static_contact_forces, static_equilibrium
 from msens.chain.model import Chain, DampingLaw
 
 #: Default steps per Hertz collision time of the stiffest, lightest contact at the impact
-#: speed. With 10, the paper chain (t_c = 13.9 us, dt = 1.39 us) has a peak-force error of
-#: ~5e-8 against a converged reference (benchmarks/chain_speed.py); 7 still meets 1e-6.
-STEPS_PER_CONTACT_TIME = 10
+#: speed. With 12, the paper chain (t_c = 15.6 us, dt = 1.30 us) has a peak-force error of
+#: ~3e-8 against a converged reference (benchmarks/chain_speed.py); 8 still meets 1e-6.
+STEPS_PER_CONTACT_TIME = 12
 #: Steps per period of the highest linearised (precompressed) chain frequency.
 STEPS_PER_LINEAR_PERIOD = 10
-#: Hertz collision time of two bodies, t_c = C (mu^2 / (A^2 v))^{1/5}, C = 2.8683
-#: (Johnson, *Contact Mechanics*, §11.4; Landau & Lifshitz, *Theory of Elasticity*, §9).
-_HERTZ_TIME = 2.8683
+#: Hertz collision time of two bodies in terms of the prefactor A: energy conservation
+#: (1/2) mu v^2 = (2/5) A delta_m^{5/2} gives t_c = 2 (delta_m / v) int_0^1 (1 - x^{5/2})^{-1/2} dx
+#: = C (mu^2 / (A^2 v))^{1/5} with C = 2 (5/4)^{2/5} (2/5) B(2/5, 1/2) = 3.2181 (Landau &
+#: Lifshitz, *Theory of Elasticity*, §9; equals Johnson's 2.87 (mu^2/(R* E*^2 v))^{1/5}).
+HERTZ_TIME_CONSTANT = 2.0 * 1.25**0.4 * 0.4 * float(beta(0.4, 0.5))
 
 _LAW_CODE = {DampingLaw.LINEAR: kernel.LAW_LINEAR,
              DampingLaw.HERTZ_KUWABARA_KONO: kernel.LAW_HKK}
@@ -98,7 +101,7 @@ def stable_step(chain: Chain, striker_velocity: float) -> float:
     times = []
     v = abs(float(striker_velocity))
     if v > 0.0:
-        times.append(_HERTZ_TIME * (np.min(mu) ** 2 / (np.max(chain.stiffness) ** 2 * v)) ** 0.2
+        times.append(HERTZ_TIME_CONSTANT * (np.min(mu) ** 2 / (np.max(chain.stiffness) ** 2 * v)) ** 0.2
                      / STEPS_PER_CONTACT_TIME)
     f0 = static_contact_forces(chain)
     k_lin = 1.5 * chain.stiffness ** (2.0 / 3.0) * f0 ** (1.0 / 3.0)  # dF/d(delta), N/m

@@ -86,8 +86,8 @@ class Chain:
     def __post_init__(self) -> None:
         mass = _vector("mass", self.mass, None)
         n = mass.shape[0]
-        if n < 2:
-            raise ValueError(f"a chain needs at least 2 particles (striker + 1), got {n}")
+        if n < 1:
+            raise ValueError("a chain needs at least one particle (the striker)")
         fields = {"mass": mass}
         for name in ("stiffness", "damping", "static_force"):
             fields[name] = _vector(name, getattr(self, name), n)

@@ -11,7 +11,7 @@ Linear systems: SuperLU with a minimum-degree ordering (:func:`.assembly.factori
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -73,6 +73,9 @@ class MagnetostaticProblem:
         Lagrange element order, 1 or 2.
     background_field : float
         Uniform axial field B_0 (T) imposed through the outer boundary values.
+    outer_potential : callable, optional
+        ``f(r, z) -> A_φ`` (T m) on the outer boundary, replacing B_0 r/2 (e.g. an exact
+        solution, to remove the truncation error in convergence studies).
     """
 
     mesh: AxiMesh
@@ -80,6 +83,7 @@ class MagnetostaticProblem:
     outer: tuple[str, ...] = ("outer",)
     order: int = 2
     background_field: float = 0.0
+    outer_potential: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
 
     def __post_init__(self) -> None:
         subs, regs = set(self.mesh.subdomains), set(self.regions)
@@ -147,8 +151,12 @@ def discretise(problem: MagnetostaticProblem) -> Discretisation:
     axis = axis_facets(mesh)
     outer = np.concatenate([problem.mesh.boundaries[n] for n in problem.outer] + [axis])
     fixed = np.unique(basis.get_dofs(outer.astype(np.int64)).flatten())
-    values = problem.background_field * basis.doflocs[0, fixed] / 2.0
-    values[basis.doflocs[0, fixed] <= 0.0] = 0.0
+    r, z = basis.doflocs[:, fixed]
+    if problem.outer_potential is not None:
+        values = np.asarray(problem.outer_potential(r, z), dtype=float)
+    else:
+        values = problem.background_field * r / 2.0
+    values = np.where(r <= 0.0, 0.0, values)
     return Discretisation(
         basis=basis, quad=quadrature_data(basis),
         pattern=build_pattern(basis.element_dofs, basis.N, fixed),
@@ -286,7 +294,7 @@ def incremental(solution: FieldSolution, sources: Mapping[str, Winding]) -> Fiel
             regions[name] = replace(reg, remanence=0.0)
         else:
             regions[name] = reg
-    inc = replace(prob, regions=regions, background_field=0.0)
+    inc = replace(prob, regions=regions, background_field=0.0, outer_potential=None)
     d0 = solution.disc if solution.disc is not None else discretise(prob)
     d = replace(d0, materials=material_fields(prob.mesh, regions),
                 fixed_values=np.zeros_like(d0.fixed_values))

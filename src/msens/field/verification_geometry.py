@@ -55,7 +55,7 @@ class Part:
 
 
 def build_mesh(parts: Sequence[Part], r_out: float, h_far: float, grading: float = 0.3,
-               path: str | Path | None = None) -> AxiMesh:
+               path: str | Path | None = None, sizing: Sequence[Part] = ()) -> AxiMesh:
     """Mesh the parts inside a half-disc of air of radius ``r_out`` and read it back.
 
     Parameters
@@ -70,6 +70,8 @@ def build_mesh(parts: Sequence[Part], r_out: float, h_far: float, grading: float
         Size growth per unit distance from the nearest part.
     path : str or Path, optional
         Where to write the .msh; a temporary file (removed afterwards) by default.
+    sizing : sequence of Part
+        Extra size-only zones (not geometry), e.g. a strip along the axis.
     """
     require(r_out > 0 and h_far > 0, "r_out and h_far must be > 0")
     # gmsh 4.15 rejects the "-noenv" flag with a warning; not reading the user's config files
@@ -112,7 +114,7 @@ def build_mesh(parts: Sequence[Part], r_out: float, h_far: float, grading: float
 
         def size(dim, tag, x, y, z, lc):
             best = h_far
-            for p in parts:
+            for p in (*parts, *sizing):
                 best = min(best, p.h + grading * p.distance(x, y))
             return best
 
@@ -155,4 +157,5 @@ def rect_mesh(name: str, r0: float, r1: float, length: float, r_out: float, h: f
               h_far: float | None = None) -> AxiMesh:
     """One rectangle r0 <= r <= r1, |z| <= length/2 (a winding or a ring magnet) in air."""
     part = Part(name, "rect", (r0, r1, -length / 2, length / 2), h)
-    return build_mesh([part], r_out, h_far or r_out / 8)
+    axis = Part("axis", "rect", (0.0, r0, -length, length), h)
+    return build_mesh([part], r_out, h_far or r_out / 8, sizing=[axis])

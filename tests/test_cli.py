@@ -1,0 +1,85 @@
+"""The msens command: bad input gives one message and exit status 2, never a traceback."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from msens.cli import main
+from msens.study import default_study_path
+
+GOOD = default_study_path().read_text()
+
+
+def _study(tmp_path, text, name="s.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "fragment"),
+    [
+        ("bead_mass_kg = 0.45e-3", "bead_mass_kg = -0.45e-3", "chain.bead_mass_kg"),
+        ("particle = 13\n  [[setup.sensor]]\n  kind = \"bead\"",
+         "particle = 0\n  [[setup.sensor]]\n  kind = \"bead\"", "particle"),
+        ("  particle = 18\n\n[[setup]]\nname = \"rod\"",
+         "  particle = 31\n\n[[setup]]\nname = \"rod\"", "from 2 to 30"),
+        ("gravity = 9.80665", "gravity = 9.80665\ncolour = 1", "unknown key 'chain.colour'"),
+        ("beads = 29", "beads = \"many\"", "must be an integer"),
+    ],
+)
+def test_bad_study_exit_2(tmp_path, capsys, old, new, fragment):
+    assert old in GOOD
+    path = _study(tmp_path, GOOD.replace(old, new, 1))
+    code = main(["run", str(path), "--out", str(tmp_path / "out"), "--no-figures"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert fragment in err
+    assert "Traceback" not in err
+    assert err.count("\n") == 1
+
+
+def test_missing_file_exit_2(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "nope.toml")]) == 2
+    assert "nope.toml" in capsys.readouterr().err
+
+
+def test_unknown_command_exit_2(capsys):
+    assert main(["fly"]) == 2
+    assert "invalid choice" in capsys.readouterr().err
+
+
+def test_console_script_no_traceback(tmp_path):
+    """The installed entry point, as a user runs it."""
+    proc = subprocess.run([sys.executable, "-m", "msens.cli", "run", str(tmp_path / "x.toml")],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr
+    assert "x.toml" in proc.stderr
+
+
+def test_refuses_to_overwrite_user_file(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "summary.json").write_text("mine")
+    code = main(["run", str(_study(tmp_path, GOOD)), "--out", str(out), "--no-figures"])
+    assert code == 2
+    assert "refusing to overwrite" in capsys.readouterr().err
+    assert (out / "summary.json").read_text() == "mine"
+
+
+def test_run_writes_summary_and_reruns(tmp_path):
+    fast = GOOD.split("[calibration.dissipation]")[0].replace("t_end_s = 1.0e-3",
+                                                              "t_end_s = 4.0e-4")
+    path = _study(tmp_path, fast)
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "--no-figures"]) == 0
+    first = json.loads((out / "summary.json").read_text())
+    assert main(["run", str(path), "--out", str(out), "--no-figures"]) == 0  # own files: ok
+    second = json.loads((out / "summary.json").read_text())
+    assert first == second  # reproducible
+    assert {r["setup"] for r in first["rows"]} == {"bead", "rod", "mss"}

@@ -38,6 +38,7 @@ RK_ORDER = 8
 
 LAW_LINEAR = 0
 LAW_HKK = 1
+LAW_LINEAR_LOADING = 2
 
 # Contacts whose crossing falls within this fraction of a step of its start toggle at once.
 _THETA_NOW = 1e-9
@@ -52,41 +53,41 @@ _FM = {"contract"}  # allow fused multiply-add only; no reassociation
 
 
 @nb.njit(cache=True, fastmath=_FM)
-def contact_forces(u, v, A, gam, law, state, out):
+def contact_forces(u, v, A, gam, law, closed, damp, out):
     """Contact forces (N) into ``out`` for displacements ``u`` and velocities ``v``.
 
-    ``state`` is 1.0 for a closed contact and 0.0 for an open one (float so that the loop
-    vectorises without branches).
+    ``closed`` (elastic part on) and ``damp`` (dashpot on) are 1.0 or 0.0 per contact
+    (floats so that the loop vectorises without branches).
     """
     n = u.shape[0]
-    if law == LAW_LINEAR:
+    if law == LAW_HKK:
         for k in range(n - 1):
-            d = u[k] - u[k + 1]
-            dp = max(d, 0.0)
-            out[k] = state[k] * (A[k] * dp * np.sqrt(dp) + gam[k] * (v[k] - v[k + 1]))
+            dp = max(u[k] - u[k + 1], 0.0)
+            out[k] = np.sqrt(dp) * (closed[k] * A[k] * dp + damp[k] * gam[k] * (v[k] - v[k + 1]))
         dp = max(u[n - 1], 0.0)
-        out[n - 1] = state[n - 1] * (A[n - 1] * dp * np.sqrt(dp) + gam[n - 1] * v[n - 1])
+        out[n - 1] = np.sqrt(dp) * (closed[n - 1] * A[n - 1] * dp
+                                    + damp[n - 1] * gam[n - 1] * v[n - 1])
     else:
         for k in range(n - 1):
-            d = u[k] - u[k + 1]
-            dp = max(d, 0.0)
-            out[k] = state[k] * np.sqrt(dp) * (A[k] * dp + gam[k] * (v[k] - v[k + 1]))
+            dp = max(u[k] - u[k + 1], 0.0)
+            out[k] = closed[k] * A[k] * dp * np.sqrt(dp) + damp[k] * gam[k] * (v[k] - v[k + 1])
         dp = max(u[n - 1], 0.0)
-        out[n - 1] = state[n - 1] * np.sqrt(dp) * (A[n - 1] * dp + gam[n - 1] * v[n - 1])
+        out[n - 1] = (closed[n - 1] * A[n - 1] * dp * np.sqrt(dp)
+                      + damp[n - 1] * gam[n - 1] * v[n - 1])
 
 
 @nb.njit(cache=True, fastmath=_FM)
-def accelerations(u, v, A, gam, law, state, load, inv_m, F, out):
+def accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, out):
     """Accelerations (m/s^2) into ``out``; ``F`` receives the contact forces."""
     n = u.shape[0]
-    contact_forces(u, v, A, gam, law, state, F)
+    contact_forces(u, v, A, gam, law, closed, damp, F)
     out[0] = (load[0] - F[0]) * inv_m[0]
     for i in range(1, n):
         out[i] = (load[i] + F[i - 1] - F[i]) * inv_m[i]
 
 
 @nb.njit(cache=True, fastmath=_FM)
-def rk_step(u, v, a0, h, A, gam, law, state, load, inv_m, ku, kv, tu, tv, F, u1, v1):
+def rk_step(u, v, a0, h, A, gam, law, closed, damp, load, inv_m, ku, kv, tu, F, u1, v1):
     """One DOP853 step of size ``h`` from (u, v) with a0 = acceleration at (u, v).
 
     ``ku[s]`` holds the stage velocities (the derivative of u), ``kv[s]`` the stage
@@ -106,7 +107,7 @@ def rk_step(u, v, a0, h, A, gam, law, state, load, inv_m, ku, kv, tu, tv, F, u1,
                 for i in range(n):
                     tu[i] += c * ku[j, i]
                     ku[s, i] += c * kv[j, i]
-        accelerations(tu, ku[s], A, gam, law, state, load, inv_m, F, kv[s])
+        accelerations(tu, ku[s], A, gam, law, closed, damp, load, inv_m, F, kv[s])
     for i in range(n):
         u1[i] = u[i]
         v1[i] = v[i]
@@ -169,7 +170,8 @@ def _hermite3(p0, d0, p1, d1, t):
 
 
 @nb.njit(cache=True)
-def _sample(t_out, j, t0, h, tiny, u0, v0, a0, u1, v1, a1, A, gam, law, state, store_uv,
+def _sample(t_out, j, t0, h, tiny, u0, v0, a0, u1, v1, a1, A, gam, law, closed, damp,
+            store_uv,
             out_F, out_d, out_u, out_v, us, vs, F):
     """Write the quintic-Hermite samples with t0 < t_out[j] <= t0 + h; return the next j."""
     n = u0.shape[0]
@@ -207,7 +209,7 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, u1, v1, a1, A, gam, law, state, s
                          + h11 * h * v1[i] + h21 * hh * a1[i])
                 vs[i] = (e01 * du / h + e10 * v0[i] + e20 * h * a0[i]
                          + e11 * v1[i] + e21 * h * a1[i])
-        contact_forces(us, vs, A, gam, law, state, F)
+        contact_forces(us, vs, A, gam, law, closed, damp, F)
         for k in range(n):
             out_F[j, k] = F[k]
             g = _gap(us, k, n)
@@ -220,12 +222,26 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, u1, v1, a1, A, gam, law, state, s
 
 
 @nb.njit(cache=True)
+def _toggle(kind, k, closed, damp, law):
+    """Switch contact k's elastic state (kind 0) or its dashpot (kind 1); True if it closed."""
+    if kind == 1:
+        damp[k] = 1.0 - damp[k]
+        return False
+    closed[k] = 1.0 - closed[k]
+    if law == LAW_LINEAR_LOADING:
+        damp[k] = closed[k]  # a contact closes while loading, and opens while unloading
+    else:
+        damp[k] = closed[k]
+    return closed[k] > 0.0
+
+
+@nb.njit(cache=True)
 def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
               out_F, out_d, out_u, out_v):
     """Integrate one chain from t = 0 over t_out (sorted, t_out[0] >= 0) with nominal step dt.
 
     Fills out_F, out_d (and out_u, out_v if ``store_uv``), each (nt, n). Returns the
-    number of steps taken (events included).
+    number of steps taken (event cuts and Newton re-steps included).
     """
     n = u_init.shape[0]
     inv_m = 1.0 / mass
@@ -238,22 +254,24 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
     ku = np.empty((N_STAGES, n))
     kv = np.empty((N_STAGES, n))
     tu = np.empty(n)
-    tv = np.empty(n)
     F = np.empty(n)
     us = np.empty(n)
     vs = np.empty(n)
-    state = np.zeros(n)  # 1.0 closed, 0.0 open
+    closed = np.zeros(n)
+    damp = np.zeros(n)
+    loading = law == LAW_LINEAR_LOADING
     for k in range(n):
         g = _gap(u, k, n)
         r = _gap(v, k, n)
-        state[k] = 1.0 if (g > 0.0 or (g == 0.0 and r > 0.0)) else 0.0
+        closed[k] = 1.0 if (g > 0.0 or (g == 0.0 and r > 0.0)) else 0.0
+        damp[k] = closed[k] * (1.0 if (not loading or r > 0.0) else 0.0)
     nt = t_out.shape[0]
     t_end = t_out[nt - 1]
-    accelerations(u, v, A, gam, law, state, load, inv_m, F, a0)
+    accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, a0)
     j = 0
     # Samples at the initial time.
     while j < nt and t_out[j] <= 0.0:
-        j = _sample(t_out, j, -1.0, 1.0, 0.0, u, v, a0, u, v, a0, A, gam, law, state,
+        j = _sample(t_out, j, -1.0, 1.0, 0.0, u, v, a0, u, v, a0, A, gam, law, closed, damp,
                     store_uv, out_F, out_d, out_u, out_v, us, vs, F)
     t = 0.0
     steps = 0
@@ -262,7 +280,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
     # Steps left in a geometric grading after a contact closed (sizes dt 2^-min(grade, K)).
     grade = 0
     for k in range(n):
-        if state[k] > 0.0 and _gap(u, k, n) == 0.0:
+        if closed[k] > 0.0 and _gap(u, k, n) == 0.0:
             grade = GRADE_LEVELS + 1
     while j < nt:
         h = dt
@@ -271,7 +289,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
         else:
             # Approach a closed contact that is about to open in halving steps.
             for k in range(n):
-                if state[k] > 0.0:
+                if closed[k] > 0.0:
                     r = _gap(v, k, n)
                     if r < 0.0:
                         tau = -_gap(u, k, n) / r
@@ -282,37 +300,55 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
             h = t_end - t
         if h <= 0.0:
             h = dt  # only rounding left: finish the last samples with one more step
-        rk_step(u, v, a0, h, A, gam, law, state, load, inv_m, ku, kv, tu, tv, F, u1, v1)
+        rk_step(u, v, a0, h, A, gam, law, closed, damp, load, inv_m, ku, kv, tu, F, u1, v1)
         steps += 1
-        # Find the earliest contact whose state is violated at the end of the step.
+        if loading:
+            accelerations(u1, v1, A, gam, law, closed, damp, load, inv_m, F, a1)
+        # Find the earliest violated contact state: kind 0 = gap (open/closed), kind 1 = the
+        # sign of the approach rate (dashpot on/off, loading law only).
         kmin = -1
+        kind = 0
         th_min = 2.0
         for k in range(n):
             g1 = _gap(u1, k, n)
-            if (state[k] > 0.0 and g1 < 0.0) or (state[k] == 0.0 and g1 > 0.0):
+            if (closed[k] > 0.0 and g1 < 0.0) or (closed[k] == 0.0 and g1 > 0.0):
                 th = _first_violation(_gap(u, k, n), h * _gap(v, k, n), g1,
-                                      h * _gap(v1, k, n), state[k] > 0.0)
+                                      h * _gap(v1, k, n), closed[k] > 0.0)
                 if th < th_min:
                     th_min = th
                     kmin = k
+                    kind = 0
+            elif loading and closed[k] > 0.0:
+                r1 = _gap(v1, k, n)
+                if (damp[k] > 0.0 and r1 < 0.0) or (damp[k] == 0.0 and r1 > 0.0):
+                    th = _first_violation(_gap(v, k, n), h * _gap(a0, k, n), r1,
+                                          h * _gap(a1, k, n), damp[k] > 0.0)
+                    if th < th_min:
+                        th_min = th
+                        kmin = k
+                        kind = 1
         if kmin >= 0:
             if th_min <= _THETA_NOW and toggles_here < 4 * n:
                 # The contact changes state now: toggle and redo the step.
-                state[kmin] = 1.0 - state[kmin]
                 toggles_here += 1
-                if state[kmin] > 0.0:
+                if _toggle(kind, kmin, closed, damp, law):
                     grade = GRADE_LEVELS + 1
-                accelerations(u, v, A, gam, law, state, load, inv_m, F, a0)
+                accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, a0)
                 continue
             if th_min > _THETA_NOW:
-                # Cut the step back to the crossing and refine it by Newton on the gap.
+                # Cut the step back to the crossing; refine by Newton on the event function.
                 hc = th_min * h
                 for _ in range(_NEWTON_MAX):
-                    rk_step(u, v, a0, hc, A, gam, law, state, load, inv_m, ku, kv, tu, tv,
+                    rk_step(u, v, a0, hc, A, gam, law, closed, damp, load, inv_m, ku, kv, tu,
                             F, u1, v1)
                     steps += 1
-                    g = _gap(u1, kmin, n)
-                    r = _gap(v1, kmin, n)
+                    if kind == 0:
+                        g = _gap(u1, kmin, n)
+                        r = _gap(v1, kmin, n)
+                    else:
+                        accelerations(u1, v1, A, gam, law, closed, damp, load, inv_m, F, a1)
+                        g = _gap(v1, kmin, n)
+                        r = _gap(a1, kmin, n)
                     if abs(g) <= _GAP_TOL * h * abs(r) or r == 0.0:
                         break
                     hn = hc - g / r
@@ -320,9 +356,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
                         break
                     hc = hn
                 h = hc
-        accelerations(u1, v1, A, gam, law, state, load, inv_m, F, a1)
-        j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, u1, v1, a1, A, gam, law, state, store_uv,
-                    out_F, out_d, out_u, out_v, us, vs, F)
+        accelerations(u1, v1, A, gam, law, closed, damp, load, inv_m, F, a1)
+        j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, u1, v1, a1, A, gam, law, closed, damp,
+                    store_uv, out_F, out_d, out_u, out_v, us, vs, F)
         t += h
         u, u1 = u1, u
         v, v1 = v1, v
@@ -330,10 +366,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
         if grade > 0:
             grade -= 1
         if kmin >= 0 and th_min > _THETA_NOW:
-            state[kmin] = 1.0 - state[kmin]
-            if state[kmin] > 0.0:
+            if _toggle(kind, kmin, closed, damp, law):
                 grade = GRADE_LEVELS + 1
-            accelerations(u, v, A, gam, law, state, load, inv_m, F, a0)
+            accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, a0)
         else:
             a0, a1 = a1, a0
     return steps

@@ -116,6 +116,71 @@ def format_summary(result: StudyResult) -> str:
     return "\n".join(lines)
 
 
+def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
+          noise: float = 0.01, seed: int = 0) -> Path:
+    """Write synthetic measurements of one setup of ``study`` to ``out`` (never over a file)."""
+    from msens.errors import InputError
+    from msens.io.read import write_waveform
+    from msens.synth import RigEffects, synthesize
+
+    if shots < 1 or shots > 10000:
+        raise InputError(f"--shots must be from 1 to 10000, got {shots}")
+    if not 0.0 <= noise <= 1.0:
+        raise InputError(f"--noise must be from 0 to 1 (fraction of the peak), got {noise}")
+    names = [s.name for s in study.setups]
+    name = setup or names[0]
+    if name not in names:
+        raise InputError(f"--setup must be one of {', '.join(names)}, got {name!r}")
+    if out.exists():
+        raise InputError(f"refusing to overwrite '{out}'")
+    result = run_study(study)
+    chosen = next(s for s in result.setups if s.setup.name == name)
+    meta = {"study": study.name}
+    if study.striker.drop_height_m is not None:
+        meta["drop_height_m"] = repr(study.striker.drop_height_m)
+    waveform = synthesize(chosen, RigEffects(shots=shots, noise=noise, seed=seed),
+                          metadata=meta)
+    write_waveform(waveform, out)
+    return out
+
+
+def compare(study: Study, data: Path, out: Path) -> tuple[dict, list[Path]]:
+    """Compare measured ``data`` with the model of ``study``; write ``compare.json`` and an
+    overlay figure into ``out``."""
+    from msens import plots
+    from msens.compare import compare as compare_records
+    from msens.compare import match_setup, shot_records
+    from msens.io.read import read_waveform
+
+    target = OutputDir(out)
+    target.check(["compare.json", "overlay.png"])
+    waveform = read_waveform(data)
+    result = run_study(study)
+    report = compare_records(result, waveform)
+    report["data"] = str(data)
+    written = [target.write_json("compare.json", report)]
+    setup = match_setup(result, waveform)
+    fig = plots.overlay(setup, shot_records(setup, waveform))
+    written.append(target.savefig("overlay.png", fig, dpi=150))
+    plots.close(fig)
+    return report, written
+
+
+def format_comparison(report: dict) -> str:
+    """Plain-text table of a comparison report."""
+    head = f"{'channel':<10} {'K':>10} {'TOF us':>16} {'AR':>14} {'nRMSE':>7} {'corr':>6}"
+    lines = [f"setup {report['setup']}, {report['shots']} shot(s)", head, "-" * len(head)]
+    for ch in report["channels"]:
+        m, s = ch["model"], ch["measured"]
+        lines.append(
+            f"{ch['channel']:<10} {s['gain']['mean']:>10.4g} "
+            f"{s['tof_us']['mean']:>7.1f} ({m['tof_us']:>6.1f}) "
+            f"{s['ar']['mean']:>6.3f} ({m['ar']:>5.3f}) {s['nrmse']['mean']:>7.4f} "
+            f"{s['correlation']['mean']:>6.3f}")
+    lines.append("(model values in parentheses)")
+    return "\n".join(lines)
+
+
 def field(study: Study, out: Path) -> str:
     """Solve the field model of the study's MsS sensors and write ``field.json``."""
     from msens.fieldrun import run_field

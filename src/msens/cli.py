@@ -39,6 +39,20 @@ def _parser() -> argparse.ArgumentParser:
     field.add_argument("--out", required=True, help="output directory")
 
     sub.add_parser("verify", help="run the field solver's verification problems")
+
+    synth = sub.add_parser("synth", help="synthetic measurements of a study's setup")
+    synth.add_argument("study", help="study .toml file")
+    synth.add_argument("--out", required=True, help="waveform file (.csv, .npz or .tdms)")
+    synth.add_argument("--setup", default=None, help="setup name (default: the first)")
+    synth.add_argument("--shots", type=int, default=1, help="repeated shots (default 1)")
+    synth.add_argument("--noise", type=float, default=0.01,
+                       help="noise std as a fraction of each channel's peak (default 0.01)")
+    synth.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+
+    comp = sub.add_parser("compare", help="compare a measured waveform with the model")
+    comp.add_argument("study", help="study .toml file")
+    comp.add_argument("data", help="waveform file (.csv, .npz or .tdms)")
+    comp.add_argument("--out", required=True, help="output directory")
     return p
 
 
@@ -72,7 +86,28 @@ def _verify(args: argparse.Namespace) -> int:
     return 0 if all(r.passed for r in rows) else 1
 
 
-_COMMANDS = {"run": _run, "field": _field, "verify": _verify}
+def _synth(args: argparse.Namespace) -> int:
+    from msens import api
+
+    study = api.load(args.study)
+    path = api.synth(study, Path(args.out), setup=args.setup, shots=args.shots,
+                     noise=args.noise, seed=args.seed)
+    print(f"wrote {path}")
+    return 0
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from msens import api
+
+    study = api.load(args.study)
+    report, written = api.compare(study, Path(args.data), Path(args.out))
+    print(api.format_comparison(report))
+    print(f"\nwrote {', '.join(str(p) for p in written)}")
+    return 0
+
+
+_COMMANDS = {"run": _run, "field": _field, "verify": _verify, "synth": _synth,
+             "compare": _compare}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -7,9 +7,10 @@ amplitude, speed = distance between two sensors / difference of their peak times
 
 Peak-picking rule (robust to the secondary pulses a piezo rod makes, paper §4.2):
 
-1. incident pulse = the first excursion of ``s`` above ``threshold`` x its global maximum;
-   its peak is the largest sample of that excursion (so ripples on the rising edge and
-   small precursors, like the MsS trough, are skipped);
+1. incident pulse = the first excursion of ``s`` above ``threshold`` x its global maximum
+   (it ends when ``s`` falls below half that level: hysteresis against noise); its peak is
+   the largest sample of that excursion (so ripples on the rising edge and small
+   precursors, like the MsS trough, are skipped);
 2. width = full width at half of the incident peak (linear interpolation of the crossings);
 3. the reflected search window opens at the latest of
    - t_incident + ``min_delay`` (e.g. a fraction of the expected wall round trip),
@@ -19,7 +20,8 @@ Peak-picking rule (robust to the secondary pulses a piezo rod makes, paper §4.2
      its tail are not taken for the reflection);
 4. reflected pulse = the largest strict local maximum inside that window;
 5. both peak times and amplitudes are refined by a parabola through the peak sample and its
-   two neighbours (sub-sample accuracy; exact for a parabolic peak).
+   two neighbours (sub-sample accuracy; exact for a parabolic peak), or, for noisy records,
+   a least-squares parabola through ``2 fit_half_width + 1`` samples.
 
 A feature that cannot be found (no decay, no local maximum in the window, non-positive
 signal) is NaN for that record.
@@ -80,21 +82,36 @@ def _check_time(t: np.ndarray, nt: int) -> float:
     return step
 
 
-def _parabolic(s: np.ndarray, i: np.ndarray, t0: float, dt: float) -> tuple[np.ndarray,
-                                                                              np.ndarray]:
-    """Vertex of the parabola through samples i-1, i, i+1 of each row of s (B, nt)."""
+def _parabolic(s: np.ndarray, i: np.ndarray, t0: float, dt: float,
+               k: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex of the least-squares parabola through samples i-k..i+k of each row of s (B, nt).
+
+    For k = 1 the parabola passes through the three samples (classic interpolation, exact for
+    a parabolic peak); larger k averages out noise. The vertex is kept within +-k samples.
+    """
     nt = s.shape[-1]
-    ic = np.clip(i, 1, nt - 2)
-    rows = np.arange(s.shape[0])
-    y0, y1, y2 = s[rows, ic - 1], s[rows, ic], s[rows, ic + 1]
-    den = y0 - 2.0 * y1 + y2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        off = np.where(den < 0, 0.5 * (y0 - y2) / den, 0.0)
-    off = np.clip(off, -0.5, 0.5)
+    k = int(min(k, (nt - 1) // 2))
+    ic = np.clip(i, k, nt - 1 - k)
+    x = np.arange(-k, k + 1, dtype=float)
+    # Rows of pinv give (c0, c1, c2) of y = c0 + c1 x + c2 x^2 from the 2k+1 samples.
+    coef = np.linalg.pinv(np.vander(x, 3, increasing=True))
+    rows = np.arange(s.shape[0])[:, None]
+    off = np.zeros(s.shape[0])
+    for sweep in range(2 if k > 1 else 1):
+        # With k > 1 the window is re-centred once on the first vertex: the largest noisy
+        # sample need not be at the centre of the underlying peak.
+        if sweep:
+            ic = np.clip(ic + np.rint(off).astype(int), k, nt - 1 - k)
+        y = s[rows, ic[:, None] + np.arange(-k, k + 1)[None, :]]
+        c0, c1, c2 = np.einsum("bj,cj->cb", y, coef)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            off = np.where(c2 < 0, -0.5 * c1 / c2, 0.0)
+        off = np.clip(off, -k, k)
+    peak = np.where(c2 < 0, c0 + c1 * off + c2 * off**2, y[:, k])
     # At the record's ends there is no bracketing sample: keep the sample itself.
-    edge = (i <= 0) | (i >= nt - 1)
+    edge = (i < k) | (i > nt - 1 - k)
     off = np.where(edge, 0.0, off)
-    peak = np.where(edge, s[rows, np.clip(i, 0, nt - 1)], y1 - 0.25 * (y0 - y2) * off)
+    peak = np.where(edge, s[np.arange(s.shape[0]), np.clip(i, 0, nt - 1)], peak)
     time = t0 + (np.where(edge, i, ic) + off) * dt
     return time, peak
 
@@ -113,7 +130,7 @@ def _crossing(s: np.ndarray, j: np.ndarray, level: np.ndarray, t0: float,
 
 def pulse_features(signal: ArrayLike, t: ArrayLike, *, threshold: float = 0.5,
                    min_delay: float | ArrayLike = 0.0, guard_widths: float = 2.0,
-                   decay: float = 0.1) -> PulseFeatures:
+                   decay: float = 0.1, fit_half_width: int = 1) -> PulseFeatures:
     """Incident and reflected peaks of pulse records (rule in the module docstring).
 
     Parameters
@@ -133,6 +150,10 @@ def pulse_features(signal: ArrayLike, t: ArrayLike, *, threshold: float = 0.5,
     decay : float
         The reflection is searched only after the record falls below this fraction of the
         incident peak.
+    fit_half_width : int
+        Peaks are refined by a least-squares parabola through 2 k + 1 samples, k this value
+        (1: interpolation through three samples; for noisy records take about a quarter of
+        the FWHM in samples).
 
     Returns
     -------
@@ -147,6 +168,8 @@ def pulse_features(signal: ArrayLike, t: ArrayLike, *, threshold: float = 0.5,
     require(0.0 < threshold <= 1.0, f"threshold must be in (0, 1], got {threshold}")
     require(0.0 < decay < 1.0, f"decay must be in (0, 1), got {decay}")
     require(guard_widths >= 0.0, f"guard_widths must be >= 0, got {guard_widths}")
+    require(isinstance(fit_half_width, int | np.integer) and fit_half_width >= 1,
+            f"fit_half_width must be an integer >= 1, got {fit_half_width!r}")
     batch = s.shape[:-1]
     s = s.reshape(-1, nt)
     delay = np.broadcast_to(np.asarray(min_delay, dtype=float), batch).reshape(-1)
@@ -157,11 +180,13 @@ def pulse_features(signal: ArrayLike, t: ArrayLike, *, threshold: float = 0.5,
     valid = gmax > 0
     above = s > (threshold * gmax)[:, None]
     i0 = np.argmax(above, axis=1)
-    below_after = ~above & (idx > i0[:, None])
+    # Hysteresis: the excursion ends below threshold/2, so noise near the threshold on the
+    # rising edge does not end the incident pulse early.
+    below_after = (s < (0.5 * threshold * gmax)[:, None]) & (idx > i0[:, None])
     i1 = np.where(below_after.any(axis=1), np.argmax(below_after, axis=1), nt)
     in_pulse = (idx >= i0[:, None]) & (idx < i1[:, None])
     ip = np.argmax(np.where(in_pulse, s, -np.inf), axis=1)
-    t_inc, f_inc = _parabolic(s, ip, t0, dt)
+    t_inc, f_inc = _parabolic(s, ip, t0, dt, fit_half_width)
 
     # Full width at half maximum of the incident pulse.
     half = 0.5 * f_inc
@@ -185,7 +210,7 @@ def pulse_features(signal: ArrayLike, t: ArrayLike, *, threshold: float = 0.5,
     window = local_max & (tt >= t_start[:, None])
     has_ref = window.any(axis=1) & has_decay & valid
     ir = np.argmax(np.where(window, s, -np.inf), axis=1)
-    t_ref, f_ref = _parabolic(s, ir, t0, dt)
+    t_ref, f_ref = _parabolic(s, ir, t0, dt, fit_half_width)
 
     nan = np.nan
     t_inc = np.where(valid, t_inc, nan)

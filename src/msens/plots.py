@@ -120,3 +120,37 @@ def table2(rows: list[dict]) -> Figure:
 def close(fig: Figure) -> None:
     """Release a figure's memory."""
     plt.close(fig)
+
+
+def overlay(setup: SetupResult, shots: list, t_max_s: float | None = None) -> Figure:
+    """Calibrated measurement (first shot, and the shot mean) over the model, per channel,
+    like the paper's Fig. 7(b, d, f).
+
+    Parameters
+    ----------
+    setup : SetupResult
+    shots : list of list of msens.compare.ShotRecord
+    """
+    sensors = setup.sensors
+    fig, axes = plt.subplots(len(sensors), 1, figsize=(7, 2.6 * len(sensors)), sharex=True,
+                             squeeze=False)
+    t = setup.history.t
+    m = np.ones(t.size, bool) if t_max_s is None else t <= t_max_s
+    for ax, sensor in zip(axes[:, 0], sensors, strict=True):
+        recs = [r for shot in shots for r in shot
+                if r.channel.kind == sensor.sensor.kind.value
+                and r.channel.particle == sensor.sensor.particle]
+        stack = np.array([r.force for r in recs])
+        covered = np.all(np.isfinite(stack), axis=0)  # samples every shot covers
+        ax.plot(t[m] * _US, recs[0].force[m], color="0.7", lw=0.8, label="measured, shot 1")
+        if len(recs) > 1:
+            ax.plot(t[m] * _US, np.where(covered, stack.mean(axis=0), np.nan)[m], "k", lw=1.2,
+                    label=f"measured, mean of {len(recs)}")
+        ax.plot(t[m] * _US, sensor.force[m], "r--", lw=1.2, label="model")
+        ax.set_ylabel(f"{sensor.sensor.kind.value}@{sensor.sensor.particle} (N)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1, 0].set_xlabel("time since impact (µs)")
+    fig.suptitle(f"Measured (calibrated, aligned) vs model: setup {setup.setup.name}")
+    fig.tight_layout()
+    return fig

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from msens.errors import InputError
@@ -62,9 +62,11 @@ def _read_only_input_errors(path: Path, content: bytes) -> None:
     except InputError as exc:
         assert str(exc), "an InputError must carry a message"
         assert path.name in str(exc), f"message does not name the file: {exc}"
+        event("rejected with InputError")
     else:
         assert isinstance(w, Waveform)
         assert np.all(np.isfinite(w.data))
+        event("read as a valid waveform")
 
 
 suffixes = st.sampled_from(sorted(BYTES))
@@ -78,7 +80,9 @@ def test_random_bytes(workdir: Path, suffix: str, content: bytes) -> None:
 
 @FUZZ
 @given(suffix=suffixes, data=st.data())
-def test_truncated_and_corrupted_valid_files(workdir: Path, suffix: str, data: st.DataObject) -> None:
+def test_truncated_and_corrupted_valid_files(
+    workdir: Path, suffix: str, data: st.DataObject
+) -> None:
     content = bytearray(BYTES[suffix])
     cut = data.draw(st.integers(0, len(content)), label="cut")
     content = content[:cut]
@@ -98,10 +102,15 @@ lines = st.one_of(
     st.text(max_size=40),
     st.builds(lambda k, v: f"# {k}: {v}", st.text(max_size=10), st.text(max_size=10)),
     st.builds(lambda cs: ",".join(cs), st.lists(cells, max_size=5)),
-    st.builds(lambda cs: ",".join(["time_s", *cs]), st.lists(
-        st.one_of(st.from_regex(r"(bead|rod|mss|x)@-?[0-9]{1,2}(#[0-9])?", fullmatch=True), cells),
-        max_size=4,
-    )),
+    st.builds(
+        lambda cs: ",".join(["time_s", *cs]),
+        st.lists(
+            st.one_of(
+                st.from_regex(r"(bead|rod|mss|x)@-?[0-9]{1,2}(#[0-9])?", fullmatch=True), cells
+            ),
+            max_size=4,
+        ),
+    ),
 )
 
 

@@ -39,7 +39,10 @@ def test_suffix_is_case_insensitive(tmp_path: Path) -> None:
 
 
 def test_unknown_suffix_and_missing_file(tmp_path: Path) -> None:
-    with pytest.raises(InputError, match=r"unknown waveform file type '\.txt'; allowed suffixes are .csv, .npz, .tdms"):
+    with pytest.raises(
+        InputError,
+        match=r"unknown waveform file type '\.txt'; allowed suffixes are .csv, .npz, .tdms",
+    ):
         read_waveform(tmp_path / "a.txt")
     with pytest.raises(InputError, match=r"unknown waveform file type"):
         write_waveform(make_waveform(), tmp_path / "a.mat")

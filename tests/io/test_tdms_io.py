@@ -78,7 +78,12 @@ TIME = ChannelObject("g", "time_s", np.arange(4.0))
         ([ChannelObject("g", "a", np.ones(4), {"kind": "rod", "particle": 2})], r"no time column"),
         ([TIME], r"no data channels"),
         (
-            [TIME, ChannelObject("g", "a", np.array([1, np.inf, 1, 1]), {"kind": "rod", "particle": 2})],
+            [
+                TIME,
+                ChannelObject(
+                    "g", "a", np.array([1, np.inf, 1, 1]), {"kind": "rod", "particle": 2}
+                ),
+            ],
             r"rod@2\[1\]: channel rod@2 value inf is not finite",
         ),
         (

@@ -44,7 +44,8 @@ def test_channel_parse_rejects(name: str) -> None:
 
 
 @pytest.mark.parametrize(
-    ("kind", "particle", "repeat"), [("coil", 1, 1), ("bead", 0, 1), ("bead", 1, 0), ("bead", True, 1)]
+    ("kind", "particle", "repeat"),
+    [("coil", 1, 1), ("bead", 0, 1), ("bead", 1, 0), ("bead", True, 1)],
 )
 def test_channel_rejects_bad_fields(kind: str, particle: int, repeat: int) -> None:
     with pytest.raises(InputError):

@@ -35,7 +35,8 @@ STEPS_PER_LINEAR_PERIOD = 10
 HERTZ_TIME_CONSTANT = 2.0 * 1.25**0.4 * 0.4 * float(beta(0.4, 0.5))
 
 _LAW_CODE = {DampingLaw.LINEAR: kernel.LAW_LINEAR,
-             DampingLaw.HERTZ_KUWABARA_KONO: kernel.LAW_HKK}
+             DampingLaw.HERTZ_KUWABARA_KONO: kernel.LAW_HKK,
+             DampingLaw.LINEAR_LOADING: kernel.LAW_LINEAR_LOADING}
 
 
 @dataclass(frozen=True)
@@ -109,7 +110,7 @@ def stable_step(chain: Chain, striker_velocity: float) -> float:
     omega2 = 2.0 * np.max((k_pad[:-1] + k_pad[1:]) / chain.mass)
     if omega2 > 0.0:
         times.append(2.0 * np.pi / np.sqrt(omega2) / STEPS_PER_LINEAR_PERIOD)
-    if chain.damping_law is DampingLaw.LINEAR and np.any(chain.damping > 0):
+    if chain.damping_law is not DampingLaw.HERTZ_KUWABARA_KONO and np.any(chain.damping > 0):
         times.append(0.5 * np.min(mu[chain.damping > 0] / chain.damping[chain.damping > 0]))
     if not times:
         raise ValueError("no time scale: zero striker velocity and no static compression")
@@ -228,6 +229,8 @@ def _numpy_forces(chain: Chain, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     g = chain.damping.reshape(A.shape)
     if chain.damping_law is DampingLaw.LINEAR:
         return A * d**1.5 + np.where(closed, g * rate, 0.0)
+    if chain.damping_law is DampingLaw.LINEAR_LOADING:
+        return A * d**1.5 + np.where(closed & (rate > 0.0), g * rate, 0.0)
     return np.sqrt(d) * (A * d + g * rate)
 
 

@@ -14,6 +14,16 @@ interpolant of the gap (values and rates at both ends), then refined by Newton s
 re-run the RK step to the new end until the residual gap is below ``1e-7 h |d(gap)/dt|``;
 the contact is toggled there and the step sequence resumes with the nominal step.
 
+Even with exact switch times, F ~ (t - t_0)^{3/2} near a switch is not smooth, which would cap
+the order at 2.5. Steps are therefore graded geometrically next to switches: after a contact
+closes the next steps are dt 2^-K, dt 2^-K, dt 2^-(K-1), ..., dt/2 (K = ``GRADE_LEVELS``), and a
+contact about to open (gap / closing rate < 2 dt) is approached in halving steps. This
+restores the high order in practice (see tests/chain/test_integrate.py).
+
+With the loading-only dashpot (``LAW_LINEAR_LOADING``) the dashpot of a closed contact is a
+second state, switched where the approach rate changes sign (a kink of the force), located
+the same way on the Hermite interpolant of the rate.
+
 The Runge-Kutta method is the 12-stage 8th-order formula of Dormand & Prince (DOP853,
 Hairer, Norsett & Wanner, *Solving ODEs I*, 2nd ed., Springer 1993, §II.5), run at a fixed
 step; its coefficients are taken from SciPy so that they are not retyped here.
@@ -222,16 +232,15 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, u1, v1, a1, A, gam, law, closed, 
 
 
 @nb.njit(cache=True)
-def _toggle(kind, k, closed, damp, law):
+def _toggle(kind, k, closed, damp):
     """Switch contact k's elastic state (kind 0) or its dashpot (kind 1); True if it closed."""
     if kind == 1:
         damp[k] = 1.0 - damp[k]
         return False
     closed[k] = 1.0 - closed[k]
-    if law == LAW_LINEAR_LOADING:
-        damp[k] = closed[k]  # a contact closes while loading, and opens while unloading
-    else:
-        damp[k] = closed[k]
+    # A contact closes while loading (dashpot on for every law) and opens while unloading
+    # (the loading-only dashpot is then already off).
+    damp[k] = closed[k]
     return closed[k] > 0.0
 
 
@@ -331,17 +340,19 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
             if th_min <= _THETA_NOW and toggles_here < 4 * n:
                 # The contact changes state now: toggle and redo the step.
                 toggles_here += 1
-                if _toggle(kind, kmin, closed, damp, law):
+                if _toggle(kind, kmin, closed, damp):
                     grade = GRADE_LEVELS + 1
                 accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, a0)
                 continue
             if th_min > _THETA_NOW:
                 # Cut the step back to the crossing; refine by Newton on the event function.
                 hc = th_min * h
-                for _ in range(_NEWTON_MAX):
+                for it in range(_NEWTON_MAX + 1):
                     rk_step(u, v, a0, hc, A, gam, law, closed, damp, load, inv_m, ku, kv, tu,
                             F, u1, v1)
                     steps += 1
+                    if it == _NEWTON_MAX:
+                        break
                     if kind == 0:
                         g = _gap(u1, kmin, n)
                         r = _gap(v1, kmin, n)
@@ -355,6 +366,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
                     if hn <= 0.0 or hn > h:
                         break
                     hc = hn
+                # (u1, v1) is the state at t + hc.
                 h = hc
         accelerations(u1, v1, A, gam, law, closed, damp, load, inv_m, F, a1)
         j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, u1, v1, a1, A, gam, law, closed, damp,
@@ -366,7 +378,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
         if grade > 0:
             grade -= 1
         if kmin >= 0 and th_min > _THETA_NOW:
-            if _toggle(kind, kmin, closed, damp, law):
+            if _toggle(kind, kmin, closed, damp):
                 grade = GRADE_LEVELS + 1
             accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, a0)
         else:

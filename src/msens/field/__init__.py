@@ -1,0 +1,55 @@
+"""Axisymmetric magnetostatic finite-element model (coil, bias magnet, steel beads).
+
+Core API (see the modules for details):
+
+- :mod:`.mesh`: :class:`AxiMesh`, :func:`read_gmsh`, :func:`refined`
+- :mod:`.regions`: :class:`Air`, :class:`LinearMagnetic`, :class:`NonlinearSoft`,
+  :class:`PermanentMagnet`, :class:`Winding`
+- :mod:`.solve`: :class:`MagnetostaticProblem`, :func:`solve`, :func:`incremental`,
+  :class:`FieldSolution`, :class:`FieldSolveError`
+- :mod:`.post`: :func:`flux_density`, :func:`field_strength`, :func:`flux_linkage`,
+  :func:`force_z`, :func:`energy`, :func:`coil_resistance`
+- :mod:`.verify`: :func:`run_all`, :func:`format_table`
+"""
+
+from msens.field.mesh import AxiMesh, read_gmsh, refined
+from msens.field.post import (
+    coil_resistance,
+    energy,
+    field_strength,
+    flux_density,
+    flux_linkage,
+    force_z,
+    potential_energy,
+)
+from msens.field.regions import Air, LinearMagnetic, NonlinearSoft, PermanentMagnet, Winding
+from msens.field.solve import (
+    FieldSolution,
+    FieldSolveError,
+    MagnetostaticProblem,
+    incremental,
+    solve,
+)
+
+__all__ = [
+    "Air",
+    "AxiMesh",
+    "FieldSolution",
+    "FieldSolveError",
+    "LinearMagnetic",
+    "MagnetostaticProblem",
+    "NonlinearSoft",
+    "PermanentMagnet",
+    "Winding",
+    "coil_resistance",
+    "energy",
+    "field_strength",
+    "flux_density",
+    "flux_linkage",
+    "force_z",
+    "incremental",
+    "potential_energy",
+    "read_gmsh",
+    "refined",
+    "solve",
+]

@@ -9,8 +9,8 @@ written as gmsh 4.1 ``.msh`` with named physical groups:
 - curves: ``axis`` (r = 0), ``outer`` (r = radius and the two z ends of the box) and
   ``contact_<k>_<k+1>`` (the flat shared by neighbour beads; only when they touch).
 
-Grading: near a contact the air wedge between two spheres is only (rho^2 - a^2)/R thick, so the
-element size follows that gap (times ``MeshOptions.wedge_factor``) from ``flat_fraction x a`` at
+Grading: near a contact the air wedge between two spheres is only g + (rho^2 - a^2)/R thick
+(g = optional gap between the flats), so the element size follows that gap (times ``MeshOptions.wedge_factor``) from ``flat_fraction x a`` at
 the flat up to the bead size; beads, coils and magnets get their own sizes; the far air grows
 to ``far_size``.
 """
@@ -100,10 +100,13 @@ def _set_sizes(geometry: SensorGeometry, options: MeshOptions, part_rects: list[
         dist = f.add("Distance")
         f.setNumbers(dist, "PointsList", rim_points)
         wedge = f.add("MathEval")
+        gap = MM * b.contact_gap
         s_min = options.flat_fraction * a
+        if gap > 0:  # an air gap between the flats must be resolved across its height
+            s_min = min(s_min, options.wedge_factor * gap)
         # No upper clamp: the field grows quadratically and the other fields take over.
-        expr = (f"Max({s_min!r}, "
-                f"{options.wedge_factor!r} * (2 * {a!r} * F{dist} + F{dist}^2) / {big_r!r})")
+        expr = (f"Max({s_min!r}, {options.wedge_factor!r} * "
+                f"({gap!r} + (2 * {a!r} * F{dist} + F{dist}^2) / {big_r!r}))")
         f.setString(wedge, "F", expr)
         fields.append(wedge)
 

@@ -32,7 +32,7 @@ from msens.field.bh import monotone_bh
 from msens.field.build import MeshOptions
 from msens.field.cache import cached_mesh
 from msens.field.constitutive import energy_density, reluctivities
-from msens.field.forms import flux_density_qp, potential_qp, quadrature_data
+from msens.field.forms import flux_density_qp, potential_qp
 from msens.field.geometry import Coil, SensorGeometry
 from msens.field.mesh import AxiMesh, from_arrays, read_gmsh
 from msens.field.regions import Air, NonlinearSoft, PermanentMagnet, Region, Winding
@@ -130,8 +130,39 @@ def _p1_gradients(mesh: skfem.MeshTri, phi: np.ndarray) -> np.ndarray:
     return np.stack([gx, gy], axis=-1)
 
 
+def shell_function(sol: FieldSolution, bodies: Sequence[str], layers: int = 0) -> np.ndarray:
+    """P1 vertex function φ of the eggshell: 1 on the bodies, 0 on all other non-air parts.
+
+    With ``layers`` = L > 0, air vertices L' <= L edges (through air triangles) away from the
+    bodies get φ = 1 - L'/(L + 1), so φ falls to 0 over L + 1 element layers; vertices of any
+    other non-air region stay 0. Shape (n_vertices,).
+    """
+    axi = sol.problem.mesh
+    mesh = axi.mesh
+    body_el = np.concatenate([axi.subdomains[n] for n in bodies])
+    phi = np.zeros(mesh.p.shape[1])
+    phi[np.unique(mesh.t[:, body_el])] = 1.0
+    solid = np.zeros(mesh.p.shape[1], dtype=bool)
+    air_el = []
+    for n, reg in sol.problem.regions.items():
+        if isinstance(reg, Air):
+            air_el.append(axi.subdomains[n])
+        elif n not in bodies:
+            solid[mesh.t[:, axi.subdomains[n]].ravel()] = True
+    t_air = mesh.t[:, np.concatenate(air_el)]
+    reached = phi > 0
+    for k in range(1, layers + 1):
+        touch = np.any(reached[t_air], axis=0)
+        new = np.zeros_like(reached)
+        new[t_air[:, touch].ravel()] = True
+        new &= ~reached & ~solid
+        phi[new] = 1.0 - k / (layers + 1)
+        reached |= new
+    return phi
+
+
 def group_force(sol: FieldSolution, bodies: Sequence[str],
-                flats: Sequence[str] = ()) -> float:
+                flats: Sequence[str] = (), layers: int = 0) -> float:
     """Axial magnetic force on the union of ``bodies``, N (eggshell Maxwell stress).
 
     Parameters
@@ -143,6 +174,9 @@ def group_force(sol: FieldSolution, bodies: Sequence[str],
     flats : sequence of str
         Boundary groups where the group touches other steel (contact flats on the group's
         *lower* side); each adds the vacuum stress of an infinitesimal gap.
+    layers : int
+        Extra element layers over which φ falls to 0 (see :func:`shell_function`); the result
+        must not depend on it beyond discretisation error.
 
     Returns
     -------
@@ -150,11 +184,7 @@ def group_force(sol: FieldSolution, bodies: Sequence[str],
         F_z, N (negative = pulled down).
     """
     axi = sol.problem.mesh
-    mesh = axi.mesh
-    body_el = np.concatenate([axi.subdomains[n] for n in bodies])
-    phi = np.zeros(mesh.p.shape[1])
-    phi[np.unique(mesh.t[:, body_el])] = 1.0
-    grad_phi = _p1_gradients(mesh, phi)
+    grad_phi = _p1_gradients(axi.mesh, shell_function(sol, bodies, layers))
     air = np.concatenate([axi.subdomains[n] for n, reg in sol.problem.regions.items()
                           if isinstance(reg, Air)])
     air = air[np.any(grad_phi[air] != 0.0, axis=1)]
@@ -195,20 +225,18 @@ def total_energy(sol: FieldSolution) -> float:
     return TWO_PI * float(np.sum(energy_density(sol.disc.materials, b, nu) * q.w))
 
 
-def virtual_work_force(sol: FieldSolution, bodies: Sequence[str], delta: float = 1e-7,
-                       **solve_kw) -> float:
+def virtual_work_force(sol: FieldSolution, bodies: Sequence[str], delta: float = 1e-8,
+                       layers: int = 2, **solve_kw) -> float:
     """Axial force on ``bodies`` by virtual work: F = -dΠ/dx at fixed remanence, N.
 
     The group's vertices are moved rigidly by ±``delta`` along z and the air around them is
-    stretched by the same P1 function φ used by :func:`group_force` (so only air elements
-    deform); Π is recomputed on both morphed meshes (two nonlinear solves) and differenced.
-    Valid only when the bodies touch nothing but air (a model with ``contact_gap > 0``).
+    stretched by the shell function φ of :func:`shell_function` (``layers`` thick, so only air
+    elements deform); Π is recomputed on both morphed meshes (two nonlinear solves) and
+    differenced. Valid only when the bodies touch nothing but air (``contact_gap > 0``).
     """
     axi = sol.problem.mesh
     mesh = axi.mesh
-    body_el = np.concatenate([axi.subdomains[n] for n in bodies])
-    phi = np.zeros(mesh.p.shape[1])
-    phi[np.unique(mesh.t[:, body_el])] = 1.0
+    phi = shell_function(sol, bodies, layers)
     others = np.concatenate([axi.subdomains[n] for n, reg in sol.problem.regions.items()
                              if not isinstance(reg, Air) and n not in bodies])
     if np.any(phi[mesh.t[:, others]] != 0):
@@ -438,5 +466,5 @@ __all__ = [
     "MAGNET_NOTE", "BeadField", "CoilResult", "ContactForce", "FieldReport", "axis_profile",
     "bead_fields", "bias_problem", "coil_current_density", "coil_resistance", "coil_results",
     "contact_forces", "flux_density_at", "flux_linkage", "group_force", "load_mesh",
-    "quadrature_data", "regions_for", "run_field_model", "total_energy", "virtual_work_force",
+    "regions_for", "run_field_model", "shell_function", "total_energy", "virtual_work_force",
 ]

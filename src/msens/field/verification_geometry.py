@@ -107,8 +107,9 @@ def build_mesh(parts: Sequence[Part], r_out: float, h_far: float, grading: float
         bnd = gmsh.model.getBoundary(all_surfs, combined=True, oriented=False)
         outer = []
         for _, c in bnd:
-            xmin, _, _, xmax, _, _ = gmsh.model.getBoundingBox(1, abs(c))
-            if xmax > 1e-9 * r_out:
+            # segments on the axis (r = 0) are not part of the truncation boundary
+            x_mid = occ.getCenterOfMass(1, abs(c))[0]
+            if x_mid > 1e-6 * r_out:
                 outer.append(abs(c))
         gmsh.model.addPhysicalGroup(1, outer, name="outer")
 

@@ -208,17 +208,16 @@ def _is_number(cell: str) -> bool:
 def format_csv(waveform: Waveform) -> str:
     """CSV text of ``waveform`` (version line, metadata, header, repr-exact rows)."""
     out = [f"# {VERSION_KEY}: {VERSION}"]
-    out += [f"# {key}: {value}" if value else f"# {key}:" for key, value in
-            waveform.metadata.items()]
+    out += [
+        f"# {key}: {value}" if value else f"# {key}:" for key, value in waveform.metadata.items()
+    ]
     out.append(",".join((TIME_NAME, *waveform.names)))
     table = np.column_stack((waveform.time, waveform.data)).tolist()
     out += [",".join(map(repr, row)) for row in table]
     return "\n".join(out) + "\n"
 
 
-def write_csv(
-    waveform: Waveform, path: str | os.PathLike[str], *, overwrite: bool = False
-) -> None:
+def write_csv(waveform: Waveform, path: str | os.PathLike[str], *, overwrite: bool = False) -> None:
     """Write ``waveform`` to a CSV file atomically; never replaces a file unless asked.
 
     Raises

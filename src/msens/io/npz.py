@@ -104,9 +104,7 @@ def _load_arrays(raw: bytes, source: str) -> dict[str, np.ndarray]:
 
 def _numeric_vector(array: np.ndarray, name: str, source: str) -> np.ndarray:
     if array.dtype.kind not in "iuf":
-        raise InputError(
-            f"{source}: array {name!r} must be real numbers, got dtype {array.dtype}"
-        )
+        raise InputError(f"{source}: array {name!r} must be real numbers, got dtype {array.dtype}")
     if array.ndim != 1:
         raise InputError(f"{source}: array {name!r} must be 1-D, got shape {array.shape}")
     return array.astype(np.float64)
@@ -139,9 +137,7 @@ def format_npz(waveform: Waveform) -> bytes:
     return buffer.getvalue()
 
 
-def write_npz(
-    waveform: Waveform, path: str | os.PathLike[str], *, overwrite: bool = False
-) -> None:
+def write_npz(waveform: Waveform, path: str | os.PathLike[str], *, overwrite: bool = False) -> None:
     """Write ``waveform`` to an NPZ archive atomically; never replaces a file unless asked.
 
     Raises

@@ -26,8 +26,8 @@ from nptdms import ChannelObject, GroupObject, RootObject, TdmsFile, TdmsWriter
 from msens.errors import InputError
 from msens.io._files import atomic_write_bytes, read_bytes
 from msens.io.waveform import (
-    METADATA_KEY_RE,
     KINDS,
+    METADATA_KEY_RE,
     TIME_NAME,
     VERSION_KEY,
     Channel,

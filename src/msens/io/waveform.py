@@ -139,7 +139,9 @@ def check_time(
         raise InputError(f"{where}: need at least 2 samples, got {time.size}")
     bad = np.flatnonzero(~np.isfinite(time))
     if bad.size:
-        raise InputError(f"{locate(int(bad[0]))}: {TIME_NAME} is not finite ({float(time[bad[0]])!r})")
+        raise InputError(
+            f"{locate(int(bad[0]))}: {TIME_NAME} is not finite ({float(time[bad[0]])!r})"
+        )
     steps = np.diff(time)
     bad = np.flatnonzero(steps <= 0.0)
     if bad.size:
@@ -194,7 +196,9 @@ def check_metadata_item(key: object, value: object, where: str) -> None:
     if not isinstance(key, str) or METADATA_KEY_RE.fullmatch(key) is None:
         raise InputError(f"{where}: bad metadata key {key!r}: {METADATA_KEY_HELP}")
     if key == VERSION_KEY:
-        raise InputError(f"{where}: metadata key {VERSION_KEY!r} is reserved for the format version")
+        raise InputError(
+            f"{where}: metadata key {VERSION_KEY!r} is reserved for the format version"
+        )
     if not isinstance(value, str):
         raise InputError(f"{where}: metadata {key!r} must be a string, got {value!r}")
     if value != value.strip() or any(c in value for c in "\r\n\x00"):

@@ -1,0 +1,452 @@
+"""Stress in a bead squeezed between its two neighbours (axisymmetric linear elasticity).
+
+A sphere of radius R is pressed by two equal and opposite forces F along its axis z, each
+transmitted through a Hertz contact: on a cap of radius a around each pole the surface carries
+the pressure p(rho) = p0 sqrt(1 - rho^2/a^2) (Johnson 1985, *Contact Mechanics*, §4.2,
+eqs. 4.22-4.24):
+
+    a = (3 F R* / (4 E*))^(1/3),   p0 = 3 F / (2 pi a^2),
+    R* = R/2 (two equal spheres),   E* = E / (2 (1 - nu^2)) (same material).
+
+The pressure acts along the axis, per unit area projected on the plane z = const: between two
+frictionless spheres the deformed contact surface is that plane, so the traction on it is
+purely axial, and the load resultant is exactly F.
+
+By symmetry about the equator only the upper quarter of the meridian section is solved, with
+u_z = 0 on z = 0 (which also removes the axial rigid motion) and u_r = 0 on the axis. The
+weak form is the axisymmetric one: strains (d_r u_r, d_z u_z, u_r/r, d_z u_r + d_r u_z) and
+every integral weighted by r. Elements are quadratic (P2) on a curved quadratic mesh graded
+toward the contact.
+
+Linearity in F. For a fixed contact radius the problem is linear, but a grows as F^(1/3), so
+the stress *near the contact* (within a few a of the pole) is not proportional to F: p0 grows
+as F^(1/3). The bead-average stress is exactly linear: by the mean-stress theorem
+<sigma_ij> = (1/V) \\oint x_i t_j dS, which for axial tractions at z = +-R gives
+<sigma_zz> = -2 F R / V = -3 F / (2 pi R^2) and <sigma_rr> = <sigma_thth> = <sigma_rz> = 0,
+whatever a is (up to a relative O(a^2/R^2) from the cap's curvature). Far from the contacts
+(Saint-Venant) the field depends on F only, to the same order. A solution is therefore for one
+force; ``stress_at(bs, ...) / bs.force`` is the stress per newton at that force.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import scipy.sparse.linalg as spla
+import skfem
+from skfem import BilinearForm, Functional, LinearForm
+
+from msens.beadmesh import BeadMeshSpec, bead_section_mesh
+from msens.errors import InputError, require
+
+#: Component order of every stress array returned here.
+COMPONENTS = ("rr", "zz", "tt", "rz")
+
+
+def hertz_contact(radius: float, youngs_modulus: float, poisson_ratio: float,
+                  force: float) -> tuple[float, float]:
+    """Contact radius and peak pressure of two equal elastic spheres pressed together.
+
+    Parameters
+    ----------
+    radius : float
+        Sphere radius R, m (both spheres).
+    youngs_modulus : float
+        E, Pa (both spheres).
+    poisson_ratio : float
+        nu (both spheres).
+    force : float
+        Contact force F, N, > 0.
+
+    Returns
+    -------
+    a : float
+        Contact radius, m: a = (3 F R* / (4 E*))^(1/3), R* = R/2, E* = E / (2 (1 - nu^2)).
+    p0 : float
+        Peak (central) pressure, Pa: p0 = 3 F / (2 pi a^2).
+
+    References
+    ----------
+    K. L. Johnson, *Contact Mechanics*, Cambridge University Press (1985), §4.2.
+    """
+    _check_material(radius, youngs_modulus, poisson_ratio)
+    require(np.isfinite(force) and force > 0, f"force must be > 0 N, got {force}")
+    r_eff = radius / 2.0
+    e_eff = youngs_modulus / (2.0 * (1.0 - poisson_ratio**2))
+    a = (3.0 * force * r_eff / (4.0 * e_eff)) ** (1.0 / 3.0)
+    return a, 3.0 * force / (2.0 * np.pi * a**2)
+
+
+def hertz_axis_stress(depth: np.ndarray, contact_radius: float, peak_pressure: float,
+                      poisson_ratio: float) -> tuple[np.ndarray, np.ndarray]:
+    """Hertz half-space stress on the load axis below a circular contact.
+
+    Parameters
+    ----------
+    depth : ndarray, shape (n,)
+        Depth below the surface, m, >= 0.
+    contact_radius, peak_pressure : float
+        a (m) and p0 (Pa), e.g. from :func:`hertz_contact`.
+    poisson_ratio : float
+        nu.
+
+    Returns
+    -------
+    sigma_zz, sigma_rr : ndarray, shape (n,)
+        Axial and radial (= hoop) stress on the axis, Pa (compression negative).
+
+    References
+    ----------
+    K. L. Johnson, *Contact Mechanics* (1985), eq. (3.45).
+    """
+    zeta = np.asarray(depth, dtype=float) / contact_radius
+    with np.errstate(divide="ignore", invalid="ignore"):
+        atan_term = np.where(zeta > 0, zeta * np.arctan2(1.0, zeta), 0.0)
+    s_zz = -peak_pressure / (1.0 + zeta**2)
+    s_rr = peak_pressure * (-(1.0 + poisson_ratio) * (1.0 - atan_term)
+                            + 0.5 / (1.0 + zeta**2))
+    return s_zz, s_rr
+
+
+@dataclass(frozen=True)
+class BeadStress:
+    """Solved stress field of a bead under two opposite Hertz contact loads.
+
+    Attributes
+    ----------
+    radius : float
+        Bead radius R, m.
+    youngs_modulus : float
+        E, Pa.
+    poisson_ratio : float
+        nu.
+    force : float
+        Contact force F at each pole, N (compressive).
+    contact_radius : float
+        Hertz contact radius a at this force, m.
+    peak_pressure : float
+        Hertz peak pressure p0 at this force, Pa.
+    basis : skfem.CellBasis
+        P2 vector basis on the quarter section (r, z) in m: dofs interleaved (u_r, u_z).
+    displacement : ndarray, shape (basis.N,)
+        Displacement dofs, m.
+    stress_basis : skfem.CellBasis
+        Discontinuous P2 scalar basis carrying the stress components.
+    stress_dofs : ndarray, shape (4, stress_basis.N)
+        Element-wise L2 projection of (sigma_rr, sigma_zz, sigma_thth, sigma_rz), Pa.
+    spec : BeadMeshSpec
+        Mesh sizes used.
+    """
+
+    radius: float
+    youngs_modulus: float
+    poisson_ratio: float
+    force: float
+    contact_radius: float
+    peak_pressure: float
+    basis: skfem.CellBasis
+    displacement: np.ndarray
+    stress_basis: skfem.CellBasis
+    stress_dofs: np.ndarray
+    spec: BeadMeshSpec
+
+    @property
+    def ndofs(self) -> int:
+        """Number of displacement unknowns (before constraints)."""
+        return int(self.basis.N)
+
+
+def _check_material(radius: float, youngs_modulus: float, poisson_ratio: float) -> None:
+    require(np.isfinite(radius) and radius > 0, f"radius must be > 0 m, got {radius}")
+    require(np.isfinite(youngs_modulus) and youngs_modulus > 0,
+            f"youngs_modulus must be > 0 Pa, got {youngs_modulus}")
+    require(-1.0 < poisson_ratio < 0.5,
+            f"poisson_ratio must be in (-1, 0.5), got {poisson_ratio}")
+
+
+def _lame(youngs_modulus: float, poisson_ratio: float) -> tuple[float, float]:
+    lam = youngs_modulus * poisson_ratio / ((1 + poisson_ratio) * (1 - 2 * poisson_ratio))
+    return lam, youngs_modulus / (2 * (1 + poisson_ratio))
+
+
+def _strains(u, r):
+    """Axisymmetric engineering strains (e_rr, e_zz, e_thth, gamma_rz) of a vector field."""
+    g = u.grad
+    return g[0][0], g[1][1], u.value[0] / r, g[0][1] + g[1][0]
+
+
+def _stresses(u, r, lam, mu):
+    """Stresses (s_rr, s_zz, s_thth, s_rz) of a vector field, Pa."""
+    err, ezz, ett, grz = _strains(u, r)
+    tr = lam * (err + ezz + ett)
+    return tr + 2 * mu * err, tr + 2 * mu * ezz, tr + 2 * mu * ett, mu * grz
+
+
+@BilinearForm
+def _stiffness(u, v, w):
+    """r-weighted axisymmetric elastic energy form (the 2 pi is dropped on both sides)."""
+    r = w.x[0]
+    s = _stresses(u, r, w.lam, w.mu)
+    e = _strains(v, r)
+    return (s[0] * e[0] + s[1] * e[1] + s[2] * e[2] + s[3] * e[3]) * r
+
+
+@LinearForm
+def _hertz_load(v, w):
+    """Axial Hertz traction per projected area: t_z = -p(rho) |n_z| on the cap."""
+    rho = w.x[0]
+    p = w.p0 * np.sqrt(np.clip(1.0 - (rho / w.a) ** 2, 0.0, None))
+    return -p * np.abs(w.n[1]) * v.value[1] * rho
+
+
+def solve_bead_stress(radius: float, youngs_modulus: float, poisson_ratio: float,
+                      force: float, *, refine: int = 0,
+                      spec: BeadMeshSpec | None = None) -> BeadStress:
+    """Solve for the stress in a bead squeezed by two opposite Hertz contacts.
+
+    Parameters
+    ----------
+    radius : float
+        Bead radius R, m (4.76 mm beads: 2.38e-3).
+    youngs_modulus : float
+        E, Pa.
+    poisson_ratio : float
+        nu.
+    force : float
+        Contact force F at each pole, N, > 0.
+    refine : int, optional
+        Uniform refinement level (all element sizes divided by 2**refine); ignored if
+        ``spec`` is given.
+    spec : BeadMeshSpec, optional
+        Full mesh specification.
+
+    Returns
+    -------
+    BeadStress
+    """
+    _check_material(radius, youngs_modulus, poisson_ratio)
+    a, p0 = hertz_contact(radius, youngs_modulus, poisson_ratio, force)
+    spec = spec or BeadMeshSpec(refine=refine)
+    mesh = bead_section_mesh(radius, a, spec)
+    basis = skfem.Basis(mesh, skfem.ElementVector(skfem.ElementTriP2()))
+    lam, mu = _lame(youngs_modulus, poisson_ratio)
+    K = _stiffness.assemble(basis, lam=lam, mu=mu)
+    # the quadrature of the contact facets integrates sqrt(1 - rho^2/a^2), whose slope is
+    # infinite at rho = a (a mesh node): a high order keeps the load resultant exact to
+    # well under 1e-4 on the coarsest meshes
+    fb = skfem.FacetBasis(mesh, basis.elem, facets=mesh.boundaries["contact"], intorder=12)
+    f = _hertz_load.assemble(fb, p0=p0, a=a)
+    fixed = np.concatenate([basis.get_dofs("axis").nodal["u^1"],
+                            basis.get_dofs("axis").facet["u^1"],
+                            basis.get_dofs("equator").nodal["u^2"],
+                            basis.get_dofs("equator").facet["u^2"]])
+    u = skfem.solve(*skfem.condense(K, f, D=fixed), solver=_direct)
+    sbasis = skfem.Basis(mesh, skfem.ElementDG(skfem.ElementTriP2()), intorder=6)
+    sdofs = _project_stress(basis, sbasis, u, lam, mu)
+    return BeadStress(radius=radius, youngs_modulus=youngs_modulus,
+                      poisson_ratio=poisson_ratio, force=force, contact_radius=a,
+                      peak_pressure=p0, basis=basis, displacement=u, stress_basis=sbasis,
+                      stress_dofs=sdofs, spec=spec)
+
+
+def _direct(A, b, **_):
+    """Sparse direct solve (SuperLU); the system is SPD and at most ~1e6 unknowns."""
+    return spla.spsolve(A.tocsc(), b)
+
+
+def _project_stress(basis, sbasis, u, lam, mu) -> np.ndarray:
+    """Element-wise L2 projection of the four stress components onto discontinuous P2.
+
+    sigma_rr, sigma_zz and sigma_rz are linear in each element (P2 displacement), hence
+    reproduced exactly; the hoop stress contains u_r / r and is projected.
+    """
+    ui = skfem.Basis(basis.mesh, basis.elem, quadrature=sbasis.quadrature).interpolate(u)
+
+    @BilinearForm
+    def mass(s, q, w):
+        return s * q
+
+    M = mass.assemble(sbasis)
+    lu = spla.splu(M.tocsc())
+    out = np.empty((4, sbasis.N))
+    for k in range(4):
+        @LinearForm
+        def rhs(q, w, k=k):
+            return _stresses(w.u, w.x[0], lam, mu)[k] * q
+
+        out[k] = lu.solve(rhs.assemble(sbasis, u=ui))
+    return out
+
+
+def stress_at(bs: BeadStress, r: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """Stress components at points of the bead (full sphere, centre at the origin).
+
+    Parameters
+    ----------
+    bs : BeadStress
+    r : array_like
+        Radial coordinates, m, >= 0.
+    z : array_like
+        Axial coordinates, m (either hemisphere); broadcast with ``r``; r^2 + z^2 <= R^2.
+
+    Returns
+    -------
+    ndarray, shape (*broadcast(r, z).shape, 4)
+        (sigma_rr, sigma_zz, sigma_thth, sigma_rz), Pa, at force ``bs.force``.
+        Compression is negative. The lower hemisphere follows by mirror symmetry
+        (sigma_rz changes sign).
+    """
+    r, z = np.broadcast_arrays(np.asarray(r, dtype=float), np.asarray(z, dtype=float))
+    shape = r.shape
+    r, z = r.ravel(), z.ravel()
+    R = bs.radius
+    if np.any(r < 0) or np.any(np.hypot(r, z) > R * (1 + 1e-9)):
+        raise InputError(f"points must satisfy r >= 0 and r^2 + z^2 <= R^2 with R = {R:g} m")
+    sign = np.where(z < 0, -1.0, 1.0)
+    pts = np.vstack([r, np.abs(z)])
+    cells, local = _locate(bs.stress_basis, pts)
+    sb = bs.stress_basis
+    phis = np.array([sb.elem.gbasis(sb.mapping, local, k, tind=cells)[0].value
+                     for k in range(sb.Nbfun)])[:, :, 0]  # (Nbfun, npts)
+    vals = np.einsum("kp,ckp->pc", phis, bs.stress_dofs[:, sb.element_dofs[:, cells]])
+    vals[:, 3] *= sign
+    return vals.reshape(*shape, 4)
+
+
+def _locate(basis: skfem.CellBasis, pts: np.ndarray, candidates: int = 12
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Element and reference coordinates of points in a (possibly curved) triangle mesh.
+
+    skfem has no element finder for quadratic meshes, so each point is tried in the
+    elements with the nearest centroids: Newton inverts the isoparametric map (without
+    clipping, so points outside an element get coordinates outside the reference
+    triangle), and the first element whose reference coordinates lie inside, up to a small
+    tolerance that absorbs points on element edges and the arc, is taken.
+
+    Parameters
+    ----------
+    basis : skfem.CellBasis
+    pts : ndarray, shape (2, n)
+
+    Returns
+    -------
+    cells : ndarray of int, shape (n,)
+    local : ndarray, shape (2, n, 1)
+        Reference coordinates, clipped onto the reference triangle.
+    """
+    from scipy.spatial import cKDTree
+
+    mesh, mapping = basis.mesh, basis.mapping
+    k = min(candidates, mesh.t.shape[1])
+    centroids = mesh.p[:, mesh.t].mean(axis=1).T
+    _, near = cKDTree(centroids).query(pts.T, k)  # (n, k)
+    n = pts.shape[1]
+    tind = near.T.ravel()  # candidate-major: all points for candidate 0, then 1, ...
+    x = np.tile(pts, (1, k))[:, :, None]
+    X = np.full((2, n * k, 1), 1.0 / 3.0)
+    with np.errstate(all="ignore"):
+        for _ in range(25):
+            dX = np.einsum("ijkl,jkl->ikl", mapping.invDF(X, tind), x - mapping.F(X, tind))
+            X = np.clip(X + dX, -2.0, 3.0)  # keep far-away candidates finite
+    X = np.nan_to_num(X, nan=9.0).reshape(2, k, n)
+    def within(tol):
+        return (X[0] >= -tol) & (X[1] >= -tol) & (X[0] + X[1] <= 1 + tol)  # (k, n)
+
+    # points between the quadratic boundary and the true arc (O(h^3) apart) need the
+    # looser tolerance; interior points are found with the strict one
+    inside = within(1e-8)
+    loose = within(1e-2)
+    inside = np.where(inside.any(axis=0), inside, loose)
+    found = inside.any(axis=0)
+    if not found.all():
+        bad = pts[:, ~found][:, 0]
+        raise InputError(f"point (r, z) = ({bad[0]:g}, {bad[1]:g}) m is not in the bead mesh")
+    first = inside.argmax(axis=0)
+    cells = near[np.arange(n), first]
+    local = X[:, first, np.arange(n)]
+    local = np.clip(local, 0.0, 1.0)
+    over = local.sum(axis=0)
+    local = np.where(over > 1.0, local / np.maximum(over, 1.0), local)
+    return cells, local[:, :, None]
+
+
+def mean_stress(bs: BeadStress) -> dict[str, float]:
+    """Volume-averaged stress components over the whole bead.
+
+    Parameters
+    ----------
+    bs : BeadStress
+
+    Returns
+    -------
+    dict
+        ``{"rr", "zz", "tt", "rz"}``: averages of sigma_rr, sigma_zz, sigma_thth and
+        sigma_rz over the (discrete) bead volume, Pa. <sigma_rz> vanishes by symmetry over
+        the whole sphere and is reported as 0; the mean-stress theorem gives
+        <sigma_zz> = -3 F / (2 pi R^2) and <sigma_rr> = <sigma_thth> = 0.
+        ``"volume"``: the discrete bead volume, m^3.
+    """
+    lam, mu = _lame(bs.youngs_modulus, bs.poisson_ratio)
+
+    def component(k):
+        @Functional
+        def integrand(w):
+            return _stresses(w.u, w.x[0], lam, mu)[k] * 2 * np.pi * w.x[0]
+        return integrand
+
+    ui = bs.basis.interpolate(bs.displacement)
+
+    @Functional
+    def volume(w):
+        return 2 * np.pi * w.x[0]
+
+    v = volume.assemble(bs.basis)
+    out = {name: float(component(k).assemble(bs.basis, u=ui)) / v
+           for k, name in enumerate(COMPONENTS[:3])}
+    out["rz"] = 0.0
+    out["volume"] = 2.0 * v
+    return out
+
+
+def mean_stress_exact(radius: float, force: float) -> float:
+    """Exact bead-average axial stress <sigma_zz> = -3 F / (2 pi R^2), Pa (mean-stress theorem)."""
+    return -3.0 * force / (2.0 * np.pi * radius**2)
+
+
+def stress_along(bs: BeadStress, r: np.ndarray, z: np.ndarray, direction: np.ndarray,
+                 kind: Literal["normal", "deviatoric"] = "normal") -> np.ndarray:
+    """Equivalent uniaxial stress along a direction field in the meridian plane.
+
+    Parameters
+    ----------
+    bs : BeadStress
+    r, z : array_like
+        Points, m, broadcast together to shape S.
+    direction : array_like, shape (*S, 2)
+        (h_r, h_z) of the direction (e.g. the local bias field); normalised here;
+        must be non-zero. An axisymmetric field has no hoop component.
+    kind : {"normal", "deviatoric"}
+        ``"normal"``: the normal stress h.sigma.h. ``"deviatoric"``: (3/2) h.s.h with
+        s = sigma - tr(sigma)/3 I, the equivalent stress of Daniel & Hubert (2009,
+        Eur. Phys. J. Appl. Phys. 45, 31101) for magnetoelastic coupling; it equals the
+        applied stress for a uniaxial stress along h and ignores hydrostatic pressure.
+
+    Returns
+    -------
+    ndarray, shape S
+        Pa.
+    """
+    require(kind in ("normal", "deviatoric"),
+            f"kind must be 'normal' or 'deviatoric', got {kind!r}")
+    s = stress_at(bs, r, z)
+    h = np.broadcast_to(np.asarray(direction, dtype=float), (*s.shape[:-1], 2))
+    norm = np.hypot(h[..., 0], h[..., 1])
+    require(bool(np.all(norm > 0)), "direction must be non-zero at every point")
+    hr, hz = h[..., 0] / norm, h[..., 1] / norm
+    s_rr, s_zz, s_tt, s_rz = (s[..., k] for k in range(4))
+    normal = hr**2 * s_rr + hz**2 * s_zz + 2 * hr * hz * s_rz
+    if kind == "normal":
+        return normal
+    return 1.5 * (normal - (s_rr + s_zz + s_tt) / 3.0)

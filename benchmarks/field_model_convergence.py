@@ -44,7 +44,7 @@ def run(geometry: SensorGeometry, mesh_dir: str, options: MeshOptions | None = N
     t0 = time.perf_counter()
     axi, _ = sm.load_mesh(geometry, options, mesh_dir)
     t1 = time.perf_counter()
-    sol = sm.solve(sm.bias_problem(geometry, axi))
+    sol = sm.solve(sm.bias_problem(geometry, axi), max_iter=40)
     t2 = time.perf_counter()
     beads = {b.particle: b.B_center_T[1] for b in sm.bead_fields(sol, geometry)}
     forces = {(c.upper, c.lower): c.magnetic_force_N

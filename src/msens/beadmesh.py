@@ -2,7 +2,10 @@
 
 The section is the quarter disc ``r >= 0, z >= 0, r^2 + z^2 <= R^2`` in the (r, z) plane of
 an axisymmetric model: its boundaries are the equator ``z = 0``, the axis ``r = 0`` and the
-arc ``r^2 + z^2 = R^2``. A mesh node is placed on the arc at the edge of the contact cap
+arc ``r^2 + z^2 = R^2``. The mesh coordinates are (r, s) with s = z - R measured from the
+pole, so that the equator is s = -R: near the pole the elements are ~1e-4 R wide, and with
+the origin at the sphere's centre rounding errors of the coordinates (1e-16 R) would be
+large enough, relative to them, to stall skfem's inverse isoparametric mapping. A mesh node is placed on the arc at the edge of the contact cap
 (``r = a``) so that no element straddles the edge of a Hertz pressure, where the pressure has
 an infinite slope; element size grows linearly with distance from the pole ``(0, R)``.
 
@@ -75,7 +78,8 @@ def bead_section_mesh(radius: float, contact_radius: float,
     Returns
     -------
     skfem.MeshTri1 or skfem.MeshTri2
-        Coordinates ``p`` of shape (2, n) are (r, z) in m. Boundaries tagged ``"axis"``,
+        Coordinates ``p`` of shape (2, n) are (r, s) in m with s = z - R (pole at the
+        origin, equator at s = -R). Boundaries tagged ``"axis"``,
         ``"equator"``, ``"contact"`` (arc with r <= a) and ``"free"`` (rest of the arc).
     """
     spec = spec or BeadMeshSpec()
@@ -97,10 +101,11 @@ def bead_section_mesh(radius: float, contact_radius: float,
         gmsh.option.setNumber("General.NumThreads", 1)
         gmsh.model.add(_MODEL)
         geo = gmsh.model.geo
-        o = geo.addPoint(0.0, 0.0, 0.0)
-        eq = geo.addPoint(1.0, 0.0, 0.0)
-        edge = geo.addPoint(alpha, np.sqrt(1.0 - alpha**2), 0.0)
-        pole = geo.addPoint(0.0, 1.0, 0.0)
+        o = geo.addPoint(0.0, -1.0, 0.0)
+        eq = geo.addPoint(1.0, -1.0, 0.0)
+        # s = sqrt(1 - alpha^2) - 1 without cancellation
+        edge = geo.addPoint(alpha, -alpha**2 / (1.0 + np.sqrt(1.0 - alpha**2)), 0.0)
+        pole = geo.addPoint(0.0, 0.0, 0.0)
         c_eq = geo.addLine(o, eq)
         c_free = geo.addCircleArc(eq, o, edge)
         c_contact = geo.addCircleArc(edge, o, pole)
@@ -110,7 +115,7 @@ def bead_section_mesh(radius: float, contact_radius: float,
         geo.synchronize()
 
         def size(dim, tag, x, y, z, lc):  # noqa: ARG001 - gmsh callback signature
-            d = np.hypot(x, y - 1.0)
+            d = np.hypot(x, y)
             return min(h_bulk, h_pole + slope * d)
 
         gmsh.model.mesh.setSizeCallback(size)
@@ -167,14 +172,14 @@ def _to_skfem(xy: np.ndarray, t: np.ndarray, order: int, radius: float,
     # axis and equator are exact straight lines, everything else is the arc; the chord
     # sag (< h^2 / 8R) is far smaller than the z-spacing of nodes near the contact edge
     tol = 1e-9 * radius
-    edge_z = np.sqrt(radius**2 - contact_radius**2)
+    edge_s = -contact_radius**2 / (radius + np.sqrt(radius**2 - contact_radius**2))
 
     def on_arc(x):
-        return (x[0] > tol) & (x[1] > tol)
+        return (x[0] > tol) & (x[1] > -radius + tol)
 
     return mesh.with_boundaries({
         "axis": lambda x: np.abs(x[0]) < tol,
-        "equator": lambda x: np.abs(x[1]) < tol,
-        "contact": lambda x: on_arc(x) & (x[1] > edge_z),
-        "free": lambda x: on_arc(x) & (x[1] < edge_z),
+        "equator": lambda x: np.abs(x[1] + radius) < tol,
+        "contact": lambda x: on_arc(x) & (x[1] > edge_s),
+        "free": lambda x: on_arc(x) & (x[1] < edge_s),
     })

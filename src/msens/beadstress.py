@@ -129,7 +129,8 @@ class BeadStress:
     peak_pressure : float
         Hertz peak pressure p0 at this force, Pa.
     basis : skfem.CellBasis
-        P2 vector basis on the quarter section (r, z) in m: dofs interleaved (u_r, u_z).
+        P2 vector basis on the quarter section, mesh coordinates (r, s) in m with
+        s = z - R (see :mod:`msens.beadmesh`); components (u_r, u_z).
     displacement : ndarray, shape (basis.N,)
         Displacement dofs, m.
     stress_basis : skfem.CellBasis
@@ -305,7 +306,7 @@ def stress_at(bs: BeadStress, r: np.ndarray, z: np.ndarray) -> np.ndarray:
     if np.any(r < 0) or np.any(np.hypot(r, z) > R * (1 + 1e-9)):
         raise InputError(f"points must satisfy r >= 0 and r^2 + z^2 <= R^2 with R = {R:g} m")
     sign = np.where(z < 0, -1.0, 1.0)
-    pts = np.vstack([r, np.abs(z)])
+    pts = np.vstack([r, np.abs(z) - R])  # mesh coordinates (r, s = z - R)
     cells, local = _locate(bs.stress_basis, pts)
     sb = bs.stress_basis
     phis = np.array([sb.elem.gbasis(sb.mapping, local, k, tind=cells)[0].value

@@ -293,4 +293,4 @@ def winding_capacitance(winding: Winding,
                * turn_to_turn_capacitance(2.0 * math.pi * r, winding.bare_diameter,
                                           winding.insulated_diameter, permittivity)
                for r in radii)
-    return 4.0 / (3.0 * n_l**2) * c_ll
+    return float(4.0 / (3.0 * n_l**2) * c_ll)

@@ -211,7 +211,7 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
             if r.channel.kind == sensor.sensor.kind.value
             and r.channel.particle == sensor.sensor.particle
         ]
-        m = sensor.features
+        m = model_features(sensor, setup.history.t)
         channels.append({
             "channel": f"{sensor.sensor.kind.value}@{sensor.sensor.particle}",
             "kind": sensor.sensor.kind.value,

@@ -16,7 +16,7 @@ the contact is toggled there and the step sequence resumes with the nominal step
 
 Even with exact switch times, F ~ (t - t_0)^{3/2} near a switch is not smooth, which would cap
 the order at 2.5. Steps are therefore graded geometrically next to switches: after a contact
-closes the next steps are dt 2^-K, dt 2^-K, dt 2^-(K-1), ..., dt/2 (K = ``GRADE_LEVELS``), and a
+closes the next steps are dt 2^-K, dt 2^-K, dt 2^-(K-1), ..., dt/2 (K = ``grade_levels``), and a
 contact about to open (gap / closing rate < 2 dt) is approached in halving steps. This
 restores the high order in practice (see tests/chain/test_integrate.py).
 
@@ -55,8 +55,6 @@ _THETA_NOW = 1e-9
 # Newton refinement of a crossing stops when |gap| < _GAP_TOL * h * |d(gap)/dt|.
 _GAP_TOL = 1e-7
 _NEWTON_MAX = 4
-#: Depth of the geometric step grading next to contact switches (steps down to dt / 2^K).
-GRADE_LEVELS = 5
 
 
 _FM = {"contract"}  # allow fused multiply-add only; no reassociation
@@ -245,9 +243,13 @@ def _toggle(kind, k, closed, damp):
 
 
 @nb.njit(cache=True)
-def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
-              out_F, out_d, out_u, out_v):
+def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, rate_tol,
+              store_uv, out_F, out_d, out_u, out_v):
     """Integrate one chain from t = 0 over t_out (sorted, t_out[0] >= 0) with nominal step dt.
+
+    ``grade_levels`` is the depth K of the step grading at contact switches; ``rate_tol``
+    (m/s) the approach rate below which a sign change of the rate is not an event (the
+    loading-only dashpot then errs by at most gamma * rate_tol).
 
     Fills out_F, out_d (and out_u, out_v if ``store_uv``), each (nt, n). Returns the
     number of steps taken (event cuts and Newton re-steps included).
@@ -285,16 +287,16 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
     t = 0.0
     steps = 0
     toggles_here = 0
-    h_floor = dt / 2.0**GRADE_LEVELS
+    h_floor = dt / 2.0**grade_levels
     # Steps left in a geometric grading after a contact closed (sizes dt 2^-min(grade, K)).
     grade = 0
     for k in range(n):
         if closed[k] > 0.0 and _gap(u, k, n) == 0.0:
-            grade = GRADE_LEVELS + 1
+            grade = grade_levels + 1
     while j < nt:
         h = dt
         if grade > 0:
-            h = dt / 2.0 ** min(grade, GRADE_LEVELS)
+            h = dt / 2.0 ** min(grade, grade_levels)
         else:
             # Approach a closed contact that is about to open in halving steps.
             for k in range(n):
@@ -329,7 +331,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
                     kind = 0
             elif loading and closed[k] > 0.0:
                 r1 = _gap(v1, k, n)
-                if (damp[k] > 0.0 and r1 < 0.0) or (damp[k] == 0.0 and r1 > 0.0):
+                if (damp[k] > 0.0 and r1 < -rate_tol) or (damp[k] == 0.0 and r1 > rate_tol):
                     th = _first_violation(_gap(v, k, n), h * _gap(a0, k, n), r1,
                                           h * _gap(a1, k, n), damp[k] > 0.0)
                     if th < th_min:
@@ -341,7 +343,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
                 # The contact changes state now: toggle and redo the step.
                 toggles_here += 1
                 if _toggle(kind, kmin, closed, damp):
-                    grade = GRADE_LEVELS + 1
+                    grade = grade_levels + 1
                 accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, a0)
                 continue
             if th_min > _THETA_NOW:
@@ -379,7 +381,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
             grade -= 1
         if kmin >= 0 and th_min > _THETA_NOW:
             if _toggle(kind, kmin, closed, damp):
-                grade = GRADE_LEVELS + 1
+                grade = grade_levels + 1
             accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, a0)
         else:
             a0, a1 = a1, a0
@@ -387,7 +389,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, store_uv,
 
 
 @nb.njit(cache=True, parallel=True)
-def integrate_batch(u_init, v_init, mass, A, gam, law, load, t_out, dt, out_F, out_d):
+def integrate_batch(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, rate_tol,
+                    out_F, out_d):
     """Integrate ``runs`` chains in parallel; arrays carry a leading run axis.
 
     dt has shape (runs,). Returns the number of steps of each run.
@@ -398,5 +401,6 @@ def integrate_batch(u_init, v_init, mass, A, gam, law, load, t_out, dt, out_F, o
     dummy = np.empty((1, n))
     for r in nb.prange(runs):
         steps[r] = integrate(u_init[r], v_init[r], mass[r], A[r], gam[r], law, load[r],
-                             t_out, dt[r], False, out_F[r], out_d[r], dummy, dummy)
+                             t_out, dt[r], grade_levels, rate_tol[r], False, out_F[r], out_d[r],
+                             dummy, dummy)
     return steps

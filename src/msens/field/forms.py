@@ -50,8 +50,8 @@ class QuadratureData:
 
 def quadrature_data(basis: skfem.CellBasis) -> QuadratureData:
     """Evaluate the B-operator of every basis function at the quadrature points."""
-    r = basis.global_coordinates().value[0]
-    phi = np.stack([basis.basis[i][0].value for i in range(basis.Nbfun)], axis=-1)
+    r = np.asarray(basis.global_coordinates())[0]
+    phi = np.stack([np.asarray(basis.basis[i][0]) for i in range(basis.Nbfun)], axis=-1)
     dphi = np.stack([basis.basis[i][0].grad for i in range(basis.Nbfun)], axis=-1)
     g = np.stack([-dphi[1], dphi[0] + phi / r[..., None]], axis=-1)
     return QuadratureData(g=np.ascontiguousarray(g), phi=phi, w=basis.dx * r, r=r,

@@ -50,7 +50,7 @@ def _evaluate(sol: FieldSolution, a: np.ndarray, pts: np.ndarray):
     for k in range(basis.Nbfun):
         f = basis.elem.gbasis(basis.mapping, loc, k, tind=cells)[0]
         coef = a[basis.element_dofs[k, cells]]
-        val += coef * f.value[:, 0]
+        val += coef * np.asarray(f)[:, 0]
         grd += coef * f.grad[:, :, 0]
     return val, grd, cells
 

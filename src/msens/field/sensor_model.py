@@ -98,13 +98,13 @@ def flux_density_at(sol: FieldSolution, r: np.ndarray, z: np.ndarray) -> np.ndar
     Parameters
     ----------
     sol : FieldSolution
-    r, z : array_like, shape (n,)
+    r, z : array_like, broadcastable to shape (n,)
         Points in the meridian plane, m (inside the mesh).
     """
     basis = sol.basis
     mesh, elem = basis.mesh, basis.elem
-    r = np.atleast_1d(np.asarray(r, dtype=float))
-    z = np.atleast_1d(np.asarray(z, dtype=float))
+    r, z = (np.atleast_1d(v).ravel() for v in np.broadcast_arrays(
+        np.asarray(r, dtype=float), np.asarray(z, dtype=float)))
     cells = mesh.element_finder()(r, z)
     out = np.zeros((r.size, 2))
     for k, e in enumerate(cells):
@@ -113,7 +113,7 @@ def flux_density_at(sol: FieldSolution, r: np.ndarray, z: np.ndarray) -> np.ndar
         a_val, da = 0.0, np.zeros(2)
         for i, dof in enumerate(basis.element_dofs[:, e]):
             f = elem.gbasis(basis.mapping, xref, i, tind=tind)[0]
-            a_val += sol.a[dof] * f.value[0, 0]
+            a_val += sol.a[dof] * np.asarray(f)[0, 0]
             da += sol.a[dof] * f.grad[:, 0, 0]
         out[k] = (-da[1], da[0] + (a_val / r[k] if r[k] > 0 else da[0]))
     return out
@@ -206,10 +206,10 @@ def _flat_force(sol: FieldSolution, boundary: str) -> float:
     fb = skfem.FacetBasis(axi.mesh, sol.basis.elem, facets=facets,
                           intorder=2 * sol.problem.order + 2)
     a = fb.interpolate(sol.a)
-    r = fb.global_coordinates().value[0]
+    r = np.asarray(fb.global_coordinates())[0]
     da = a.grad
     br = -da[1]
-    bz = da[0] + a.value / r
+    bz = da[0] + np.asarray(a) / r
     law = monotone_bh(STEEL_1018_BH)
     bmag = np.sqrt(br**2 + bz**2)
     mu0_hr = MU0 * law.reluctivity(bmag) * br

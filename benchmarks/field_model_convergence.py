@@ -31,7 +31,7 @@ import numpy as np
 
 from msens.field import sensor_model as sm
 from msens.field.build import MeshOptions
-from msens.field.geometry import AirBox, BeadChain, SensorGeometry
+from msens.field.geometry import AirBox, SensorGeometry
 
 SENSOR_BEADS = tuple(range(11, 21))
 SENSOR_CONTACTS = tuple((p, p + 1) for p in range(11, 20))

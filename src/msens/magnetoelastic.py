@@ -144,12 +144,13 @@ def _lam_ms(law, m):
 # --- the implicit solve ---------------------------------------------------------------------
 
 def _phi_and_slope(law, x, h, sigma):
-    """Residual Φ(x) − H, A/m, and its slope Φ_x, A/m, at M = M_s L(x)."""
+    """Residual Φ(x) − H, its slope Φ_x and the size of its terms (for rounding), A/m."""
     m = law.Ms * langevin(x)
     k = law.coupling * sigma / MU0
-    phi = law.a * x - law.alpha * m - k * _lam_m(law, m, sigma) - h
+    terms = (law.a * x, law.alpha * m, k * _lam_m(law, m, sigma), h)
+    phi = terms[0] - terms[1] - terms[2] - terms[3]
     slope = law.a - law.Ms * langevin_derivative(x) * (law.alpha + k * _lam_mm(law, m, sigma))
-    return phi, slope
+    return phi, slope, sum(np.abs(t) for t in terms)
 
 
 def _as_inputs(law: JilesAthertonSablik, H: ArrayLike, sigma: ArrayLike):
@@ -178,18 +179,24 @@ def _solve_x(law: JilesAthertonSablik, h: NDArray, s: NDArray) -> NDArray:
     lo = (h - c) / law.a - 1e-12
     hi = (h + c) / law.a + 1e-12
     x = np.clip(h / (law.a - law.alpha * law.Ms / 3.0), lo, hi)
+    active = np.ones(x.shape, dtype=bool)
     for _ in range(_MAX_ITER):
-        phi, slope = _phi_and_slope(law, x, h, s)
+        phi, slope, size = _phi_and_slope(law, x, h, s)
         neg = phi < 0.0
         lo = np.where(neg, x, lo)
         hi = np.where(neg, hi, x)
         with np.errstate(divide="ignore", invalid="ignore"):
             newton = x - phi / slope
-        ok = (slope > 0.0) & (newton > lo) & (newton < hi)
+        ok = (slope > 0.0) & (newton >= lo) & (newton <= hi)
         x_new = np.where(ok, newton, 0.5 * (lo + hi))
-        done = np.abs(x_new - x) <= 4e-16 * np.maximum(1.0, np.abs(x)) + 1e-300
-        x = x_new
-        if np.all(done | (phi == 0.0)):
+        # Converged when the step is down to the rounding of Φ (Newton then cycles between
+        # neighbouring floats) or to a few ulps of x.
+        noise = 8.0 * np.finfo(float).eps * size / np.maximum(np.abs(slope), 1e-300)
+        done = (phi == 0.0) | (np.abs(x_new - x) <= np.maximum(2e-15 * np.abs(x), noise))
+        # converged entries stay put: a bisection step from an exact root would leave it
+        x = np.where(active, np.where(phi == 0.0, x, x_new), x)
+        active &= ~done
+        if not active.any():
             break
     return x
 
@@ -225,7 +232,7 @@ def _state(law, H, sigma):
     h, s = _as_inputs(law, H, sigma)
     x = _solve_x(law, h, s)
     m = law.Ms * langevin(x)
-    _, slope = _phi_and_slope(law, x, h, s)
+    _, slope, _ = _phi_and_slope(law, x, h, s)
     chi = law.Ms * langevin_derivative(x) / slope
     de_dm = law.coupling * (_lam_m(law, m, s) + s * _lam_ms(law, m))
     return m, chi, de_dm, s

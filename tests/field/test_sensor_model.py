@@ -90,7 +90,7 @@ def test_point_evaluation_on_axis_matches_the_air_core_solenoid(small):
 
 
 def test_contact_force_independent_of_shell_width(small):
-    g, sol = small
+    _, sol = small
     group = [f"bead_{p}" for p in range(10, 13)]
     f0 = sm.group_force(sol, group, ["contact_12_13"], layers=0)
     f2 = sm.group_force(sol, group, ["contact_12_13"], layers=2)

@@ -11,6 +11,7 @@ from msens.chain.integrate import (
     stable_step,
 )
 from msens.chain.model import Chain, DampingLaw, uniform_chain
+from msens.chain.published import paper_chain, striker_velocity
 
 __all__ = [
     "Chain",
@@ -19,11 +20,13 @@ __all__ = [
     "hertz_energy",
     "hertz_sphere_flat",
     "hertz_sphere_sphere",
+    "paper_chain",
     "simulate",
     "simulate_batch",
     "simulate_reference",
     "stable_step",
     "static_contact_forces",
     "static_equilibrium",
+    "striker_velocity",
     "uniform_chain",
 ]

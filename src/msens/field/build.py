@@ -10,9 +10,9 @@ written as gmsh 4.1 ``.msh`` with named physical groups:
   ``contact_<k>_<k+1>`` (the flat shared by neighbour beads; only when they touch).
 
 Grading: near a contact the air wedge between two spheres is only g + (rho^2 - a^2)/R thick
-(g = optional gap between the flats), so the element size follows that gap (times ``MeshOptions.wedge_factor``) from ``flat_fraction x a`` at
-the flat up to the bead size; beads, coils and magnets get their own sizes; the far air grows
-to ``far_size``.
+(g = optional gap between the flats), so the element size follows that height (times
+``MeshOptions.wedge_factor``) from ``flat_fraction x a`` at the flat up to the bead size; beads,
+coils and magnets get their own sizes; the far air grows to ``far_size``.
 """
 
 from __future__ import annotations

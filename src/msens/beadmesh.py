@@ -5,9 +5,11 @@ an axisymmetric model: its boundaries are the equator ``z = 0``, the axis ``r = 
 arc ``r^2 + z^2 = R^2``. The mesh coordinates are (r, s) with s = z - R measured from the
 pole, so that the equator is s = -R: near the pole the elements are ~1e-4 R wide, and with
 the origin at the sphere's centre rounding errors of the coordinates (1e-16 R) would be
-large enough, relative to them, to stall skfem's inverse isoparametric mapping. A mesh node is placed on the arc at the edge of the contact cap
-(``r = a``) so that no element straddles the edge of a Hertz pressure, where the pressure has
-an infinite slope; element size grows linearly with distance from the pole ``(0, R)``.
+large enough, relative to them, to stall skfem's inverse isoparametric mapping.
+
+A mesh node is placed on the arc at the edge of the contact cap (``r = a``) so that no
+element straddles the edge of a Hertz pressure, where the pressure has an infinite slope;
+the element size grows linearly with distance from the pole, up to a bulk size.
 
 gmsh places the mid-side nodes of second-order meshes on the true arc, so the quadratic
 (``MeshTri2``) mesh represents the sphere up to an O(h^3) geometric error.
@@ -47,8 +49,8 @@ class BeadMeshSpec:
     """
 
     contact_elements: float = 8.0
-    grading: float = 0.25
-    bulk_size: float = 0.125
+    grading: float = 0.2
+    bulk_size: float = 0.0625
     refine: int = 0
     order: int = 2
 
@@ -114,7 +116,7 @@ def bead_section_mesh(radius: float, contact_radius: float,
         surf = geo.addPlaneSurface([loop])
         geo.synchronize()
 
-        def size(dim, tag, x, y, z, lc):  # noqa: ARG001 - gmsh callback signature
+        def size(dim, tag, x, y, z, lc):
             d = np.hypot(x, y)
             return min(h_bulk, h_pole + slope * d)
 

@@ -21,7 +21,7 @@ toward the contact.
 Linearity in F. For a fixed contact radius the problem is linear, but a grows as F^(1/3), so
 the stress *near the contact* (within a few a of the pole) is not proportional to F: p0 grows
 as F^(1/3). The bead-average stress is exactly linear: by the mean-stress theorem
-<sigma_ij> = (1/V) \\oint x_i t_j dS, which for axial tractions at z = +-R gives
+<sigma_ij> = (1/V) * (surface integral of x_i t_j), which for axial tractions at z = +-R gives
 <sigma_zz> = -2 F R / V = -3 F / (2 pi R^2) and <sigma_rr> = <sigma_thth> = <sigma_rz> = 0,
 whatever a is (up to a relative O(a^2/R^2) from the cap's curvature). Far from the contacts
 (Saint-Venant) the field depends on F only, to the same order. A solution is therefore for one
@@ -30,14 +30,14 @@ force; ``stress_at(bs, ...) / bs.force`` is the stress per newton at that force.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 import scipy.sparse.linalg as spla
-from scipy.integrate import quad
 import skfem
+from scipy.integrate import quad
 from skfem import BilinearForm, Functional, LinearForm
 
 from msens.beadmesh import BeadMeshSpec, bead_section_mesh
@@ -178,7 +178,7 @@ def lame_parameters(youngs_modulus: float, poisson_ratio: float) -> tuple[float,
 def _strains(u, r):
     """Axisymmetric engineering strains (e_rr, e_zz, e_thth, gamma_rz) of a vector field."""
     g = u.grad
-    return g[0][0], g[1][1], u.value[0] / r, g[0][1] + g[1][0]
+    return g[0][0], g[1][1], u[0] / r, g[0][1] + g[1][0]
 
 
 def axisymmetric_stress(u, r, lam: float, mu: float) -> tuple:
@@ -187,7 +187,7 @@ def axisymmetric_stress(u, r, lam: float, mu: float) -> tuple:
     Parameters
     ----------
     u : skfem DiscreteField
-        Displacement (u_r, u_z), m: ``u.value`` shape (2, ...), ``u.grad`` (2, 2, ...).
+        Displacement (u_r, u_z), m: ``u[i]`` shape (...), ``u.grad`` (2, 2, ...).
     r : ndarray
         Radial coordinate of the quadrature points, m (> 0 there).
     lam, mu : float
@@ -253,7 +253,7 @@ def solve_traction(mesh: skfem.Mesh, youngs_modulus: float, poisson_ratio: float
     @LinearForm
     def load(v, w):
         t_r, t_z = traction(w.x[0], w.x[1], w.n[0], w.n[1])
-        return (t_r * v.value[0] + t_z * v.value[1]) * w.x[0]
+        return (t_r * v[0] + t_z * v[1]) * w.x[0]
 
     fb = skfem.FacetBasis(mesh, basis.elem, facets=facets, intorder=intorder)
     f = load.assemble(fb)
@@ -338,7 +338,8 @@ def hertz_resultant(mesh: skfem.Mesh, facets: np.ndarray, contact_radius: float,
     Returns
     -------
     float
-        2 pi \int p(rho) |n_z| rho ds, N; the exact value is 2 pi a^2 p0 / 3 = F.
+        2 pi * integral of p(rho) |n_z| rho ds over the facets, N; exactly
+        2 pi a^2 p0 / 3 = F.
     """
     fb = skfem.FacetBasis(mesh, skfem.ElementTriP2(), facets=facets,
                           intorder=_HERTZ_INTORDER)
@@ -409,7 +410,7 @@ def stress_at(bs: BeadStress, r: np.ndarray, z: np.ndarray) -> np.ndarray:
     pts = np.vstack([r, np.abs(z) - R])  # mesh coordinates (r, s = z - R)
     cells, local = _locate(bs.stress_basis, pts)
     sb = bs.stress_basis
-    phis = np.array([sb.elem.gbasis(sb.mapping, local, k, tind=cells)[0].value
+    phis = np.array([np.asarray(sb.elem.gbasis(sb.mapping, local, k, tind=cells)[0])
                      for k in range(sb.Nbfun)])[:, :, 0]  # (Nbfun, npts)
     vals = np.einsum("kp,ckp->pc", phis, bs.stress_dofs[:, sb.element_dofs[:, cells]])
     vals[:, 3] *= sign
@@ -516,7 +517,8 @@ def mean_stress(bs: BeadStress) -> dict[str, float]:
 def mean_stress_exact(radius: float, force: float, contact_radius: float = 0.0) -> float:
     """Exact bead-average axial stress under two opposite axial Hertz loads, Pa.
 
-    By the mean-stress theorem <sigma_zz> = (1/V) \oint z t_z dS. For point loads this is
+    By the mean-stress theorem <sigma_zz> = (1/V) * (surface integral of z t_z). For
+    point loads this is
     -2 F R / V = -3 F / (2 pi R^2). A Hertz pressure on a cap of radius a acts at
     z = sqrt(R^2 - rho^2) < R, which lowers the magnitude by about a^2 / (5 R^2).
 

@@ -158,7 +158,7 @@ class Winding:
     @property
     def turns_per_layer(self) -> int:
         """Turns side by side in one layer, floor(length / d_ins)."""
-        return max(1, int(math.floor(self.length / self.insulated_diameter * (1 + 1e-12))))
+        return max(1, math.floor(self.length / self.insulated_diameter * (1 + 1e-12)))
 
     @property
     def layers(self) -> int:

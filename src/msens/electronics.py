@@ -22,6 +22,7 @@ the continuous-time process, so its aliasing is included.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -175,12 +176,14 @@ def state_space(circuit: ReadoutCircuit) -> tuple[np.ndarray, np.ndarray, np.nda
     C : ndarray, shape (n,)
     """
     c = circuit
-    require(c.inductance > 0, "time-domain read-out needs coil inductance > 0 H")
+    require(c.inductance > 0, "the circuit's state-space model (time domain, resonance, "
+            "bandwidth, total noise) needs coil inductance > 0 H")
     g_in = _conductance(c.input_resistance)
     inv_l = 1.0 / c.inductance
     if c.cable_resistance == 0.0:
         require(c.total_capacitance > 0,
-                "time-domain read-out needs winding + cable + input capacitance > 0 F")
+                "the circuit's state-space model needs winding + cable + input capacitance "
+                "> 0 F")
         inv_c = 1.0 / c.total_capacitance
         a = np.array([[-c.resistance * inv_l, -inv_l],
                       [inv_c, -g_in * inv_c]])
@@ -418,7 +421,7 @@ def daq_voltage(circuit: ReadoutCircuit, t: ArrayLike, emf: ArrayLike, sample_ra
     x0 = -linalg.solve(a, b_emf[:, 0] * emf[0])
     x = _linear_recursion(phi, x0, np.ascontiguousarray(drive))
 
-    n_daq = int(math.floor((t[-1] - t[0]) * sample_rate * (1 + 1e-12))) + 1
+    n_daq = math.floor((t[-1] - t[0]) * sample_rate * (1 + 1e-12)) + 1
     t_daq = t[0] + np.arange(n_daq) / sample_rate
     pos = (t_daq - t[0]) / dt
     j = np.minimum(np.floor(pos + 1e-9).astype(int), t.size - 2)
@@ -486,7 +489,7 @@ def _integrate_psd(circuit: ReadoutCircuit, temperature: float, lo: float, hi: f
         marks = []
     edges = sorted({lo, hi, *(m for m in marks if lo < m < hi)})
     total = 0.0
-    for f1, f2 in zip(edges[:-1], edges[1:], strict=True):
+    for f1, f2 in itertools.pairwise(edges):
         val, _ = integrate.quad(lambda f: float(thermal_noise_psd(circuit, temperature,
                                                                   [f])[0]),
                                 f1, f2, limit=200, epsabs=0.0, epsrel=1e-10)

@@ -23,9 +23,9 @@ from msens.chain.equilibrium import static_contact_forces, static_equilibrium
 from msens.chain.model import Chain, DampingLaw
 
 #: Default steps per Hertz collision time of the stiffest, lightest contact at the impact
-#: speed. With 12, the paper chain (t_c = 15.6 us, dt = 1.30 us) has a peak-force error of
-#: ~3e-8 against a converged reference (benchmarks/chain_speed.py); 8 still meets 1e-6.
-STEPS_PER_CONTACT_TIME = 12
+#: speed. With 10, the paper chain (t_c = 15.6 us, dt = 1.56 us) has a peak-force error of
+#: ~1e-7 against a converged reference (benchmarks/chain_speed.py); 12 gives 4e-8, 8 gives 4e-7.
+STEPS_PER_CONTACT_TIME = 10
 #: Steps per period of the highest linearised (precompressed) chain frequency.
 STEPS_PER_LINEAR_PERIOD = 10
 #: Hertz collision time of two bodies in terms of the prefactor A: energy conservation
@@ -37,7 +37,7 @@ HERTZ_TIME_CONSTANT = 2.0 * 1.25**0.4 * 0.4 * float(beta(0.4, 0.5))
 #: Depth K of the geometric step grading after a contact closes (first step dt / 2^K). The
 #: force grows like t^{3/2} after closing (t^{1/2} for Kuwabara-Kono), which a Runge-Kutta step
 #: cannot follow; the error of the first step shrinks like 2^{-2.5 K} (2^{-1.5 K}).
-GRADE_LEVELS = {DampingLaw.LINEAR: 5, DampingLaw.LINEAR_LOADING: 5,
+GRADE_LEVELS = {DampingLaw.LINEAR: 4, DampingLaw.LINEAR_LOADING: 4,
                 DampingLaw.HERTZ_KUWABARA_KONO: 10}
 #: Approach rates below this fraction of the impact speed do not switch the loading-only
 #: dashpot (noise-level rates of the resting part of the chain would otherwise chatter).
@@ -67,9 +67,9 @@ class ChainResult:
     approach : ndarray, shape (nt, n) or (runs, nt, n)
         Contact approach delta >= 0, m.
     displacement : ndarray, shape (nt, n), or None
-        Particle displacements u, m, +x (single runs only).
+        Particle displacements u, m, +x (``simulate(..., states=True)`` and the reference).
     velocity : ndarray, shape (nt, n), or None
-        Particle velocities, m/s, +x (single runs only).
+        Particle velocities, m/s, +x (as ``displacement``).
     dt : float or ndarray, shape (runs,)
         Nominal step used, s (nan for the adaptive reference).
     steps : int or ndarray, shape (runs,)
@@ -116,8 +116,8 @@ def stable_step(chain: Chain, striker_velocity: float) -> float:
     times = []
     v = abs(float(striker_velocity))
     if v > 0.0:
-        times.append(HERTZ_TIME_CONSTANT * (np.min(mu) ** 2 / (np.max(chain.stiffness) ** 2 * v)) ** 0.2
-                     / STEPS_PER_CONTACT_TIME)
+        t_c = HERTZ_TIME_CONSTANT * (np.min(mu) ** 2 / (np.max(chain.stiffness) ** 2 * v)) ** 0.2
+        times.append(t_c / STEPS_PER_CONTACT_TIME)
     f0 = static_contact_forces(chain)
     k_lin = 1.5 * chain.stiffness ** (2.0 / 3.0) * f0 ** (1.0 / 3.0)  # dF/d(delta), N/m
     k_pad = np.concatenate([[0.0], k_lin])
@@ -155,7 +155,7 @@ def _check_dt(dt: float) -> float:
 
 
 def simulate(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
-             dt: float | None = None) -> ChainResult:
+             dt: float | None = None, states: bool = False) -> ChainResult:
     """Integrate one chain with the compiled fixed-step scheme.
 
     Parameters
@@ -167,23 +167,26 @@ def simulate(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
         Output times, s, non-decreasing, from 0 (the impact).
     dt : float, optional
         Nominal step, s; default :func:`stable_step`.
+    states : bool
+        Also return ``displacement`` and ``velocity`` (two more (nt, n) arrays).
 
     Returns
     -------
     ChainResult
-        With ``displacement`` and ``velocity``.
     """
     t = _check_times(t_out)
     dt = stable_step(chain, striker_velocity) if dt is None else _check_dt(dt)
     u0, v0 = _initial_state(chain, striker_velocity)
     n = chain.n_particles
-    out = [np.empty((t.size, n)) for _ in range(4)]
+    shape = (t.size, n) if states else (1, n)
+    out = [np.empty((t.size, n)), np.empty((t.size, n)), np.empty(shape), np.empty(shape)]
     steps = kernel.integrate(u0, v0, chain.mass, chain.stiffness, chain.damping,
                              _LAW_CODE[chain.damping_law], chain.load(), t, dt,
-                             GRADE_LEVELS[chain.damping_law], _rate_tol(striker_velocity), True,
+                             GRADE_LEVELS[chain.damping_law], _rate_tol(striker_velocity), states,
                              *out)
-    return ChainResult(t=t, force=out[0], approach=out[1], displacement=out[2],
-                       velocity=out[3], dt=dt, steps=int(steps))
+    return ChainResult(t=t, force=out[0], approach=out[1],
+                       displacement=out[2] if states else None,
+                       velocity=out[3] if states else None, dt=dt, steps=int(steps))
 
 
 def simulate_batch(chains: Sequence[Chain], striker_velocities: ArrayLike, t_out: ArrayLike, *,

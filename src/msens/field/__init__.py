@@ -5,8 +5,9 @@ Core API (see the modules for details):
 - :mod:`.mesh`: :class:`AxiMesh`, :func:`read_gmsh`, :func:`refined`
 - :mod:`.regions`: :class:`Air`, :class:`LinearMagnetic`, :class:`NonlinearSoft`,
   :class:`PermanentMagnet`, :class:`Winding`
-- :mod:`.solve`: :class:`MagnetostaticProblem`, :func:`solve`, :func:`incremental`,
-  :class:`FieldSolution`, :class:`FieldSolveError`
+- :mod:`.solve`: :class:`MagnetostaticProblem`, ``solve.solve``, :func:`incremental`,
+  :class:`FieldSolution`, :class:`FieldSolveError` (``solve`` itself is not re-exported
+  here: it would shadow the submodule ``msens.field.solve``)
 - :mod:`.post`: :func:`flux_density`, :func:`field_strength`, :func:`flux_linkage`,
   :func:`force_z`, :func:`energy`, :func:`coil_resistance`
 - :mod:`.verify`: :func:`run_all`, :func:`format_table`
@@ -28,7 +29,6 @@ from msens.field.solve import (
     FieldSolveError,
     MagnetostaticProblem,
     incremental,
-    solve,
 )
 
 __all__ = [
@@ -51,5 +51,4 @@ __all__ = [
     "potential_energy",
     "read_gmsh",
     "refined",
-    "solve",
 ]

@@ -1,0 +1,135 @@
+"""What a candidate effect is: a named, bounded change of the baseline model.
+
+The model a diagnosis varies is a :class:`ModelState`: the chain, the striker speed, the
+particle each sensor reads, and operations applied to the sensor records afterwards (the
+acquisition). An effect is a pure function ``apply(context, state, params) -> state`` with
+named SI parameters and bounds; it never simulates. Prediction (simulation + observation)
+lives in :mod:`msens.diagnose.predict`, so that many states are run in one batch.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import lfilter
+
+from msens.chain.model import Chain
+from msens.sensors import SensorKind
+from msens.study import SetupSpec, Study
+
+#: A record operation: (records (..., nt), sample interval s) -> records (..., nt).
+RecordOp = Callable[[np.ndarray, float], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Context:
+    """The study and setup a diagnosis works on (read-only inputs of every effect)."""
+
+    study: Study
+    setup: SetupSpec
+
+
+@dataclass(frozen=True)
+class ModelState:
+    """Everything that defines one prediction of a setup's sensor records.
+
+    Attributes
+    ----------
+    chain : Chain
+    velocity : float
+        Striker speed at impact, m/s.
+    particles : tuple of int
+        1-based particle each sensor reads, in the order of ``setup.sensors``.
+    kinds : tuple of SensorKind
+        Observation operator of each sensor.
+    post : tuple of RecordOp
+        Operations applied, in order, to the sensor force records after observation.
+    """
+
+    chain: Chain
+    velocity: float
+    particles: tuple[int, ...]
+    kinds: tuple[SensorKind, ...]
+    post: tuple[RecordOp, ...] = ()
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One fitted parameter of an effect.
+
+    Attributes
+    ----------
+    name : str
+        Parameter name with its SI unit in it (e.g. ``gamma_wall_kg_per_s``).
+    lower, upper : float
+        Bounds of the search.
+    log : bool
+        Search (grid and refinement) in log space: for scale parameters.
+    integer : bool
+        Integer parameter: searched exhaustively on lower..upper, no refinement.
+    """
+
+    name: str
+    lower: float
+    upper: float
+    log: bool = False
+    integer: bool = False
+
+    def __post_init__(self) -> None:
+        if not self.lower < self.upper or (self.log and self.lower <= 0):
+            raise ValueError(f"bad bounds for {self.name}: [{self.lower}, {self.upper}]")
+
+
+@dataclass(frozen=True)
+class Effect:
+    """A candidate missing effect.
+
+    Attributes
+    ----------
+    name : str
+        Fixed public name (``wall_dissipation``, ...).
+    description : str
+        One line, for reports.
+    space : callable (Context, ModelState) -> tuple of Parameter
+        Parameters and their bounds for this setup and baseline.
+    baseline : callable (Context, ModelState) -> dict
+        Value of each parameter in the baseline model (None when the baseline is not a
+        value of the parameter, e.g. a different law).
+    apply : callable (Context, ModelState, Mapping[str, float]) -> ModelState
+        Pure: the state with the effect at the given parameter values.
+    applies : callable (Context) -> bool
+        Whether the effect makes sense for the setup (e.g. magnets only on MsS setups).
+    grid_points : int
+        Points per continuous parameter of the batched start grid.
+    """
+
+    name: str
+    description: str
+    space: Callable[[Context, ModelState], tuple[Parameter, ...]]
+    baseline: Callable[[Context, ModelState], dict[str, float | None]]
+    apply: Callable[[Context, ModelState, Mapping[str, float]], ModelState]
+    applies: Callable[[Context], bool] = lambda ctx: True
+    grid_points: int = 12
+
+
+@dataclass(frozen=True)
+class FirstOrderLowpass:
+    """Causal first-order low-pass y' = (x - y) / tau applied along the last axis.
+
+    Discretised exactly for an input held constant over each sample (zero-order hold):
+    y[k] = a y[k-1] + (1 - a) x[k], a = exp(-dt / tau). Its group delay at low frequency
+    is tau (not removed: a real DAQ filter delays the record).
+
+    Attributes
+    ----------
+    tau_s : float
+        Time constant, s (> 0).
+    """
+
+    tau_s: float
+
+    def __call__(self, records: np.ndarray, dt: float) -> np.ndarray:
+        a = float(np.exp(-dt / self.tau_s))
+        return lfilter([1.0 - a], [1.0, -a], records, axis=-1)

@@ -1,0 +1,141 @@
+"""Batched prediction of sensor records for many model states.
+
+States that share a chain and striker speed (they differ only in the observation, e.g. the
+sensor particles or the acquisition filter) share one simulation; the rest are run in
+batches with :func:`msens.chain.simulate_batch` grouped by damping law.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from msens.assemble import build_chain
+from msens.chain.equilibrium import static_contact_forces
+from msens.chain.integrate import ChainResult, simulate_batch
+from msens.compare import smooth
+from msens.diagnose.effects.base import Context, ModelState
+from msens.features import PulseFeatures, pulse_features
+from msens.pipeline import SensorResult, SetupResult
+from msens.sensors import SensorKind, observe, time_derivative
+
+#: Runs per simulate_batch call (bounds memory: runs x nt x n doubles per call).
+BATCH = 24
+
+
+@dataclass
+class Predictor:
+    """Sensor force records of model states on the common output times.
+
+    Attributes
+    ----------
+    t : ndarray, shape (nt,)
+        Output times from impact, s.
+    simulations : int
+        Chain runs made so far (a counter for reports).
+    """
+
+    t: np.ndarray
+    simulations: int = 0
+
+    def records(self, states: Sequence[ModelState]) -> np.ndarray:
+        """Dynamic sensor forces (N) after the states' record operations.
+
+        Returns
+        -------
+        ndarray, shape (runs, sensors, nt)
+        """
+        keys = [_sim_key(s) for s in states]
+        unique: dict[tuple, int] = {}
+        for k in keys:
+            unique.setdefault(k, len(unique))
+        firsts = {unique[k]: s for k, s in zip(keys, states, strict=True)}
+        order = [firsts[i] for i in range(len(unique))]
+        forces = self._simulate(order)  # list of (nt, n) total contact forces
+        dt = float(self.t[1] - self.t[0])
+        out = np.empty((len(states), len(states[0].particles), self.t.size))
+        for r, (k, s) in enumerate(zip(keys, states, strict=True)):
+            out[r] = observe_state(s, forces[unique[k]], dt)
+        return out
+
+    def _simulate(self, states: list[ModelState]) -> list[np.ndarray]:
+        result: list[np.ndarray | None] = [None] * len(states)
+        groups: dict = {}
+        for i, s in enumerate(states):
+            groups.setdefault(s.chain.damping_law, []).append(i)
+        for idx in groups.values():
+            for start in range(0, len(idx), BATCH):
+                part = idx[start:start + BATCH]
+                res = simulate_batch([states[i].chain for i in part],
+                                     np.array([states[i].velocity for i in part]), self.t)
+                self.simulations += len(part)
+                for j, i in enumerate(part):
+                    result[i] = res.force[j]
+        return result  # type: ignore[return-value]
+
+
+def observe_state(state: ModelState, force: np.ndarray, dt: float) -> np.ndarray:
+    """Sensor records (sensors, nt) of a state from its contact forces (nt, n), N."""
+    out = np.array([observe(kind, force, p)
+                    for kind, p in zip(state.kinds, state.particles, strict=True)])
+    for op in state.post:
+        out = op(out, dt)
+    return out
+
+
+def _sim_key(state: ModelState) -> tuple:
+    c = state.chain
+    return (c.mass.tobytes(), c.stiffness.tobytes(), c.damping.tobytes(),
+            c.static_force.tobytes(), c.gravity, c.damping_law, float(state.velocity))
+
+
+def baseline_state(ctx: Context, gamma_contact: float, gamma_wall: float) -> ModelState:
+    """The study's model of the setup with the given (calibrated) dissipation."""
+    chain = build_chain(ctx.study, ctx.setup, gamma_contact=gamma_contact,
+                        gamma_wall=gamma_wall)
+    return ModelState(chain=chain, velocity=float(ctx.study.striker.velocity_m_per_s),
+                      particles=tuple(s.particle for s in ctx.setup.sensors),
+                      kinds=tuple(s.kind for s in ctx.setup.sensors))
+
+
+def signal(kind: SensorKind, force: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """What a channel's voltage is proportional to: force (bead, rod) or dF/dt (MsS, Eq. 5)."""
+    return time_derivative(force, t) if kind is SensorKind.MSS else force
+
+
+def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> SetupResult:
+    """A :class:`~msens.pipeline.SetupResult` whose records come from ``state``.
+
+    The sensors keep the setup's nominal specs (so synthetic channels are labelled as the
+    study says) while their records are read where ``state`` says. The contact-force history
+    is that of the state's chain; speeds are not computed (NaN).
+    """
+    res = predictor._simulate([state])[0]
+    t = predictor.t
+    forces = observe_state(state, res, float(t[1] - t[0]))
+    sensors = []
+    where = positions([s.particle for s in ctx.setup.sensors])
+    for spec, pos, f in zip(ctx.setup.sensors, where, forces, strict=True):
+        shape = time_derivative(f, t) if spec.kind is SensorKind.MSS else None
+        sr = SensorResult(sensor=spec, position=pos, force=f, voltage_shape=shape,
+                          features=model_features_of(f, t))
+        sensors.append(sr)
+    return SetupResult(setup=ctx.setup, chain=state.chain,
+                       history=ChainResult(t=t, force=res, approach=np.zeros_like(res)),
+                       static_force=static_contact_forces(state.chain), sensors=tuple(sensors),
+                       speed_incident=float("nan"), speed_reflected=float("nan"))
+
+
+def model_features_of(force: np.ndarray, t: np.ndarray) -> PulseFeatures:
+    """Features of a model force record (..., nt) after the comparison's smoothing."""
+    return pulse_features(smooth(force, float(t[1] - t[0])), t)
+
+
+def positions(particles: Sequence[int]) -> list[str]:
+    """"top" / "bottom" (or "single") of each sensor by its particle."""
+    if len(particles) == 1:
+        return ["single"]
+    lo, hi = min(particles), max(particles)
+    return ["top" if p == lo else "bottom" if p == hi else f"middle-{p}" for p in particles]

@@ -186,3 +186,56 @@ def field(study: Study, out: Path) -> str:
     from msens.fieldrun import run_field
 
     return run_field(study, out)
+
+
+def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | None = None,
+             passes: int = 1) -> tuple[dict, list[Path]]:
+    """Name the effect the model of ``study`` misses; write ``diagnosis.json`` and
+    ``diagnosis.png`` into ``out``.
+
+    Either ``data`` (a measured waveform; its sensors choose the study's setup) or
+    ``reference`` (a setup name: its ``[reference]`` rows are the measurement) is given.
+    """
+    import json
+
+    from msens.diagnose import diagnose_passes, diagnose_reference
+    from msens.diagnose.report import FILES
+    from msens.diagnose.report import write as write_diagnosis
+    from msens.errors import InputError
+    from msens.io.read import read_waveform
+
+    if (data is None) == (reference is None):
+        raise InputError("diagnose needs either DATA (a waveform file) or --reference SETUP, "
+                         "not both")
+    if not 1 <= passes <= 7:
+        raise InputError(f"--passes must be from 1 to 7, got {passes}")
+    target = OutputDir(out)
+    target.check(list(FILES))
+    if data is not None:
+        results = diagnose_passes(read_waveform(data), study, passes=passes)
+    else:
+        results, added = [], []
+        for _ in range(passes):
+            d = diagnose_reference(study, reference, added=tuple(added))
+            results.append(d)
+            if d.effect == "none":
+                break
+            added.append((d.effect, d.parameters))
+    written = write_diagnosis(results, target)
+    report = json.loads(written[0].read_text())
+    return report, written
+
+
+def format_diagnosis(report: dict) -> str:
+    """Plain-text summary of ``diagnosis.json``."""
+    lines = [f"setup {report['setup']} ({report['mode']}): disagreement mostly at the "
+             f"{report['disagreement']['where']}",
+             f"{'effect':<24} {'score (dBIC)':>13} {'misfit':>10}  parameters"]
+    for c in report["candidates"]:
+        pars = ", ".join(f"{k}={v:.4g}" for k, v in c["parameters"].items())
+        lines.append(f"{c['effect']:<24} {c['score']:>13.1f} {c['misfit']:>10.4g}  {pars}")
+    for i, p in enumerate(report["passes"], 1):
+        pars = ", ".join(f"{k}={v:.4g}" for k, v in p["parameters"].items())
+        lines.append(f"pass {i}: {p['effect']}" + (f" ({pars})" if pars else "")
+                     + f"; misfit {p['misfit_before']:.4g} -> {p['misfit_after']:.4g}")
+    return "\n".join(lines)

@@ -53,6 +53,18 @@ def _parser() -> argparse.ArgumentParser:
     comp.add_argument("study", help="study .toml file")
     comp.add_argument("data", help="waveform file (.csv, .npz or .tdms)")
     comp.add_argument("--out", required=True, help="output directory")
+
+    diag = sub.add_parser("diagnose", help="find and name the effect the model misses")
+    diag.add_argument("data", nargs="?", default=None,
+                      help="measured waveform file (.csv, .npz or .tdms)")
+    diag.add_argument("--study", default=None,
+                      help="study .toml file (default: the built-in paper study)")
+    diag.add_argument("--out", required=True, help="output directory")
+    diag.add_argument("--reference", metavar="SETUP", default=None,
+                      help="feature-only mode: the study's [reference] rows of SETUP "
+                           "(e.g. the paper's Table 2) are the measurement; no DATA")
+    diag.add_argument("--passes", type=int, default=1,
+                      help="diagnosis passes, each adding the previous winner (default 1)")
     return p
 
 
@@ -106,8 +118,20 @@ def _compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _diagnose(args: argparse.Namespace) -> int:
+    from msens import api
+
+    study = api.load(args.study) if args.study else api.load_default()
+    data = Path(args.data) if args.data else None
+    report, written = api.diagnose(study, data, Path(args.out), reference=args.reference,
+                                   passes=args.passes)
+    print(api.format_diagnosis(report))
+    print(f"\nwrote {', '.join(str(p) for p in written)}")
+    return 0
+
+
 _COMMANDS = {"run": _run, "field": _field, "verify": _verify, "synth": _synth,
-             "compare": _compare}
+             "compare": _compare, "diagnose": _diagnose}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

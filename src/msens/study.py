@@ -302,7 +302,7 @@ def _chain(t: Table) -> ChainSpec:
     law = Damping(damping)
     # The linear law's coefficients are in kg/s, the HKK law's in kg/(s m^0.5): distinct keys
     # keep a number from being read in the wrong unit.
-    if law is Damping.LINEAR:
+    if law in (Damping.LINEAR, Damping.LINEAR_LOADING):
         gc = t.number("gamma_contact_kg_per_s", 0.0, low=0.0)
         gw = t.number("gamma_wall_kg_per_s", 0.0, low=0.0)
     else:

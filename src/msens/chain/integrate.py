@@ -73,7 +73,8 @@ class ChainResult:
     dt : float or ndarray, shape (runs,)
         Nominal step used, s (nan for the adaptive reference).
     steps : int or ndarray, shape (runs,)
-        Runge-Kutta steps taken, including those cut at contact events.
+        Runge-Kutta steps taken, including those cut at contact events (for
+        :func:`simulate_reference`: right-hand-side evaluations).
     """
 
     t: np.ndarray
@@ -260,7 +261,9 @@ def simulate_reference(chain: Chain, striker_velocity: float, t_out: ArrayLike, 
     """Integrate one chain with SciPy's adaptive ``solve_ivp(method="DOP853")``.
 
     Slow; for checking :func:`simulate`. The contact states are not tracked as events: the
-    adaptive step control resolves the contact switches.
+    adaptive step control resolves the contact switches. A contact counts as closed when
+    delta > 0, so at t = 0 exactly the striker's dashpot is still off here, while
+    :func:`simulate` reports the force just after impact (gamma v for ``LINEAR``).
 
     Parameters
     ----------

@@ -129,8 +129,11 @@ def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> Setup
 
 
 def model_features_of(force: np.ndarray, t: np.ndarray) -> PulseFeatures:
-    """Features of a model force record (..., nt) after the comparison's smoothing."""
-    return pulse_features(smooth(force, float(t[1] - t[0])), t)
+    """Features of force records (nt,) or (sensors, nt) after the comparison's smoothing."""
+    dt = float(t[1] - t[0])
+    force = np.asarray(force, dtype=float)
+    smoothed = np.array([smooth(f, dt) for f in force.reshape(-1, force.shape[-1])])
+    return pulse_features(smoothed.reshape(force.shape), t)
 
 
 def positions(particles: Sequence[int]) -> list[str]:

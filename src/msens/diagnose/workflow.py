@@ -272,8 +272,9 @@ def _trough(force: np.ndarray, t: np.ndarray, t_inc: float, width: float,
 
 
 def _features(force: np.ndarray, t: np.ndarray) -> dict[str, float]:
+    force = np.where(np.isfinite(force), force, 0.0)  # outside the record: at rest
     f = model_features_of(force, t)
-    sm = smooth(np.where(np.isfinite(force), force, 0.0), float(t[1] - t[0]))
+    sm = smooth(force, float(t[1] - t[0]))
     return {"t_incident_us": float(f.t_incident) * 1e6, "tof_us": float(f.tof) * 1e6,
             "ar": float(f.ar), "width_us": float(f.width) * 1e6,
             "trough": _trough(sm, t, float(f.t_incident), float(f.width), float(f.f_incident))}

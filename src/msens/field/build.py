@@ -18,7 +18,7 @@ coils and magnets get their own sizes; the far air grows to ``far_size``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import gmsh
@@ -37,28 +37,51 @@ class MeshOptions:
         Element size at a contact flat as a fraction of the flat radius.
     wedge_factor : float
         Element size near a contact = this x the local air-gap height of the wedge.
+    near_contacts : int
+        Contacts within this many beads of a coil's particle get the sizes above; contacts
+        farther away are ``far_contact_factor`` times coarser (they matter less to the
+        sensors' fields and forces).
+    far_contact_factor : float
     bead_size : float
         Element size inside and on the beads, m.
+    centre_size : float
+        Element size at the bead centres (where B is reported), m.
     part_size : float
         Element size in coils, magnets and pole pieces, m.
     far_size : float
-        Largest element size in the far air, m.
+        Element size in the air next to the parts, m.
+    far_growth : float
+        Far-air element size grows as this fraction of the distance from the parts, so a
+        large air box costs few elements.
     growth : float
-        Distance over which sizes blend into ``far_size``, as a multiple of the part size.
+        Distance over which part sizes blend into the air size, as a multiple of part_size.
     """
 
     flat_fraction: float = 0.4
     wedge_factor: float = 2.0
+    near_contacts: int = 4
+    far_contact_factor: float = 2.5
     bead_size: float = 0.4e-3
+    centre_size: float = 0.1e-3
     part_size: float = 1.2e-3
-    far_size: float = 8e-3
+    far_size: float = 6e-3
+    far_growth: float = 0.3
     growth: float = 6.0
 
     def __post_init__(self) -> None:
-        for name in ("flat_fraction", "wedge_factor", "bead_size", "part_size", "far_size",
-                     "growth"):
+        for name in ("flat_fraction", "wedge_factor", "far_contact_factor", "bead_size",
+                     "centre_size", "part_size", "far_size", "far_growth", "growth"):
             v = getattr(self, name)
             require(v > 0 and math.isfinite(v), f"MeshOptions.{name} must be > 0, got {v}")
+        require(self.near_contacts >= 0, "MeshOptions.near_contacts must be >= 0")
+
+    def scaled(self, factor: float) -> MeshOptions:
+        """All sizes (not the counts) times ``factor`` (refinement studies)."""
+        return replace(self, flat_fraction=self.flat_fraction * factor,
+                       wedge_factor=self.wedge_factor * factor,
+                       bead_size=self.bead_size * factor, centre_size=self.centre_size * factor,
+                       part_size=self.part_size * factor, far_size=self.far_size * factor,
+                       far_growth=self.far_growth * factor)
 
 
 #: The OCC model is built in millimetres (OCC's tolerance, 1e-7 model units, would swallow the
@@ -81,56 +104,82 @@ def _rect_surface(occ, q: Rect) -> int:
     return occ.addRectangle(MM * q.r0, MM * q.z0, 0.0, MM * (q.r1 - q.r0), MM * (q.z1 - q.z0))
 
 
-def _set_sizes(geometry: SensorGeometry, options: MeshOptions, part_rects: list[Rect]) -> None:
-    """Size fields: contact wedges, bead column, parts, far air (combined by Min)."""
+def _wedge_field(rim_points: list[int], geometry: SensorGeometry, flat_fraction: float,
+                 wedge_factor: float) -> int:
+    """Size ~ wedge_factor x air-gap height g + ((a + d)^2 - a^2)/R at distance d from a rim."""
     f = gmsh.model.mesh.field
     b = geometry.beads
-    a, big_r = MM * b.flat_radius, MM * b.radius
-    bead_size, part_size, far_size = (MM * options.bead_size, MM * options.part_size,
-                                      MM * options.far_size)
-    fields: list[int] = []
+    a, big_r, gap = MM * b.flat_radius, MM * b.radius, MM * b.contact_gap
+    dist = f.add("Distance")
+    f.setNumbers(dist, "PointsList", rim_points)
+    s_min = flat_fraction * a
+    if gap > 0:  # an air gap between the flats must be resolved across its height
+        s_min = min(s_min, wedge_factor * gap)
+    wedge = f.add("MathEval")
+    # No upper clamp: the size grows quadratically and the other fields take over.
+    f.setString(wedge, "F", f"Max({s_min!r}, {wedge_factor!r} * "
+                             f"({gap!r} + (2 * {a!r} * F{dist} + F{dist}^2) / {big_r!r}))")
+    return wedge
 
-    # Contact wedges: distance d from the flat's rim; gap ~ ((a + d)^2 - a^2)/R.
-    rim_points = []
+
+def _box_field(q: Rect, size: float, options: MeshOptions, r_pad: float = 0.0) -> int:
+    f = gmsh.model.mesh.field
+    bx = f.add("Box")
+    f.setNumber(bx, "VIn", size)
+    f.setNumber(bx, "VOut", 1e22)
+    f.setNumber(bx, "XMin", MM * q.r0)
+    f.setNumber(bx, "XMax", MM * q.r1 + r_pad)
+    f.setNumber(bx, "YMin", MM * q.z0 - r_pad)
+    f.setNumber(bx, "YMax", MM * q.z1 + r_pad)
+    f.setNumber(bx, "Thickness", options.growth * MM * options.part_size)
+    return bx
+
+
+def _set_sizes(geometry: SensorGeometry, options: MeshOptions, part_rects: list[Rect]) -> None:
+    """Size fields: contact wedges, bead centres, beads, parts, graded far air (by Min)."""
+    f = gmsh.model.mesh.field
+    b = geometry.beads
+    fields: list[int] = []
+    sensors = [u.coil.particle for u in geometry.sensors]
+    near, far = [], []
     for upper, _ in b.contacts:
         z = MM * b.contact_z(upper)
-        rim_points.append(gmsh.model.occ.addPoint(a, z, 0.0))
+        tag = gmsh.model.occ.addPoint(MM * b.flat_radius, z, 0.0)
+        d = min(min(abs(upper - p), abs(upper + 1 - p)) for p in sensors)
+        (near if d < options.near_contacts else far).append(tag)
+    centres = [gmsh.model.occ.addPoint(0.0, MM * b.center(p), 0.0) for p in b.particles]
     gmsh.model.occ.synchronize()
-    if rim_points:
-        dist = f.add("Distance")
-        f.setNumbers(dist, "PointsList", rim_points)
-        wedge = f.add("MathEval")
-        gap = MM * b.contact_gap
-        s_min = options.flat_fraction * a
-        if gap > 0:  # an air gap between the flats must be resolved across its height
-            s_min = min(s_min, options.wedge_factor * gap)
-        # No upper clamp: the field grows quadratically and the other fields take over.
-        expr = (f"Max({s_min!r}, {options.wedge_factor!r} * "
-                f"({gap!r} + (2 * {a!r} * F{dist} + F{dist}^2) / {big_r!r}))")
-        f.setString(wedge, "F", expr)
-        fields.append(wedge)
+    if near:
+        fields.append(_wedge_field(near, geometry, options.flat_fraction, options.wedge_factor))
+    if far:
+        k = options.far_contact_factor
+        fields.append(_wedge_field(far, geometry, k * options.flat_fraction,
+                                   k * options.wedge_factor))
+    dist = f.add("Distance")
+    f.setNumbers(dist, "PointsList", centres)
+    centre = f.add("Threshold")
+    f.setNumber(centre, "InField", dist)
+    f.setNumber(centre, "SizeMin", MM * options.centre_size)
+    f.setNumber(centre, "SizeMax", MM * options.bead_size)
+    f.setNumber(centre, "DistMin", 0.1 * MM * b.radius)
+    f.setNumber(centre, "DistMax", 0.5 * MM * b.radius)
+    fields.append(centre)
 
-    z0, z1 = (MM * z for z in b.z_span)
-    column = f.add("Box")
-    f.setNumber(column, "VIn", bead_size)
-    f.setNumber(column, "VOut", far_size)
-    f.setNumber(column, "XMin", 0.0)
-    f.setNumber(column, "XMax", big_r * 1.05)
-    f.setNumber(column, "YMin", z0 - 0.05 * big_r)
-    f.setNumber(column, "YMax", z1 + 0.05 * big_r)
-    f.setNumber(column, "Thickness", options.growth * part_size)
-    fields.append(column)
+    z0, z1 = b.z_span
+    fields.append(_box_field(Rect("beads", 0.0, b.radius, z0, z1), MM * options.bead_size,
+                             options, r_pad=0.05 * MM * b.radius))
+    fields.extend(_box_field(q, MM * options.part_size, options) for q in part_rects)
 
-    for q in part_rects:
-        bx = f.add("Box")
-        f.setNumber(bx, "VIn", part_size)
-        f.setNumber(bx, "VOut", far_size)
-        f.setNumber(bx, "XMin", MM * q.r0)
-        f.setNumber(bx, "XMax", MM * q.r1)
-        f.setNumber(bx, "YMin", MM * q.z0)
-        f.setNumber(bx, "YMax", MM * q.z1)
-        f.setNumber(bx, "Thickness", options.growth * part_size)
-        fields.append(bx)
+    # far air: far_size next to the parts, growing with the distance from their bounding box
+    rects = geometry.rectangles()
+    r1 = MM * max(q.r1 for q in rects)
+    zlo, zhi = geometry.parts_z_span()
+    zlo, zhi = MM * zlo, MM * zhi
+    far_air = f.add("MathEval")
+    f.setString(far_air, "F",
+                f"Max({MM * options.far_size!r}, {options.far_growth!r} * "
+                f"Sqrt(Max(x - {r1!r}, 0)^2 + Max(Max({zlo!r} - y, y - {zhi!r}), 0)^2))")
+    fields.append(far_air)
 
     lo = f.add("Min")
     f.setNumbers(lo, "FieldsList", fields)

@@ -130,8 +130,8 @@ class BeadChain:
         Air gap between neighbour flats, m; 0 (default) means the beads touch.
     """
 
-    first: int = 8
-    last: int = 23
+    first: int = 2
+    last: int = 30
     count: int = 30
     diameter: float = BEAD_DIAMETER
     contact_load: float = DEFAULT_CONTACT_LOAD
@@ -368,8 +368,8 @@ class AirBox:
         Axial distance from the lowest/highest part to the box's ends, m.
     """
 
-    radius: float = 0.08
-    margin: float = 0.06
+    radius: float = 0.32
+    margin: float = 0.24
 
     def __post_init__(self) -> None:
         require(self.radius > 0 and self.margin > 0,

@@ -51,7 +51,7 @@ def from_arrays(points: np.ndarray, triangles: np.ndarray, subdomains: Mapping[s
     points : ndarray, shape (2, n)
         Vertex coordinates (r, z), m.
     triangles : ndarray, shape (3, m)
-        Vertex indices per triangle (any orientation).
+        Vertex indices per triangle (any orientation; skfem sorts them).
     subdomains : Mapping[str, ndarray]
         Element indices per name; must partition ``range(m)``.
     boundaries : Mapping[str, ndarray], optional
@@ -64,12 +64,10 @@ def from_arrays(points: np.ndarray, triangles: np.ndarray, subdomains: Mapping[s
             f"mesh has vertices at r < 0 (min r = {p[0].min():.3e} m); the meridian "
             "half-plane must have r >= 0")
     p[0] = np.maximum(p[0], 0.0)
-    # counter-clockwise orientation keeps the affine maps' determinants positive
+    # skfem sorts the vertices of each triangle and integrates with |det J|: orientation is free
     d = ((p[0, t[1]] - p[0, t[0]]) * (p[1, t[2]] - p[1, t[0]])
          - (p[0, t[2]] - p[0, t[0]]) * (p[1, t[1]] - p[1, t[0]]))
     require(bool(np.all(d != 0.0)), "mesh has degenerate (zero-area) triangles")
-    flip = d < 0
-    t[1, flip], t[2, flip] = t[2, flip], t[1, flip].copy()
     subs = {name: np.asarray(ix, dtype=np.int64) for name, ix in subdomains.items()}
     counts = np.zeros(t.shape[1], dtype=np.int64)
     for ix in subs.values():
@@ -126,7 +124,7 @@ def read_gmsh(path: str | Path) -> AxiMesh:
     require(path.is_file(), f"mesh file '{path}' does not exist")
     try:
         raw = meshio.read(path, file_format="gmsh")
-    except Exception as exc:  # meshio raises a variety of errors on bad files
+    except (Exception, SystemExit) as exc:  # meshio raises many errors, even SystemExit
         raise InputError(f"mesh file '{path}' could not be read as gmsh: {exc}") from exc
     names = {(int(tag), int(dim)): name for name, (tag, dim) in raw.field_data.items()}
     phys = raw.cell_data.get("gmsh:physical")

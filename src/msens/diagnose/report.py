@@ -1,0 +1,94 @@
+"""Write a diagnosis: ``diagnosis.json`` and ``diagnosis.png``.
+
+The figure shows where the baseline disagrees (chi^2 per sample in each sensor's incident and
+reflected window and elsewhere, before and after the named effect; or, in feature mode, each
+feature's residual in units of its std) and, for waveforms, the first shot of every channel
+over the baseline and the corrected model.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+
+from msens.diagnose.workflow import Diagnosis
+from msens.output import OutputDir
+
+FILES = ("diagnosis.json", "diagnosis.png")
+
+
+def report(passes: Sequence[Diagnosis]) -> dict:
+    """``diagnosis.json``: the first pass in full, and a summary of every pass."""
+    out = passes[0].to_json()
+    out["passes"] = [{"effect": d.effect, "parameters": d.parameters,
+                      "misfit_before": d.misfit_before, "misfit_after": d.misfit_after,
+                      "best_score": d.candidates[0].score if d.candidates else None}
+                     for d in passes]
+    return out
+
+
+def _label(d: Diagnosis) -> str:
+    if d.effect == "none":
+        return "no effect named"
+    pars = ", ".join(f"{k} = {v:.4g}" for k, v in d.parameters.items())
+    return f"{d.effect} ({pars})"
+
+
+def figure(d: Diagnosis) -> Figure:
+    """Where the disagreement sits, and before/after overlays."""
+    if d.mode == "features":
+        fig, ax = plt.subplots(figsize=(7, 3.6))
+        table = d.disagreement["features"]
+        x = np.arange(len(table))
+        ax.bar(x - 0.2, [r["residual_before"] for r in table], 0.4, label="baseline")
+        ax.bar(x + 0.2, [r["residual_after"] for r in table], 0.4, label=f"with {d.effect}")
+        ax.set_xticks(x, [f"{r['feature']}\n{r['channel']}" for r in table], fontsize=7)
+        ax.axhline(0, color="k", lw=0.8)
+        ax.set_ylabel("(model - measured) / std")
+        ax.legend(fontsize=8)
+        ax.set_title(f"setup {d.setup}: {_label(d)}", fontsize=9)
+        fig.tight_layout()
+        return fig
+    channels = d.overlay
+    fig, axes = plt.subplots(1 + len(channels), 1, figsize=(8, 2.6 * (1 + len(channels))),
+                             squeeze=False)
+    ax = axes[0, 0]
+    rows = d.disagreement["windows"]
+    x = np.arange(len(rows))
+    ax.bar(x - 0.2, [r["chi2_per_sample_before"] for r in rows], 0.4, label="baseline")
+    ax.bar(x + 0.2, [r["chi2_per_sample_after"] for r in rows], 0.4, label=f"with {d.effect}")
+    ax.set_xticks(x, [f"{r['window']}\n{r['channel']}" for r in rows], fontsize=7)
+    ax.set_yscale("log")
+    ax.axhline(1.0, color="k", lw=0.8, ls=":")
+    ax.set_ylabel("chi² per sample")
+    ax.legend(fontsize=8)
+    ax.set_title(f"setup {d.setup}: disagreement at the {d.disagreement['where']}; "
+                 f"{_label(d)}; misfit {d.misfit_before:.3g} -> {d.misfit_after:.3g}",
+                 fontsize=9)
+    for ax, ch in zip(axes[1:, 0], channels, strict=True):
+        ax.plot(ch["t_us"], ch["data"], color="0.6", lw=0.7, label="measured (shot 1)")
+        ax.plot(ch["t_us"], ch["before"], "b--", lw=1.0, label="baseline")
+        ax.plot(ch["t_us"], ch["after"], "r-", lw=1.0, label=f"with {d.effect}")
+        ax.set_ylabel(f"{ch['channel']} (V)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1, 0].set_xlabel("record time (µs)")
+    fig.tight_layout()
+    return fig
+
+
+def write(passes: Sequence[Diagnosis], out: str | Path | OutputDir) -> list[Path]:
+    """Write ``diagnosis.json`` and ``diagnosis.png`` (atomically, never over a user's file)."""
+    d = out if isinstance(out, OutputDir) else OutputDir(out)
+    written = [d.write_json("diagnosis.json", report(passes))]
+    fig = figure(passes[0])
+    written.append(d.savefig("diagnosis.png", fig, dpi=130))
+    plt.close(fig)
+    return written

@@ -33,7 +33,8 @@ def test_self_comparison_has_zero_error(result, name):
     report = compare(result, synthesize(_setup(result, name), clean))
     for ch in report["channels"]:
         m = ch["measured"]
-        assert m["nrmse"]["mean"] < 1e-4
+        # not exactly 0: synth shifts records by a fraction of a sample (linear interpolation)
+        assert m["nrmse"]["mean"] < 5e-4
         assert m["correlation"]["mean"] > 1 - 1e-6
         assert m["tof_us"]["mean"] == pytest.approx(ch["model"]["tof_us"], abs=0.01)
         assert m["ar"]["mean"] == pytest.approx(ch["model"]["ar"], abs=1e-4)

@@ -1,10 +1,11 @@
 """Monotone B–H interpolation for nonlinear soft magnetic regions.
 
 The table H(B) of a :class:`msens.materials.BHCurve` is interpolated with a shape-preserving
-piecewise-cubic Hermite interpolant (PCHIP, Fritsch & Carlson 1980), which keeps H(B) strictly
-increasing when the data are, so the magnetic energy density w(B) = ∫ H dB is convex and Newton's
-method has a unique solution to converge to. Beyond the last table point the curve continues as
-a straight line of slope μ0 (the material is saturated: B = B_n + μ0 (H − H_n)).
+piecewise-cubic Hermite interpolant (PCHIP slopes, Fritsch & Carlson 1980), which keeps H(B)
+strictly increasing when the data are, so the magnetic energy density w(B) = ∫ H dB is convex and
+Newton's method has a unique solution to converge to. Beyond the last table point the curve
+continues as a straight line of slope μ0 (the material is saturated: B = B_n + μ0 (H − H_n));
+the interpolant's end slope is set to 1/μ0 so that dH/dB is continuous there.
 
 The solver works with the reluctivity ν(|B|²) = H(|B|)/|B| and the differential (tangent)
 reluctivity ν_d(|B|) = dH/dB. The Jacobian of H(B) = ν(|B|²) B with respect to B is
@@ -16,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
+from scipy.interpolate import CubicHermiteSpline, PchipInterpolator, PPoly
 
 from msens.errors import require
 from msens.materials import BHCurve
@@ -31,15 +32,15 @@ class MonotoneBH:
     ----------
     curve : BHCurve
         The tabulated curve it was built from.
-    h_of_b : PchipInterpolator
+    h_of_b : CubicHermiteSpline
         H(B) on [0, B_n], A/m as a function of T.
-    w_of_b : PchipInterpolator
+    w_of_b : PPoly
         Energy density ∫_0^B H dB', J/m^3, on [0, B_n] (antiderivative of ``h_of_b``).
     """
 
     curve: BHCurve
-    h_of_b: PchipInterpolator
-    w_of_b: PchipInterpolator
+    h_of_b: CubicHermiteSpline
+    w_of_b: PPoly
 
     @property
     def b_max(self) -> float:
@@ -113,5 +114,14 @@ def monotone_bh(curve: BHCurve) -> MonotoneBH:
     require(b[0] == 0.0 and h[0] == 0.0, f"B-H curve '{curve.name}' must start at (0, 0)")
     require(bool(np.all(np.diff(b) > 0) and np.all(np.diff(h) > 0)),
             f"B-H curve '{curve.name}': B and H must be strictly increasing")
-    h_of_b = PchipInterpolator(b, h, extrapolate=False)
+    slopes = PchipInterpolator(b, h).derivative()(b)
+    # End slope 1/μ0 makes H'(B) continuous into the saturation line (a kink there would slow
+    # Newton); it stays within the Fritsch–Carlson monotonicity bound 3 ΔH/ΔB of the last
+    # interval for any physical table (checked).
+    last_secant = (h[-1] - h[-2]) / (b[-1] - b[-2])
+    require(1.0 / MU0 <= 3.0 * last_secant,
+            f"B-H curve '{curve.name}': the last interval is too steep for a monotone join to "
+            "the saturation line B = B_n + mu0 (H - H_n); extend the table to higher fields")
+    slopes[-1] = 1.0 / MU0
+    h_of_b = CubicHermiteSpline(b, h, slopes, extrapolate=False)
     return MonotoneBH(curve=curve, h_of_b=h_of_b, w_of_b=h_of_b.antiderivative())

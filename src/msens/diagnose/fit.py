@@ -89,7 +89,7 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
     points = list(itertools.product(*grids))
 
     def params_of(x) -> dict:
-        return {p.name: (int(round(v)) if p.integer else _from_x(p, v))
+        return {p.name: (round(v) if p.integer else _from_x(p, v))
                 for p, v in zip(space, x, strict=True)}
 
     count = [0]
@@ -134,3 +134,58 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
     return EffectFit(effect=effect.name, parameters=params,
                      state=effect.apply(ctx, base, params),
                      rss=evaluate([best])[0], n_parameters=len(space), evaluations=count[0])
+
+
+def refit_jointly(named: list[tuple[Effect, dict]], ctx: Context, plain: ModelState,
+                  predictor: Predictor, objective, weights: np.ndarray,
+                  maxfev: int = 80) -> tuple[list[dict], ModelState, np.ndarray]:
+    """Refine the continuous parameters of several named effects together.
+
+    Each pass of the workflow fits a new effect with the earlier ones frozen; the earlier
+    ones were then fitted without the new one and have absorbed part of it. A bounded
+    Nelder–Mead over all their continuous parameters at once (search variables as in
+    :func:`fit_effect`; integer parameters stay fixed) removes that bias.
+
+    Parameters
+    ----------
+    named : list of (Effect, parameters)
+        The effects in the order they are applied to ``plain``.
+    plain : ModelState
+        The baseline without any of them.
+
+    Returns
+    -------
+    parameters : list of dict
+        Refined parameters, one dict per effect.
+    state : ModelState
+    rss : ndarray, shape (sensors,)
+    """
+    slots = []  # (effect index, Parameter)
+    for i, (effect, _) in enumerate(named):
+        slots += [(i, p) for p in effect.space(ctx, plain) if not p.integer]
+
+    def build(x) -> tuple[list[dict], ModelState]:
+        params = [dict(p) for _, p in named]
+        for (i, p), v in zip(slots, x, strict=True):
+            params[i][p.name] = _from_x(p, float(v))
+        state = plain
+        for (effect, _), ps in zip(named, params, strict=True):
+            state = effect.apply(ctx, state, ps)
+        return params, state
+
+    def f(x) -> float:
+        return float(weights @ objective.rss(predictor.records([build(x)[1]])[0]))
+
+    x0 = np.array([_to_x(p, named[i][1][p.name]) for i, p in slots])
+    if slots:
+        bounds = [(_to_x(p, p.lower), _to_x(p, p.upper)) for _, p in slots]
+        step = np.array([0.02 if p.log else 0.02 * (p.upper - p.lower) for _, p in slots])
+        simplex = np.vstack([x0, x0 + np.diag(step)])
+        f0 = f(x0)
+        opt = minimize(f, x0, method="Nelder-Mead", bounds=bounds,
+                       options={"initial_simplex": simplex, "xatol": XATOL, "fatol": 1e-3,
+                                "maxfev": maxfev})
+        if opt.fun < f0:
+            x0 = np.asarray(opt.x)
+    params, state = build(x0)
+    return params, state, objective.rss(predictor.records([state])[0])

@@ -6,11 +6,14 @@ Two objectives share one interface (``rss(records) -> (sensors,)``, ``n_obs``, `
   channel signals (force for bead and rod, dF/dt for the four-contact MsS, paper Eq. 5).
   Per shot one time offset D (impact to trigger) common to all channels — a single offset
   keeps the delays between sensors, which carry the speed — and per shot and channel one
-  gain, both profiled out: for a given D the least-squares gain is <y, m> / <m, m> (kept
-  >= 0), and D is found by an FFT cross-correlation over +-``MAX_SHIFT_S`` followed by a
-  bounded Brent refinement of the exact residual. The model is interpolated onto the data's
-  own sample times, so the data's noise stays white and independent (what the BIC assumes).
-  The channel's noise ``sigma`` is the standard deviation of its pre-trigger samples.
+  gain and one DC offset, all profiled out: for a given D, gain (kept >= 0) and offset are
+  the linear least-squares fit y ~ g m + b (the pre-trigger mean removes the offset only to
+  ~noise / sqrt(pre-trigger samples), which over a whole record would otherwise cost chi^2 of
+  order tens and bias shape parameters), and D is found by an FFT cross-correlation over
+  +-``MAX_SHIFT_S`` followed by a bounded Brent refinement of the exact residual. The model
+  is interpolated onto the data's own sample times, so the data's noise stays white and
+  independent (what the BIC assumes). The channel's noise ``sigma`` is the standard
+  deviation of its pre-trigger samples.
 - :class:`FeatureObjective`: published features (TOF and AR per sensor, e.g. the paper's
   Table 2) against the model's, each residual divided by the published shot-to-shot std.
 """
@@ -68,7 +71,32 @@ class Alignment:
 
     delay: float
     gains: np.ndarray
+    offsets: np.ndarray
     rss: np.ndarray
+
+
+def check_channels(waveform: Waveform) -> None:
+    """Fail early (before any simulation) on a channel without a pulse above its noise.
+
+    Raises
+    ------
+    InputError
+        A channel whose largest excursion from its pre-trigger mean is not above
+        ``MIN_SNR`` x its pre-trigger std (or is not positive at all).
+    """
+    tau = waveform.time
+    pre = tau < 0.0
+    for j, ch in enumerate(waveform.channels):
+        v = np.asarray(waveform.data[:, j], dtype=float)
+        if pre.sum() >= MIN_PRETRIGGER:
+            v = v - v[pre].mean()
+            noise = float(np.std(v[pre], ddof=1))
+        else:
+            noise = 0.0
+        peak = float(np.max(np.abs(v)))
+        if not (peak > 0.0 and peak > MIN_SNR * noise):
+            raise InputError(f"channel {ch.name} has no usable pulse (peak {peak:.3g} V "
+                             f"against pre-trigger noise {noise:.3g} V; needs > {MIN_SNR:g}x)")
 
 
 def _shots(waveform: Waveform) -> list[list[Channel]]:
@@ -147,11 +175,19 @@ class WaveformObjective:
     def _rss_at(self, shot: Shot, sig: np.ndarray, delay: float) -> Alignment:
         m = np.array([np.interp(shot.tau + delay, self.t, s, left=0.0, right=0.0)
                       for s in sig])
+        # least squares y ~ g m + b per channel (2x2 normal equations), g kept >= 0
+        n = float(shot.tau.size)
+        sm, sy = m.sum(axis=1), shot.y.sum(axis=1)
         mm = np.einsum("ij,ij->i", m, m)
         ym = np.einsum("ij,ij->i", shot.y, m)
         yy = np.einsum("ij,ij->i", shot.y, shot.y)
-        g = np.where(mm > 0, np.maximum(ym, 0.0) / np.where(mm > 0, mm, 1.0), 0.0)
-        return Alignment(delay=delay, gains=g, rss=yy - 2 * g * ym + g**2 * mm)
+        det = n * mm - sm**2
+        ok = det > 1e-12 * n * np.maximum(mm, 1e-300)
+        g = np.where(ok, (n * ym - sm * sy) / np.where(ok, det, 1.0), 0.0)
+        g = np.maximum(g, 0.0)
+        b = (sy - g * sm) / n
+        rss = yy + g**2 * mm + n * b**2 - 2 * g * ym - 2 * b * sy + 2 * g * b * sm
+        return Alignment(delay=delay, gains=g, offsets=b, rss=np.maximum(rss, 0.0))
 
     def align(self, shot: Shot, sig: np.ndarray) -> Alignment:
         """Best time offset and gains of ``shot`` for model signals ``sig`` (sensors, nt)."""
@@ -197,8 +233,8 @@ class WaveformObjective:
         for s in self.shots:
             a = self.align(s, sig)
             tm = s.tau + a.delay
-            m = np.array([g * np.interp(tm, self.t, x, left=0.0, right=0.0)
-                          for g, x in zip(a.gains, sig, strict=True)])
+            m = np.array([g * np.interp(tm, self.t, x, left=0.0, right=0.0) + b
+                          for g, b, x in zip(a.gains, a.offsets, sig, strict=True)])
             out.append((a, tm, m))
         return out
 

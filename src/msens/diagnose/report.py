@@ -29,7 +29,8 @@ def report(passes: Sequence[Diagnosis]) -> dict:
     out = passes[0].to_json()
     out["passes"] = [{"effect": d.effect, "parameters": d.parameters,
                       "misfit_before": d.misfit_before, "misfit_after": d.misfit_after,
-                      "best_score": d.candidates[0].score if d.candidates else None}
+                      "best_score": d.candidates[0].score if d.candidates else None,
+                      "joint_refit": [{"effect": n, "parameters": p} for n, p in d.refit]}
                      for d in passes]
     return out
 
@@ -69,7 +70,7 @@ def figure(d: Diagnosis) -> Figure:
     ax.axhline(1.0, color="k", lw=0.8, ls=":")
     ax.set_ylabel("chi² per sample")
     ax.legend(fontsize=8)
-    ax.set_title(f"setup {d.setup}: disagreement at the {d.disagreement['where']}; "
+    ax.set_title(f"setup {d.setup}: disagreement mostly at the {d.disagreement['where']}\n"
                  f"{_label(d)}; misfit {d.misfit_before:.3g} -> {d.misfit_after:.3g}",
                  fontsize=9)
     for ax, ch in zip(axes[1:, 0], channels, strict=True):

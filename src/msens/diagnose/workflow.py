@@ -29,7 +29,9 @@ Steps (issue 7):
    ``THRESHOLD`` = 10 ("very strong" evidence on the Kass & Raftery (1995) scale of 2 ln B;
    with the BIC penalty already subtracted): otherwise ``"none"``.
 6. *Gap.* The named effect is added, the model rerun, and the misfit (chi^2 per sample)
-   before and after reported.
+   before and after reported. In later passes (``added`` not empty) the parameters of the
+   earlier effects and the new one are first refined together, since each earlier fit
+   absorbed part of the effects not yet named.
 
 A feature-only mode (:func:`diagnose_reference`) takes a study's ``[reference]`` rows (e.g. the
 paper's Table 2: TOF and AR per sensor, with their shot-to-shot std) as the measurement;
@@ -39,6 +41,7 @@ the noise floor is not applied (the std is given).
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -49,8 +52,8 @@ from msens.calibrate import DissipationFit
 from msens.compare import setup_spec_channels, shot_records, smooth
 from msens.diagnose.effects import Context, Effect, ModelState, registry
 from msens.diagnose.effects import get as get_effect
-from msens.diagnose.fit import EffectFit, fit_effect
-from msens.diagnose.objective import FeatureObjective, WaveformObjective
+from msens.diagnose.fit import EffectFit, fit_effect, refit_jointly
+from msens.diagnose.objective import FeatureObjective, WaveformObjective, check_channels
 from msens.diagnose.predict import (
     Predictor,
     baseline_state,
@@ -121,6 +124,10 @@ class Diagnosis:
         Noise std per sensor used in chi^2 (V or V for MsS voltage; 1 in feature mode).
     added : tuple of (str, dict)
         Effects already in the baseline (earlier passes).
+    refit : tuple of (str, dict)
+        When ``added`` is not empty and an effect is named: the added effects and the new one
+        with their parameters refined together (:func:`~msens.diagnose.fit.refit_jointly`);
+        ``misfit_after`` is that model's.
     gamma_contact, gamma_wall : float
         Baseline dissipation (Eq. 10 or the study's).
     disagreement : dict
@@ -145,6 +152,7 @@ class Diagnosis:
     n_obs: int
     sigma: tuple[float, ...]
     added: tuple[tuple[str, dict], ...]
+    refit: tuple[tuple[str, dict], ...]
     gamma_contact: float
     gamma_wall: float
     disagreement: dict
@@ -177,6 +185,7 @@ class Diagnosis:
                          "gamma_wall": self.gamma_wall,
                          "added_effects": [{"effect": n, "parameters": p}
                                            for n, p in self.added]},
+            "joint_refit": [{"effect": n, "parameters": p} for n, p in self.refit],
             "disagreement": self.disagreement,
             "simulations": self.simulations,
             "elapsed_s": self.elapsed_s,
@@ -328,7 +337,7 @@ def _windows(objective: WaveformObjective, records_before: np.ndarray,
                                float(feats.t_reflected[j]) + w)}
         # windows are in model time of the baseline alignment, the same samples after
         masks = []
-        for shot, (a, tm, _) in zip(objective.shots, per[0], strict=True):
+        for _, tm, _ in per[0]:
             inside = {k: (tm >= lo) & (tm <= hi) for k, (lo, hi) in spans.items()}
             inside["elsewhere"] = ~(inside["incident"] | inside["reflected"])
             masks.append(inside)
@@ -384,10 +393,12 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     """
     start = time.perf_counter()
     setup = match_setup_spec(study, waveform)
+    check_channels(waveform)
     ctx = Context(study, setup)
     gc, gw = baseline_dissipation(study, fit)
     predictor = Predictor(output_times(study))
-    base = _with_added(ctx, baseline_state(ctx, gc, gw), added)
+    plain = baseline_state(ctx, gc, gw)
+    base = _with_added(ctx, plain, added)
     base_result = setup_result(ctx, base, predictor)
     objective = WaveformObjective(waveform, base_result)
     records0 = predictor.records([base])[0]
@@ -400,6 +411,13 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
                                  np.where(np.isfinite(sigma), sigma, np.nan), True, ctx, base)
     winner, wfit = _decide(cands, fits, threshold)
     after = wfit.state if wfit is not None else base
+    refit: tuple[tuple[str, dict], ...] = ()
+    if wfit is not None and added:
+        named = [(get_effect(n), dict(p)) for n, p in added] + \
+            [(get_effect(wfit.effect), dict(wfit.parameters))]
+        params, after, _ = refit_jointly(named, ctx, plain, predictor, objective, weights)
+        refit = tuple((e.name, p) for (e, _), p in zip(named, params, strict=True))
+        winner = dataclasses.replace(winner, parameters=params[-1])
     records1 = predictor.records([after])[0]  # rerun with the effect added
     rss1 = objective.rss(records1)
     n = float(objective.n_obs.sum())
@@ -412,7 +430,7 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
         misfit_before=misfit0, misfit_after=float((rss1 / sig**2).sum()) / n,
         candidates=tuple(cands), threshold=threshold, n_obs=int(n),
         sigma=tuple(float(s) for s in sig), added=tuple((k, dict(v)) for k, v in added),
-        gamma_contact=gc, gamma_wall=gw, disagreement=disagreement,
+        refit=refit, gamma_contact=gc, gamma_wall=gw, disagreement=disagreement,
         simulations=predictor.simulations, elapsed_s=time.perf_counter() - start,
         before=base, after=after, overlay=_overlay(objective, records0, records1, base_result))
 
@@ -439,7 +457,7 @@ def diagnose_passes(waveform: Waveform, study: Study, *, passes: int = 2,
         out.append(d)
         if d.effect == "none":
             break
-        added.append((d.effect, d.parameters))
+        added = list(d.refit) if d.refit else [*added, (d.effect, d.parameters)]
     return out
 
 
@@ -495,7 +513,7 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
         misfit_before=misfit0, misfit_after=float(objective.rss(records1).sum()) / n,
         candidates=tuple(cands), threshold=threshold, n_obs=int(n),
         sigma=tuple(float(s) for s in sig), added=tuple((k, dict(v)) for k, v in added),
-        gamma_contact=gc, gamma_wall=gw,
+        refit=(), gamma_contact=gc, gamma_wall=gw,
         disagreement={"where": f"{worst['feature']} at {worst['channel']}",
                       "features": table},
         simulations=predictor.simulations, elapsed_s=time.perf_counter() - start,

@@ -157,12 +157,9 @@ def _set_sizes(geometry: SensorGeometry, options: MeshOptions, part_rects: list[
                                    k * options.wedge_factor))
     dist = f.add("Distance")
     f.setNumbers(dist, "PointsList", centres)
-    centre = f.add("Threshold")
-    f.setNumber(centre, "InField", dist)
-    f.setNumber(centre, "SizeMin", MM * options.centre_size)
-    f.setNumber(centre, "SizeMax", MM * options.bead_size)
-    f.setNumber(centre, "DistMin", 0.1 * MM * b.radius)
-    f.setNumber(centre, "DistMax", 0.5 * MM * b.radius)
+    centre = f.add("MathEval")  # centre_size within R/10, then growing (no upper clamp)
+    f.setString(centre, "F", f"Max({MM * options.centre_size!r}, "
+                             f"F{dist} - {0.1 * MM * b.radius!r})")
     fields.append(centre)
 
     z0, z1 = b.z_span

@@ -44,7 +44,7 @@ def _baseline(ctx: Context, state: ModelState) -> dict[str, float | None]:
 
 
 def _apply(ctx: Context, state: ModelState, params) -> ModelState:
-    particles = tuple(int(round(params[k])) for k in names(ctx))
+    particles = tuple(round(params[k]) for k in names(ctx))
     return dataclasses.replace(state, particles=particles)
 
 

@@ -1,0 +1,76 @@
+"""``msens diagnose``: a run end to end, the feature-only mode, and bad input (exit 2)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from msens.cli import main
+from msens.diagnose.effects import Context
+from msens.diagnose.hidden import hidden_case
+from msens.diagnose.predict import Predictor, baseline_state
+from msens.io.read import write_waveform
+from msens.io.waveform import Waveform
+from msens.pipeline import output_times
+from msens.study import default_study_path, load_study
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory):
+    """A bead-setup measurement whose wall is aluminium-like (70 GPa)."""
+    study = load_study(default_study_path())
+    ctx = Context(study, study.setup("bead"))
+    from msens.pipeline import calibrate_dissipation
+
+    fit = calibrate_dissipation(study, output_times(study))
+    base = baseline_state(ctx, fit.gamma_c, fit.gamma_w)
+    wf, _ = hidden_case(ctx, base, Predictor(output_times(study)),
+                        {"wall_stiffness": {"wall_youngs_modulus_pa": 70e9}}, seed=21)
+    d = tmp_path_factory.mktemp("data")
+    path = d / "shot.csv"
+    write_waveform(wf, path)
+    dead = np.array(wf.data)
+    dead[:, :] = np.random.default_rng(1).normal(0.0, 1e-4, dead.shape)
+    write_waveform(Waveform(time=wf.time, data=dead, channels=wf.channels), d / "dead.csv")
+    return d
+
+
+def test_diagnose_names_the_soft_wall(data, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["diagnose", str(data / "shot.csv"), "--out", str(out)]) == 0
+    report = json.loads((out / "diagnosis.json").read_text())
+    assert report["effect"] == "wall_stiffness"
+    assert report["parameters"]["wall_youngs_modulus_pa"] == pytest.approx(70e9, rel=0.15)
+    assert report["misfit_after"] < report["misfit_before"]
+    assert report["candidates"][0]["effect"] == "wall_stiffness"
+    assert (out / "diagnosis.png").exists()
+    assert "wall_stiffness" in capsys.readouterr().out
+
+
+def test_feature_only_mode_on_table2(tmp_path):
+    out = tmp_path / "t2"
+    assert main(["diagnose", "--reference", "bead", "--out", str(out)]) == 0
+    report = json.loads((out / "diagnosis.json").read_text())
+    assert report["mode"] == "features" and report["n_observations"] == 4
+    assert report["misfit_after"] <= report["misfit_before"]
+    assert {c["effect"] for c in report["candidates"]} >= {"striker_velocity", "wall_stiffness"}
+
+
+@pytest.mark.parametrize("args", [
+    ["diagnose", "{data}/dead.csv"],  # no usable channel
+    ["diagnose", "{data}/shot.csv", "--study", "{data}/rods.toml"],  # sensors do not match
+    ["diagnose", "{data}/shot.csv", "--reference", "bead"],  # both modes
+    ["diagnose"],  # neither
+    ["diagnose", "--reference", "nosuch"],
+    ["diagnose", "{data}/missing.csv"],
+])
+def test_bad_input_exits_2(data, tmp_path, args, capsys):
+    text = default_study_path().read_text()
+    # a study whose only setup has rods at 13 and 18: bead data do not match it
+    parts = text.split("[[setup]]")  # header, bead, rod, mss (+ calibration, reference)
+    (data / "rods.toml").write_text(parts[0] + "[[setup]]" + parts[2])
+    argv = [a.format(data=data) for a in args] + ["--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    assert "msens: error:" in capsys.readouterr().err

@@ -40,10 +40,12 @@ def test_default_study_loads_three_setups():
                                                                          (16, 19, 1.8)]
 
 
-def test_studies_folder_copy_matches_builtin(pytestconfig):
+@pytest.mark.parametrize("name", ["paper-table2", "paper-mss"])
+def test_studies_folder_copy_matches_builtin(pytestconfig, name):
     root = pytestconfig.rootpath
-    assert (root / "studies" / "paper-table2.toml").read_text() == \
-        default_study_path().read_text()
+    builtin = default_study_path().parent / f"{name}.toml"
+    assert (root / "studies" / f"{name}.toml").read_text() == builtin.read_text()
+    load_study(builtin)
 
 
 def test_minimal_study_defaults():

@@ -137,6 +137,7 @@ class MagnetSpec:
     outer_radius_m: float | None = None
     length_m: float | None = None
     pole_inner_radius_m: float | None = None
+    pole_outer_radius_m: float | None = None
     pole_thickness_m: float | None = None
     axial_offset_m: float = 0.0
 
@@ -172,12 +173,22 @@ class StrikerSpec:
 
 @dataclass(frozen=True)
 class ElectronicsSpec:
-    """Coil read-out chain. Capacitances in F, resistance in Ohm, rate in Hz."""
+    """Coil read-out chain. Capacitances in F, resistance in Ohm, rate in Hz.
+
+    Defaults: 1 m of RG-58 coaxial cable (about 100 pF/m) into a 1 MOhm || 20 pF DAQ input
+    sampled at the paper's 10 MHz; noise off unless asked for.
+    """
 
     cable_capacitance_f: float = 100e-12
     input_resistance_ohm: float = 1e6
     input_capacitance_f: float = 20e-12
     sample_rate_hz: float = 10e6
+    johnson_noise: bool = False
+    temperature_k: float = 293.15
+    adc_bits: int | None = None
+    adc_range_v: float | None = None
+    input_noise_v_per_rthz: float = 0.0
+    seed: int = 0
 
 
 @dataclass(frozen=True)
@@ -405,7 +416,7 @@ def _coil(t: Table) -> CoilSpec:
 def _magnet(t: Table) -> MagnetSpec:
     dims = {}
     for key in ("inner_radius_m", "outer_radius_m", "length_m", "pole_inner_radius_m",
-                "pole_thickness_m"):
+                "pole_outer_radius_m", "pole_thickness_m"):
         dims[key] = t.number(key, None, low=0.0, high=1.0, low_open=True, allow_none=True)
     grade = t.string("grade", None, choices=sorted(MAGNET_GRADES))
     br = t.number("remanence_T", None, low=0.0, high=2.0, low_open=True, allow_none=True)
@@ -513,7 +524,15 @@ def _electronics(t: Table | None) -> ElectronicsSpec:
         input_capacitance_f=t.number("input_capacitance_F", d.input_capacitance_f, low=0.0,
                                      high=1e-3),
         sample_rate_hz=t.number("sample_rate_hz", d.sample_rate_hz, low=1e3, high=1e10),
+        johnson_noise=t.boolean("johnson_noise", d.johnson_noise),
+        temperature_k=t.number("temperature_K", d.temperature_k, low=0.0, high=1000.0),
+        adc_bits=t.integer("adc_bits", 0, low=0, high=32) or None,
+        adc_range_v=t.number("adc_range_V", None, low=0.0, low_open=True, allow_none=True),
+        input_noise_v_per_rthz=t.number("input_noise_V_per_rtHz", 0.0, low=0.0, high=1e-3),
+        seed=t.integer("seed", 0, low=0),
     )
+    if (spec.adc_bits is None) != (spec.adc_range_v is None):
+        raise t.error("adc_bits", "and 'adc_range_V' must be given together")
     t.finish()
     return spec
 

@@ -35,8 +35,10 @@ def small(mesh_dir):
 
 
 @pytest.fixture(scope="module")
-def default_report(mesh_dir):
-    return sm.run_field_model(SensorGeometry(), mesh_dir=mesh_dir)
+def symmetric_report(mesh_dir):
+    """Both paper sensors, beads 3..28: mirror-symmetric about the contact 15-16."""
+    return sm.run_field_model(SensorGeometry(beads=BeadChain(first=3, last=28)),
+                              mesh_dir=mesh_dir)
 
 
 def test_coil_resistance_from_the_wire():
@@ -125,18 +127,21 @@ def test_virtual_work_agrees_with_eggshell_in_a_gapped_model(mesh_dir):
     assert vw == pytest.approx(egg, rel=5e-3)
 
 
-def test_default_model_is_mirror_symmetric_and_plausible(default_report):
-    rep = default_report
+def test_two_sensor_model_is_mirror_symmetric_and_plausible(symmetric_report):
+    rep = symmetric_report
     bz = {b.particle: b.B_center_T[1] for b in rep.beads}
     f = {(c.upper, c.lower): c.magnetic_force_N for c in rep.contacts}
-    # beads 8..23 and sensors 13, 18 are symmetric about the contact 15-16
-    for p in range(8, 16):
+    # beads 3..28 and sensors 13, 18 are symmetric about the contact 15-16
+    for p in range(3, 16):
         assert bz[p] == pytest.approx(bz[31 - p], rel=5e-3, abs=1e-3)
-    for u in range(8, 15):
+    for u in range(3, 15):
         assert f[(u, u + 1)] == pytest.approx(f[(30 - u, 31 - u)], rel=5e-3, abs=5e-3)
     # sensor beads biased to a few tenths of a tesla; the four sensor contacts compressed by
     # newtons (the paper inferred 1.8 N from wave speeds)
     assert 0.2 < abs(bz[13]) < 1.5
+    mean13 = next(b.B_mean_T for b in rep.beads if b.particle == 13)
+    assert abs(mean13[0]) < 1e-3 * abs(mean13[1])  # B_r averages out over the bead
+    assert mean13[1] == pytest.approx(bz[13], rel=0.1)
     four = [f[(11, 12)], f[(12, 13)], f[(13, 14)], f[(14, 15)]]
     assert all(x > 0 for x in four)
     assert 0.5 < np.mean(four) < 6.0
@@ -144,15 +149,15 @@ def test_default_model_is_mirror_symmetric_and_plausible(default_report):
     assert rep.coils[0].inductance_H > rep.coils[0].air_core_inductance_H > 0
 
 
-def test_outputs_written(default_report, tmp_path):
-    written = write_field_outputs(default_report, tmp_path)
+def test_outputs_written(symmetric_report, tmp_path):
+    written = write_field_outputs(symmetric_report, tmp_path)
     data = json.loads((tmp_path / "field.json").read_text())
     assert [c["particle"] for c in data["coils"]] == [13, 18]
     assert {"particle", "turns", "resistance_ohm", "inductance_H"} <= set(data["coils"][0])
-    assert len(data["beads"]) == 16 and len(data["beads"][0]["B_center_T"]) == 2
+    assert len(data["beads"]) == 26 and len(data["beads"][0]["B_center_T"]) == 2
     assert {"upper", "lower", "magnetic_force_N"} <= set(data["contacts"][0])
     assert len(data["axis"]["z_m"]) == len(data["axis"]["Bz_T"]) > 100
-    assert data["dofs"] == default_report.dofs and data["newton_iterations"] >= 1
+    assert data["dofs"] == symmetric_report.dofs and data["newton_iterations"] >= 1
     assert "EQUIVALENT" in data["note"]
     vtu = meshio.read(tmp_path / "field.vtu")
     assert vtu.point_data["A_phi"].shape == (len(vtu.points),)

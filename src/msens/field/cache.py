@@ -20,7 +20,7 @@ from msens.field.build import MeshOptions, build_mesh
 from msens.field.geometry import SensorGeometry
 
 #: Version of the mesh builder's output; part of every cache key.
-BUILDER_VERSION = "sensor-mesh/2"
+BUILDER_VERSION = "sensor-mesh/3"
 
 
 def _canonical(obj: object) -> object:

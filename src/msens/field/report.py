@@ -62,8 +62,8 @@ def report_dict(report: FieldReport) -> dict:
                    "air_core_inductance_H": _finite(c.air_core_inductance_H),
                    "inner_radius_m": c.inner_radius_m, "outer_radius_m": c.outer_radius_m,
                    "length_m": c.length_m} for c in report.coils],
-        "beads": [{"particle": b.particle, "B_center_T": list(b.B_center_T)}
-                  for b in report.beads],
+        "beads": [{"particle": b.particle, "B_center_T": list(b.B_center_T),
+                   "B_mean_T": list(b.B_mean_T)} for b in report.beads],
         "contacts": [{"upper": c.upper, "lower": c.lower,
                       "magnetic_force_N": c.magnetic_force_N} for c in report.contacts],
         "axis": {"z_m": report.axis_z_m.tolist(), "Bz_T": report.axis_Bz_T.tolist()},

@@ -291,10 +291,20 @@ class CoilResult:
 
 @dataclass(frozen=True)
 class BeadField:
-    """Bias flux density at a bead centre: particle and (B_r, B_z) in T."""
+    """Bias flux density of a bead.
+
+    Attributes
+    ----------
+    particle : int
+    B_center_T : tuple of float
+        (B_r, B_z) at the bead centre, T.
+    B_mean_T : tuple of float
+        Volume average of (B_r, B_z) over the bead, T (B_r averages to ~0 by symmetry).
+    """
 
     particle: int
     B_center_T: tuple[float, float]
+    B_mean_T: tuple[float, float]
 
 
 @dataclass(frozen=True)
@@ -366,8 +376,16 @@ def bead_fields(sol: FieldSolution, geometry: SensorGeometry) -> tuple[BeadField
     parts = list(geometry.beads.particles)
     z = np.array([geometry.beads.center(p) for p in parts])
     b = flux_density_at(sol, np.zeros_like(z), z)
-    return tuple(BeadField(p, (float(v[0]), float(v[1]))) for p, v in zip(parts, b,
-                                                                            strict=True))
+    q = sol.disc.quad
+    bq = flux_density_qp(q, sol.a)
+    out = []
+    for p, v in zip(parts, b, strict=True):
+        el = sol.problem.mesh.subdomains[f"bead_{p}"]
+        w = q.w[el]
+        mean = np.einsum("eq,eqc->c", w, bq[el]) / w.sum()
+        out.append(BeadField(p, (float(v[0]), float(v[1])),
+                             (float(mean[0]), float(mean[1]))))
+    return tuple(out)
 
 
 def contact_forces(sol: FieldSolution, geometry: SensorGeometry,

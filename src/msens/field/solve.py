@@ -250,7 +250,7 @@ def solve(problem: MagnetostaticProblem, *, tol: float = 1e-8, max_iter: int = 1
         Maximum Newton iterations.
     initial : ndarray, shape (n_dofs,), optional
         Starting dofs for Newton (default: a linear solve with the secant reluctivity of
-        the nonlinear regions at 1 T).
+        the nonlinear regions at 1.8 T, ``constitutive.INITIAL_SECANT_B``).
 
     Returns
     -------

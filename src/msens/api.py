@@ -181,61 +181,45 @@ def format_comparison(report: dict) -> str:
     return "\n".join(lines)
 
 
+FIELD_OUTPUTS = ("field.json", "field.vtu", "field_B.png", "field_3d.png")
+
+
 def field(study: Study, out: Path) -> str:
-    """Solve the field model of the study's MsS sensors and write ``field.json``."""
-    from msens.fieldrun import run_field
+    """Solve the field model of the study's MsS sensors; write ``field.json``, ``field.vtu``
+    and figures into ``out``; return a short text report."""
+    from msens.field.report import write_field_outputs
+    from msens.field.sensor_model import run_field_model
+    from msens.fieldsetup import geometry_from_study
 
-    return run_field(study, out)
-
-
-def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | None = None,
-             passes: int = 1) -> tuple[dict, list[Path]]:
-    """Name the effect the model of ``study`` misses; write ``diagnosis.json`` and
-    ``diagnosis.png`` into ``out``.
-
-    Either ``data`` (a measured waveform; its sensors choose the study's setup) or
-    ``reference`` (a setup name: its ``[reference]`` rows are the measurement) is given.
-    """
-    import json
-
-    from msens.diagnose import diagnose_passes, diagnose_reference
-    from msens.diagnose.report import FILES
-    from msens.diagnose.report import write as write_diagnosis
-    from msens.errors import InputError
-    from msens.io.read import read_waveform
-
-    if (data is None) == (reference is None):
-        raise InputError("diagnose needs either DATA (a waveform file) or --reference SETUP, "
-                         "not both")
-    if not 1 <= passes <= 7:
-        raise InputError(f"--passes must be from 1 to 7, got {passes}")
+    geometry = geometry_from_study(study)
     target = OutputDir(out)
-    target.check(list(FILES))
-    if data is not None:
-        results = diagnose_passes(read_waveform(data), study, passes=passes)
-    else:
-        results, added = [], []
-        for _ in range(passes):
-            d = diagnose_reference(study, reference, added=tuple(added))
-            results.append(d)
-            if d.effect == "none":
-                break
-            added.append((d.effect, d.parameters))
-    written = write_diagnosis(results, target)
-    report = json.loads(written[0].read_text())
-    return report, written
+    target.check(list(FIELD_OUTPUTS))
+    report = run_field_model(geometry)
+    written = write_field_outputs(report, out)
+    for name, path in written.items():
+        if not path.startswith("skipped"):
+            target.record(name)
+    return format_field(report, written)
 
 
-def format_diagnosis(report: dict) -> str:
-    """Plain-text summary of ``diagnosis.json``."""
-    lines = [f"setup {report['setup']} ({report['mode']}): disagreement mostly at the "
-             f"{report['disagreement']['where']}",
-             f"{'effect':<24} {'score (dBIC)':>13} {'misfit':>10}  parameters"]
-    for c in report["candidates"]:
-        pars = ", ".join(f"{k}={v:.4g}" for k, v in c["parameters"].items())
-        lines.append(f"{c['effect']:<24} {c['score']:>13.1f} {c['misfit']:>10.4g}  {pars}")
-    for i, p in enumerate(report["passes"], 1):
-        pars = ", ".join(f"{k}={v:.4g}" for k, v in p["parameters"].items())
-        lines.append(f"pass {i}: {p['effect']}" + (f" ({pars})" if pars else "")
-                     + f"; misfit {p['misfit_before']:.4g} -> {p['misfit_after']:.4g}")
+def format_field(report, written: dict[str, str]) -> str:
+    """Plain-text summary of a field-model report."""
+    sensors = [u.coil.particle for u in report.geometry.sensors]
+    near = {p + d for p in sensors for d in (-2, -1, 0, 1, 2)}
+    lines = [f"field model: {report.dofs} dofs, {report.elements} elements, "
+             f"{report.newton_iterations} Newton iterations, bias solve "
+             f"{report.timings_s['bias_solve']:.1f} s",
+             "NOTE: the bias magnet is an axisymmetric equivalent of the undocumented "
+             "bridge magnet", "", "coil  R (Ohm)  L_air (mH)  L_bias (mH)"]
+    for c in report.coils:
+        l_air, l_bias = c.air_core_inductance_H * 1e3, c.inductance_H * 1e3
+        lines.append(f"{c.particle:>4}  {c.resistance_ohm:>7.2f}  {l_air:>10.2f}  {l_bias:>11.2f}")
+    lines += ["", "bead  Bz centre (T)"]
+    lines += [f"{b.particle:>4}  {b.B_center_T[1]:>13.3f}" for b in report.beads
+              if b.particle in near]
+    lines += ["", "contact  magnetic compression (N)"]
+    lines += [f"{c.upper:>3}-{c.lower:<3}  {c.magnetic_force_N:>10.2f}" for c in report.contacts
+              if c.upper in near and c.lower in near]
+    lines += ["", "wrote " + ", ".join(f"{k} ({v})" if v.startswith("skipped") else k
+                                     for k, v in written.items())]
     return "\n".join(lines)

@@ -65,6 +65,14 @@ def _parser() -> argparse.ArgumentParser:
                            "(e.g. the paper's Table 2) are the measurement; no DATA")
     diag.add_argument("--passes", type=int, default=1,
                       help="diagnosis passes, each adding the previous winner (default 1)")
+    des = sub.add_parser("design", help="sweep coil and magnet designs of a study's MsS")
+    des.add_argument("study", help="study .toml file with an mss sensor")
+    des.add_argument("--sweep", required=True, help="sweep .toml file (schema msens.sweep/1)")
+    des.add_argument("--out", required=True, help="output directory (its cache/ resumes runs)")
+    des.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                     help="Dask distributed scheduler address (default: local processes)")
+    des.add_argument("--workers", type=int, default=None,
+                     help="local worker processes (default: all CPUs)")
     return p
 
 
@@ -130,8 +138,18 @@ def _diagnose(args: argparse.Namespace) -> int:
     return 0
 
 
+def _design(args: argparse.Namespace) -> int:
+    from msens import api
+
+    study = api.load(args.study)
+    result = api.design(study, Path(args.sweep), Path(args.out), scheduler=args.scheduler,
+                        workers=args.workers)
+    print(api.format_design(result))
+    return 0
+
+
 _COMMANDS = {"run": _run, "field": _field, "verify": _verify, "synth": _synth,
-             "compare": _compare, "diagnose": _diagnose}
+             "compare": _compare, "diagnose": _diagnose, "design": _design}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

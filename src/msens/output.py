@@ -89,7 +89,8 @@ class OutputDir:
         for name in names:
             self.target(name)
 
-    def _record(self, name: str) -> None:
+    def record(self, name: str) -> None:
+        """Note ``name`` as written by msens (for files written by other code)."""
         if name not in self._owned:
             self._owned.add(name)
             text = json.dumps({"files": sorted(self._owned)}, indent=1)
@@ -98,7 +99,7 @@ class OutputDir:
     def write(self, name: str, write: Callable[[Path], None]) -> Path:
         """Write ``name`` atomically with ``write(tmp_path)``; returns the final path."""
         path = self.target(name)
-        self._record(name)
+        self.record(name)
         atomic_write(path, write)
         return path
 

@@ -120,6 +120,7 @@ class CoilSpec:
     inner_radius_m: float = 7.95e-3
     wire: str = "AWG36"
     axial_offset_m: float = 0.0
+    packing_factor: float | None = None
 
 
 @dataclass(frozen=True)
@@ -201,6 +202,30 @@ class SimulationSpec:
 
 
 @dataclass(frozen=True)
+class FieldSpec:
+    """Options of the finite-element field model (all optional).
+
+    Attributes
+    ----------
+    beads : (int, int) or None
+        First and last particle in the field model (default: the whole chain).
+    contact_load_n : float or None
+        Static load that sets the Hertz contact-flat radius, N.
+    min_flat_radius_m, contact_gap_m : float or None
+        Lower bound of the flat radius and an air gap between flats, m.
+    air_radius_m, air_margin_m : float or None
+        Truncation of open space, m.
+    """
+
+    beads: tuple[int, int] | None = None
+    contact_load_n: float | None = None
+    min_flat_radius_m: float | None = None
+    contact_gap_m: float | None = None
+    air_radius_m: float | None = None
+    air_margin_m: float | None = None
+
+
+@dataclass(frozen=True)
 class DissipationFitSpec:
     """Fit γc, γw ≥ 0 to measured amplitude ratios (paper Eq. 10) on ``setup``."""
 
@@ -233,6 +258,7 @@ class Study:
     setups: tuple[SetupSpec, ...]
     simulation: SimulationSpec = field(default_factory=SimulationSpec)
     electronics: ElectronicsSpec = field(default_factory=ElectronicsSpec)
+    field: FieldSpec = field(default_factory=FieldSpec)
     dissipation_fit: DissipationFitSpec | None = None
     reference: tuple[ReferenceRow, ...] = ()
     measurement_file: Path | None = None
@@ -297,13 +323,14 @@ def parse_study(text: str, *, source: str = "<memory>", base_dir: Path | None = 
     setups = _setups(root, chain, name, top_inserts)
     simulation = _simulation(root.table("simulation"))
     electronics = _electronics(root.table("electronics"))
+    field_spec = _field(root.table("field"), chain)
     calib = root.table("calibration")
     fit = _dissipation_fit(calib, setups) if calib is not None else None
     reference = _reference(root.table("reference"), setups)
     measurement_file = _measurement(root.table("measurement"), base_dir)
     root.finish()
     return Study(name=name, chain=chain, striker=striker, setups=setups, simulation=simulation,
-                 electronics=electronics, dissipation_fit=fit, reference=reference,
+                 electronics=electronics, field=field_spec, dissipation_fit=fit, reference=reference,
                  measurement_file=measurement_file, source=source)
 
 
@@ -405,6 +432,8 @@ def _coil(t: Table) -> CoilSpec:
                                 low_open=True),
         wire=t.string("wire", d.wire),
         axial_offset_m=t.number("axial_offset_m", 0.0, low=-1.0, high=1.0),
+        packing_factor=t.number("packing_factor", None, low=0.0, high=0.907, low_open=True,
+                                allow_none=True),
     )
     if not spec.wire.upper().startswith("AWG") or not spec.wire[3:].isdigit() \
             or not 10 <= int(spec.wire[3:]) <= 50:
@@ -533,6 +562,31 @@ def _electronics(t: Table | None) -> ElectronicsSpec:
     )
     if (spec.adc_bits is None) != (spec.adc_range_v is None):
         raise t.error("adc_bits", "and 'adc_range_V' must be given together")
+    t.finish()
+    return spec
+
+
+def _field(t: Table | None, chain: ChainSpec) -> FieldSpec:
+    if t is None:
+        return FieldSpec()
+    beads = t.raw("beads")
+    n = chain.n_particles
+    if beads is not None:
+        ok = (isinstance(beads, list) and len(beads) == 2
+              and all(isinstance(b, int) and not isinstance(b, bool) for b in beads))
+        if not ok or not 2 <= beads[0] <= beads[1] <= n:
+            raise t.error("beads", f"must be [first, last] particles with 2 <= first <= "
+                                   f"last <= {n}, got {beads!r}")
+        beads = (beads[0], beads[1])
+
+    def opt(key: str, high: float) -> float | None:
+        return t.number(key, None, low=0.0, high=high, allow_none=True)
+
+    spec = FieldSpec(beads=beads, contact_load_n=opt("contact_load_N", 1e4),
+                     min_flat_radius_m=opt("min_flat_radius_m", 1e-2),
+                     contact_gap_m=opt("contact_gap_m", 1e-3),
+                     air_radius_m=opt("air_radius_m", 100.0),
+                     air_margin_m=opt("air_margin_m", 100.0))
     t.finish()
     return spec
 

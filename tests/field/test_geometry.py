@@ -21,7 +21,6 @@ from msens.field.geometry import (
     SensorUnit,
     hertz_flat_radius,
 )
-from msens.field.geometry_input import geometry_from_mapping
 from msens.field.mesh import read_gmsh
 from msens.materials import BEAD_STEEL
 
@@ -87,42 +86,6 @@ def test_default_dimensions_follow_the_paper():
 def test_invalid_geometry_raises_input_error(make, match):
     with pytest.raises(InputError, match=match):
         make()
-
-
-def test_geometry_from_mapping_defaults_and_keys():
-    study = {"chain": {"beads": 29},
-             "sensor": [{"kind": "bead", "particle": 13},
-                        {"kind": "mss", "particle": 13, "coil": {"turns": 1100, "wire": "AWG36"},
-                         "magnet": {"grade": "ceramic8"}},
-                        {"kind": "mss", "particle": 18, "coil": {}, "magnet": {}}]}
-    g = geometry_from_mapping(study)
-    assert g == SensorGeometry()
-    study["sensor"][2]["magnet"] = {"enabled": False}
-    assert geometry_from_mapping(study).sensors[1].magnet is None
-    study["sensor"][2]["magnet"] = {"remanence_T": 1.2, "recoil_permeability": 1.05}
-    m = geometry_from_mapping(study).sensors[1].magnet
-    assert (m.remanence, m.recoil_permeability, m.grade) == (1.2, 1.05, "custom")
-    g2 = geometry_from_mapping({"sensor": [{"kind": "mss", "particle": 13}],
-                                "field": {"beads": [2, 30], "air_radius_m": 0.1}})
-    assert (g2.beads.first, g2.beads.last, g2.air.radius) == (2, 30, 0.1)
-
-
-@pytest.mark.parametrize(("study", "match"), [
-    ({"sensor": []}, "at least one"),
-    ({"sensor": [{"kind": "mss", "particle": 13, "coil": {"turnz": 3}}]}, r"coil: unknown"),
-    ({"sensor": [{"kind": "mss", "particle": 13, "coil": {"turns": 10.5}}]}, "integer"),
-    ({"sensor": [{"kind": "mss", "particle": 13, "coil": {"turns": 0}}]}, "turns"),
-    ({"sensor": [{"kind": "mss", "particle": 13, "coil": {"wire": "AWG99"}}]}, "AWG99"),
-    ({"sensor": [{"kind": "mss", "particle": 13, "magnet": {"grade": "N99"}}]}, "N99"),
-    ({"sensor": [{"kind": "mss", "particle": 13, "magnet": {"length_m": "5"}}]}, "length_m"),
-    ({"sensor": [{"kind": "mss", "particle": 40}]}, "outside the chain"),
-    ({"sensor": [{"kind": "mss", "particle": 13}], "field": {"beads": [14, 20]}},
-     "outside the modelled chain"),
-    ({"sensor": [{"kind": "mss", "particle": 13}], "field": {"box": 1}}, "unknown"),
-])
-def test_geometry_from_mapping_rejects_bad_input(study, match):
-    with pytest.raises(InputError, match=match):
-        geometry_from_mapping(study)
 
 
 def test_mesh_regions_and_contact_flats(tmp_path):

@@ -59,7 +59,8 @@ def test_flat_radius_convergence(reference):
     res = [quantities(replace(g, beads=replace(g.beads, contact_load=1e-9,
                                                min_flat_radius=a)), d)
            for a in (25e-6, 12.5e-6)]
-    assert rel_change(res[0], res[1]) < 3e-3
+    # below the remeshing noise of the model (~0.3-0.5 %, see test_mesh_refinement)
+    assert rel_change(res[0], res[1]) < 5e-3
 
 
 def test_mesh_refinement(reference):

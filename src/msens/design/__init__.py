@@ -1,0 +1,121 @@
+"""Sensor design sweeps: ``msens design STUDY.toml --sweep SWEEP.toml --out DIR``.
+
+- :mod:`.sweep` — sweep spec (TOML) parsing and validation; design geometries.
+- :mod:`.reciprocity` — Villari sources, one factorisation, summed-area flux tables.
+- :mod:`.coil_sweep` — coil-only sweeps from one bias solve.
+- :mod:`.magnet_sweep` — one nonlinear solve per design through :mod:`msens.parallel`.
+- :mod:`.cache`, :mod:`.runner` — content-hash result cache, resumable runs, progress bar.
+- :mod:`.report` — designs.csv, Pareto plot, recommendation.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from msens.design.cache import ResultCache, atomic_write_bytes, content_key
+from msens.design.report import csv_text, pareto_plot, recommend
+from msens.design.sweep import (
+    SweepSpec,
+    base_geometry,
+    design_geometry,
+    load_sweep,
+    parse_sweep,
+    sweep_sensor,
+    validate_designs,
+)
+from msens.study import Study
+
+FILES = ("designs.csv", "pareto.png", "recommendation.json")
+
+
+@dataclass(frozen=True)
+class DesignResult:
+    """Outcome of a sweep: output paths, the recommendation, counts."""
+
+    out: Path
+    files: tuple[Path, ...]
+    recommendation: dict
+    designs: int
+    failed: int
+    computed: int
+    kind: str
+
+
+def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
+               scheduler: str | None = None, workers: int | None = None,
+               progress: bool = True, cache_dir: str | Path | None = None) -> DesignResult:
+    """Run a sweep and write designs.csv, pareto.png and recommendation.json into ``out``.
+
+    Parameters
+    ----------
+    study : Study
+        Study with at least one MsS sensor (its coil and magnet are the base design).
+    spec : SweepSpec
+    out : str or Path
+        Output directory; its ``cache/`` holds per-design results and meshes, so rerunning
+        into the same directory resumes an interrupted sweep.
+    scheduler : str, optional
+        Dask scheduler address (magnet sweeps); default local processes.
+    workers : int, optional
+        Local worker processes.
+    progress : bool
+    cache_dir : str or Path, optional
+        Cache location (default ``out/cache``).
+    """
+    from msens.design.coil_sweep import run_coil_sweep
+    from msens.design.magnet_sweep import MagnetTask, evaluate_design
+    from msens.design.runner import run_cached
+
+    out = Path(out)
+    sensor = sweep_sensor(study, spec)
+    base = base_geometry(study, spec.bead_padding)
+    designs = spec.designs()
+    validate_designs(base, sensor.particle, designs, spec.source)
+    cache = ResultCache(Path(cache_dir) if cache_dir else out / "cache")
+    if spec.kind == "coil":
+        rows, computed = run_coil_sweep(study, spec, base, sensor.particle, designs, cache,
+                                        mesh_dir=cache.directory / "meshes", progress=progress)
+    else:
+        mesh_dir = str(cache.directory / "meshes")
+        tasks = []
+        for d in designs:
+            g = design_geometry(base, sensor.particle, d)
+            tasks.append((content_key("magnet-design", study, g, sensor.particle),
+                          MagnetTask(study, g, sensor.particle, mesh_dir)))
+        rows, computed = run_cached(evaluate_design, tasks, cache, scheduler=scheduler,
+                                    workers=workers, progress=progress,
+                                    description="magnet designs")
+    return write_results(spec, designs, rows, out, computed=computed)
+
+
+def write_results(spec: SweepSpec, designs, rows, out: Path, *, computed: int) -> DesignResult:
+    """Write the three output files (atomically) and return the summary."""
+    rec = recommend(designs, rows, spec.recommend)
+    paths = [out / f for f in FILES]
+    atomic_write_bytes(paths[0], csv_text(designs, rows).encode())
+    pareto_plot(designs, rows, paths[1], rec.get("design"))
+    atomic_write_bytes(paths[2], (json.dumps(rec, indent=2, sort_keys=True) + "\n").encode())
+    failed = sum(r["status"] != "ok" for r in rows)
+    return DesignResult(out=out, files=tuple(paths), recommendation=rec, designs=len(rows),
+                        failed=failed, computed=computed, kind=spec.kind)
+
+
+def format_result(result: DesignResult) -> str:
+    """Short text summary for the terminal."""
+    rec = result.recommendation
+    lines = [f"{result.kind} sweep: {result.designs} designs ({result.failed} failed, "
+             f"{result.computed} computed, {result.designs - result.computed} from cache)"]
+    if rec.get("design") is None:
+        lines.append("no recommended design: " + "; ".join(rec["reasons"]))
+    else:
+        pars = ", ".join(f"{k}={v}" for k, v in rec["parameters"].items())
+        lines.append(f"recommended design {rec['design']}: {pars}")
+        lines.extend(f"  - {r}" for r in rec["reasons"])
+    lines.append(f"wrote {', '.join(str(p) for p in result.files)}")
+    return "\n".join(lines)
+
+
+__all__ = ["FILES", "DesignResult", "format_result", "load_sweep", "parse_sweep", "run_design",
+           "write_results"]

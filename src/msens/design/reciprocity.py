@@ -18,10 +18,12 @@ at zero stress along the local bias field, μ0 ΔM = d(|H|) σ_eq ĥ, with d = (
 :func:`msens.magnetoelastic.piezomagnetic_coefficient` (the contact stresses are GPa, beyond the
 nonlinear law's range) and σ_eq the equivalent uniaxial stress along ĥ
 (:func:`msens.magnetoelastic.equivalent_uniaxial_stress`) of a bead squeezed at both poles by
-F_ref (:mod:`msens.beadstress`), divided by F_ref. F_ref is the static contact load that sets the
+F_ref (:mod:`msens.beadstress`, sampled by :class:`msens.villari.StressSampler`), divided by
+F_ref. F_ref is the static contact load that sets the
 field model's contact flats, so stress field and flat geometry agree. A contact force loads both
 beads it joins: ∂Λ/∂F_c = (S_i + S_{i+1})/2 (the bead-end and inertial load differences are
-neglected, as in the transducer).
+neglected, as in the transducer). The bead values S_i agree with
+:func:`msens.villari.villari_sensitivities` (an independent implementation) to round-off.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ import matplotlib.tri as mtri
 import numpy as np
 import scipy.sparse as sp
 
-from msens.beadstress import BeadStress, solve_bead_stress, stress_at
+from msens.beadstress import BeadStress, solve_bead_stress
 from msens.errors import require
 from msens.field.assembly import assemble_matrix, factorize
 from msens.field.constitutive import reluctivities, tangent
@@ -48,6 +50,7 @@ from msens.magnetoelastic import (
 )
 from msens.materials import BEAD_STEEL
 from msens.units import TWO_PI
+from msens.villari import StressSampler
 
 
 def bead_stress(geometry: SensorGeometry) -> BeadStress:
@@ -81,6 +84,7 @@ def villari_sources(bias: FieldSolution, geometry: SensorGeometry, particles: Se
         shape (n_e, n_qp, 2), T/N.
     """
     stress = stress or bead_stress(geometry)
+    sampler = StressSampler(stress)  # the transducer's fast point location, stress per N
     axi = bias.problem.mesh
     xq = np.asarray(bias.basis.global_coordinates())  # (2, n_el, n_qp)
     h_all = internal_field_strength(bias)
@@ -92,7 +96,7 @@ def villari_sources(bias: FieldSolution, geometry: SensorGeometry, particles: Se
         # mesh points of a truncated bead lie inside its sphere up to round-off
         rho = np.hypot(r, z)
         scale = np.minimum(1.0, stress.radius / np.where(rho > 0, rho, 1.0))
-        sig = stress_at(stress, r * scale, z * scale) / stress.force
+        sig = sampler(r * scale, z * scale)
         h = h_all[el]
         hmag = np.sqrt(np.sum(h**2, axis=-1))
         hhat = h / np.where(hmag > 0, hmag, 1.0)[..., None]

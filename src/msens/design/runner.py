@@ -22,7 +22,7 @@ def guarded(fn: Callable[[Any], dict], payload: Any) -> dict:
     """``{"status": "ok", **fn(payload)}``, or ``{"status": "failed", "reason": ...}``."""
     try:
         return {"status": "ok", **fn(payload)}
-    except Exception as exc:  # noqa: BLE001 - a failed design is a result, not a crash
+    except Exception as exc:  # a failed design is a result, not a crash
         last = traceback.extract_tb(exc.__traceback__)[-1]
         where = f" (at {last.name}:{last.lineno})" if last else ""
         reason = f"{type(exc).__name__}: {exc}".replace("\n", " ")

@@ -209,6 +209,8 @@ def _values(t: Table, key: str, raw: Any, kind: str, low: float, high: float) ->
     where = t.key(key)
     if isinstance(raw, dict):
         values = _range(t, key, raw)
+        if kind == "int":  # integer ranges are computed in floats
+            values = [round(v) if abs(v - round(v)) < 1e-9 else v for v in values]
     elif isinstance(raw, list):
         values = list(raw)
     else:

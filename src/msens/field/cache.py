@@ -43,16 +43,36 @@ def geometry_key(geometry: SensorGeometry, options: MeshOptions | None = None) -
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+def committed_mesh_dirs() -> list[Path]:
+    """Folders searched for an existing mesh before one is built: ``$MSENS_MESH_DIR``,
+    ``./meshes`` and the source checkout's ``meshes/`` (the project commits the meshes of its
+    default studies there, so a fresh clone needs no meshing)."""
+    dirs = []
+    env = os.environ.get("MSENS_MESH_DIR")
+    if env:
+        dirs.append(Path(env))
+    dirs.append(Path.cwd() / "meshes")
+    dirs.append(Path(__file__).resolve().parents[3] / "meshes")
+    return dirs
+
+
 def default_mesh_dir() -> Path:
-    """Where meshes live: ``$MSENS_MESH_DIR``, else the project's ``meshes/`` (source
-    checkout), else ``./.msens-cache/meshes``."""
+    """Where new meshes are written: ``$MSENS_MESH_DIR``, else the user cache
+    (``$XDG_CACHE_HOME/msens/meshes``, default ``~/.cache/msens/meshes``) — never the
+    project's committed ``meshes/``, which changes only by a deliberate commit."""
     env = os.environ.get("MSENS_MESH_DIR")
     if env:
         return Path(env)
-    project = Path(__file__).resolve().parents[3] / "meshes"
-    if project.is_dir() and os.access(project, os.W_OK):
-        return project
-    return Path.cwd() / ".msens-cache" / "meshes"
+    cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(cache) / "msens" / "meshes"
+
+
+def _publish(tmp: str, path: Path) -> None:
+    """Give ``tmp`` the usual permissions (mkstemp makes it 0600) and move it onto ``path``."""
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)
+    os.replace(tmp, path)
 
 
 def _atomic_write_text(path: Path, text: str) -> None:
@@ -60,7 +80,7 @@ def _atomic_write_text(path: Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w") as fh:
             fh.write(text)
-        os.replace(tmp, path)
+        _publish(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
@@ -75,7 +95,8 @@ def cached_mesh(geometry: SensorGeometry, options: MeshOptions | None = None,
     geometry : SensorGeometry
     options : MeshOptions, optional
     directory : str or Path, optional
-        Cache directory (created if needed); default :func:`default_mesh_dir`.
+        Cache directory (created if needed); default: an existing mesh in
+        :func:`committed_mesh_dirs`, else built into :func:`default_mesh_dir`.
 
     Returns
     -------
@@ -83,17 +104,22 @@ def cached_mesh(geometry: SensorGeometry, options: MeshOptions | None = None,
         ``<directory>/sensor-<key>.msh``; a ``.json`` beside it records the geometry.
     """
     options = options or MeshOptions()
+    key = geometry_key(geometry, options)
+    name = f"sensor-{key}.msh"
+    if directory is None:
+        for d in committed_mesh_dirs():
+            if (d / name).is_file():
+                return d / name
     directory = Path(directory) if directory is not None else default_mesh_dir()
     directory.mkdir(parents=True, exist_ok=True)
-    key = geometry_key(geometry, options)
-    path = directory / f"sensor-{key}.msh"
+    path = directory / name
     if path.is_file():
         return path
     fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".sensor-{key}.", suffix=".msh")
     os.close(fd)
     try:
         build_mesh(geometry, tmp, options)
-        os.replace(tmp, path)
+        _publish(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

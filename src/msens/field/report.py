@@ -63,7 +63,7 @@ def report_dict(report: FieldReport) -> dict:
                    "inner_radius_m": c.inner_radius_m, "outer_radius_m": c.outer_radius_m,
                    "length_m": c.length_m} for c in report.coils],
         "beads": [{"particle": b.particle, "B_center_T": list(b.B_center_T),
-                   "B_mean_T": list(b.B_mean_T)} for b in report.beads],
+                   "Bz_mean_T": b.Bz_mean_T} for b in report.beads],
         "contacts": [{"upper": c.upper, "lower": c.lower,
                       "magnetic_force_N": c.magnetic_force_N} for c in report.contacts],
         "axis": {"z_m": report.axis_z_m.tolist(), "Bz_T": report.axis_Bz_T.tolist()},
@@ -145,6 +145,15 @@ def _outline(ax, report: FieldReport, scale: float) -> None:
         ax.axvline(scale * r, color="0.5", lw=0.4, ls=":")
 
 
+def _sensor_z_span(report: FieldReport) -> tuple[float, float]:
+    """z range of the coils and magnets (the whole model without sensors), m."""
+    g = report.geometry
+    rects = [r for u in g.sensors for r in (g.coil_rect(u), *g.magnet_rects(u))]
+    if not rects:
+        return g.parts_z_span()
+    return min(r.z0 for r in rects), max(r.z1 for r in rects)
+
+
 def plot_field_map(report: FieldReport, path: str | Path) -> Path:
     """|B| map with field lines, zoomed on the sensors (PNG)."""
     import matplotlib
@@ -161,9 +170,9 @@ def plot_field_map(report: FieldReport, path: str | Path) -> Path:
     mm = 1e3
     tri = Triangulation(mm * mesh.p[0], mm * mesh.p[1], mesh.t.T)
     g = report.geometry
-    z0, z1 = g.parts_z_span()
+    z0, z1 = _sensor_z_span(report)
     r1 = max(q.r1 for q in g.rectangles()) * 1.3
-    fig, ax = plt.subplots(figsize=(5.5, 8), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(6, 8), constrained_layout=True)
     pc = ax.tripcolor(tri, facecolors=bmag, norm=LogNorm(vmin=1e-3, vmax=2.5), cmap="magma",
                       shading="flat", rasterized=True)
     lim = np.max(np.abs(psi))
@@ -171,7 +180,7 @@ def plot_field_map(report: FieldReport, path: str | Path) -> Path:
                   linewidths=0.5)
     _outline(ax, report, mm)
     ax.set_xlim(0, mm * r1)
-    ax.set_ylim(mm * (z0 - 0.005), mm * (z1 + 0.005))
+    ax.set_ylim(mm * (z0 - 0.008), mm * (z1 + 0.008))
     ax.set_aspect("equal")
     ax.set_xlabel("r (mm)")
     ax.set_ylabel("z (mm, wall at 0)")
@@ -191,7 +200,8 @@ def plot_field_3d(report: FieldReport, path: str | Path) -> Path:
     mesh = report.solution.problem.mesh.mesh
     b_mean, _, _ = _element_fields(report)
     g = report.geometry
-    z0, z1 = g.parts_z_span()
+    z0, z1 = _sensor_z_span(report)
+    z0, z1 = z0 - 0.01, z1 + 0.01
     r_max = max(q.r1 for q in g.rectangles()) * 1.15
     # revolve the solid parts only (beads, magnets, pole pieces, coils): air would hide them
     air = report.solution.problem.mesh.subdomains["air"]

@@ -99,7 +99,8 @@ def flux_density_at(sol: FieldSolution, r: np.ndarray, z: np.ndarray) -> np.ndar
     ----------
     sol : FieldSolution
     r, z : array_like, broadcastable to shape (n,)
-        Points in the meridian plane, m (inside the mesh).
+        Points in the meridian plane, m (inside the mesh; skfem's element finder raises
+        otherwise).
     """
     basis = sol.basis
     mesh, elem = basis.mesh, basis.elem
@@ -298,13 +299,14 @@ class BeadField:
     particle : int
     B_center_T : tuple of float
         (B_r, B_z) at the bead centre, T.
-    B_mean_T : tuple of float
-        Volume average of (B_r, B_z) over the bead, T (B_r averages to ~0 by symmetry).
+    Bz_mean_T : float
+        Volume average of B_z over the bead, T (the 3-D average of the vector B is
+        (0, 0, Bz_mean): e_r averages out around the axis).
     """
 
     particle: int
     B_center_T: tuple[float, float]
-    B_mean_T: tuple[float, float]
+    Bz_mean_T: float
 
 
 @dataclass(frozen=True)
@@ -382,9 +384,8 @@ def bead_fields(sol: FieldSolution, geometry: SensorGeometry) -> tuple[BeadField
     for p, v in zip(parts, b, strict=True):
         el = sol.problem.mesh.subdomains[f"bead_{p}"]
         w = q.w[el]
-        mean = np.einsum("eq,eqc->c", w, bq[el]) / w.sum()
-        out.append(BeadField(p, (float(v[0]), float(v[1])),
-                             (float(mean[0]), float(mean[1]))))
+        mean = float(np.sum(w * bq[el, :, 1]) / w.sum())
+        out.append(BeadField(p, (float(v[0]), float(v[1])), mean))
     return tuple(out)
 
 
@@ -483,6 +484,7 @@ def run_field_model(geometry: SensorGeometry, out_dir: str | Path | None = None,
 __all__ = [
     "MAGNET_NOTE", "BeadField", "CoilResult", "ContactForce", "FieldReport", "axis_profile",
     "bead_fields", "bias_problem", "coil_current_density", "coil_resistance", "coil_results",
-    "contact_forces", "flux_density_at", "flux_linkage", "group_force", "load_mesh",
+    "contact_forces", "flux_density_at", "flux_linkage", "geometry_from_mapping",
+    "group_force", "load_mesh",
     "regions_for", "run_field_model", "shell_function", "total_energy", "virtual_work_force",
 ]

@@ -1,0 +1,105 @@
+"""Build the field model's geometry from a validated study.
+
+The field package knows nothing of studies; this module maps a setup's MsS sensors (coil and
+magnet tables) and the study's ``[field]`` options onto :class:`SensorGeometry`, the way
+:mod:`msens.assemble` maps a setup onto the chain. Dimensions a study leaves out take the
+field model's documented defaults (the paper's coil; an *equivalent* ring magnet with two
+pole pieces standing in for the undocumented bridge magnet).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from msens.errors import InputError
+from msens.field.geometry import (
+    WIRES,
+    AirBox,
+    BeadChain,
+    BiasMagnet,
+    Coil,
+    SensorGeometry,
+    SensorUnit,
+)
+from msens.materials import MAGNET_GRADES
+from msens.sensors import SensorKind
+from msens.study import CoilSpec, MagnetSpec, SensorSpec, SetupSpec, Study
+
+
+def mss_setup(study: Study) -> SetupSpec:
+    """The first setup with an MsS sensor."""
+    for s in study.setups:
+        if any(x.kind is SensorKind.MSS for x in s.sensors):
+            return s
+    raise InputError(f"{study.source}: the field model needs a [[sensor]] with kind = 'mss'")
+
+
+def _given(**kw: float | None) -> dict[str, float]:
+    return {k: v for k, v in kw.items() if v is not None}
+
+
+def coil_geometry(spec: CoilSpec, particle: int) -> Coil:
+    """The field model's coil for a study's coil table."""
+    if spec.wire.upper() not in WIRES:
+        raise InputError(f"coil at particle {particle}: wire {spec.wire!r} has no insulation "
+                         f"data for the field model; allowed: {', '.join(sorted(WIRES))}")
+    return Coil(particle=particle, turns=spec.turns, length=spec.length_m,
+                inner_radius=spec.inner_radius_m, wire=WIRES[spec.wire.upper()],
+                axial_offset=spec.axial_offset_m,
+                **_given(packing_factor=spec.packing_factor))
+
+
+def magnet_geometry(spec: MagnetSpec, particle: int) -> BiasMagnet | None:
+    """The field model's bias magnet, or None when the study disables it."""
+    if not spec.enabled:
+        return None
+    if spec.grade is not None:
+        g = MAGNET_GRADES[spec.grade]
+        material = {"grade": spec.grade, "remanence": g.remanence,
+                    "recoil_permeability": g.recoil_permeability}
+    else:
+        material = {"grade": "custom", "remanence": spec.remanence_t,
+                    "recoil_permeability": spec.recoil_permeability}
+    dims = _given(inner_radius=spec.inner_radius_m, outer_radius=spec.outer_radius_m,
+                  length=spec.length_m, pole_inner_radius=spec.pole_inner_radius_m,
+                  pole_outer_radius=spec.pole_outer_radius_m,
+                  pole_thickness=spec.pole_thickness_m)
+    return BiasMagnet(particle=particle, axial_offset=spec.axial_offset_m, **material, **dims)
+
+
+def sensor_unit(sensor: SensorSpec) -> SensorUnit:
+    """Coil and magnet of one MsS sensor."""
+    return SensorUnit(coil_geometry(sensor.coil or CoilSpec(), sensor.particle),
+                      magnet_geometry(sensor.magnet or MagnetSpec(), sensor.particle))
+
+
+def geometry_from_study(study: Study, setup: SetupSpec | None = None) -> SensorGeometry:
+    """The axisymmetric field-model geometry of ``setup`` (default: the first MsS setup).
+
+    Raises
+    ------
+    InputError
+        No MsS sensor, or parts that overlap, a magnet inside the tube, a coil at a
+        particle outside the modelled chain (checked by :class:`SensorGeometry`).
+    """
+    setup = setup or mss_setup(study)
+    units = tuple(sensor_unit(s) for s in setup.sensors if s.kind is SensorKind.MSS)
+    if not units:
+        raise InputError(f"{study.source}: setup {setup.name!r} has no MsS sensor")
+    f = study.field
+    count = study.chain.n_particles
+    first, last = f.beads if f.beads is not None else (2, count)
+    beads = BeadChain(first=first, last=last, count=count,
+                      diameter=study.chain.bead_diameter_m,
+                      **_given(contact_load=f.contact_load_n,
+                               min_flat_radius=f.min_flat_radius_m,
+                               contact_gap=f.contact_gap_m))
+    air = AirBox(**_given(radius=f.air_radius_m, margin=f.air_margin_m))
+    return SensorGeometry(beads=beads, sensors=units, air=air)
+
+
+def with_magnets(geometry: SensorGeometry, enabled: bool) -> SensorGeometry:
+    """The same geometry with every bias magnet kept or removed."""
+    units = tuple(dataclasses.replace(u, magnet=u.magnet if enabled else None)
+                  for u in geometry.sensors)
+    return dataclasses.replace(geometry, sensors=units)

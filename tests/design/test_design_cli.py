@@ -1,0 +1,120 @@
+"""`msens design` end to end on a tiny study (default suite) and the acceptance runs (slow)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+import time
+from pathlib import Path
+
+import pytest
+
+from msens import api
+from msens.cli import main
+from msens.design import load_sweep, run_design
+from msens.study import load_study
+
+ROOT = Path(__file__).resolve().parents[2]
+
+TINY_STUDY = """
+schema = "msens.study/1"
+name = "tiny-mss"
+[chain]
+beads = 10
+damping = "linear-loading"
+gamma_contact_kg_per_s = 4.7
+[striker]
+drop_height_m = 7.2e-3
+[simulation]
+t_end_s = 2.0e-4
+sample_rate_hz = 5e6
+[[sensor]]
+kind = "mss"
+particle = 6
+model = "physics"
+"""
+
+TINY_COIL = """
+schema = "msens.sweep/1"
+name = "tiny-coil"
+[coil]
+turns = [600, 1100]
+axial_offset_m = [0.0, 1e-3]
+[model]
+bead_padding = 2
+"""
+
+TINY_MAGNET = """
+schema = "msens.sweep/1"
+name = "tiny-magnet"
+[magnet]
+grade = ["ceramic8", "N38"]
+[model]
+bead_padding = 2
+"""
+
+
+def _files(tmp_path: Path, sweep: str) -> tuple[Path, Path]:
+    study, spec = tmp_path / "study.toml", tmp_path / "sweep.toml"
+    study.write_text(TINY_STUDY)
+    spec.write_text(sweep)
+    return study, spec
+
+
+def _rows(path: Path) -> list[dict]:
+    with path.open() as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_coil_sweep_cli_outputs_and_byte_identical_rerun(tmp_path, capsys):
+    study, spec = _files(tmp_path, TINY_COIL)
+    out = tmp_path / "out"
+    args = ["design", str(study), "--sweep", str(spec), "--out", str(out)]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "4 designs (0 failed, 4 computed" in text and "recommended design" in text
+    first = (out / "designs.csv").read_bytes()
+    rows = _rows(out / "designs.csv")
+    assert [r["design"] for r in rows] == ["0", "1", "2", "3"]
+    assert all(r["status"] == "ok" for r in rows)
+    # more turns, same geometry -> more flux linkage (sensitivity ∝ N for a thin change)
+    s = [abs(float(r["sensitivity_Wb_per_N"])) for r in rows]
+    assert s[2] > s[0] and s[3] > s[1]
+    assert all(float(r["peak_emf_V"]) > 0 and float(r["snr"]) > 0 for r in rows)
+    rec = json.loads((out / "recommendation.json").read_text())
+    assert rec["design"] in range(4) and rec["reasons"]
+    assert (out / "pareto.png").stat().st_size > 1000
+    # rerun: everything from the cache, identical bytes
+    assert main(args) == 0
+    assert "0 computed, 4 from cache" in capsys.readouterr().out
+    assert (out / "designs.csv").read_bytes() == first
+
+
+@pytest.mark.slow
+def test_magnet_sweep_local_and_dask_identical(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    study, spec = _files(tmp_path, TINY_MAGNET)
+    s, sw = load_study(study), load_sweep(spec)
+    local = run_design(s, sw, tmp_path / "local", workers=2, progress=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0") as cluster:
+        remote = run_design(s, sw, tmp_path / "dask", scheduler=cluster.scheduler_address,
+                            progress=False)
+    assert local.computed == remote.computed == 2
+    for name in ("designs.csv", "recommendation.json"):
+        assert (tmp_path / "local" / name).read_bytes() == (tmp_path / "dask" / name).read_bytes()
+
+
+@pytest.mark.slow
+def test_paper_magnet_sweep_24_designs(tmp_path):
+    """Acceptance: 24 magnet designs of the paper's sensor (time printed, not asserted)."""
+    t0 = time.perf_counter()
+    result = api.design(api.load(ROOT / "studies" / "paper-mss.toml"),
+                        ROOT / "studies" / "sweep-magnet.toml", tmp_path, workers=2,
+                        progress=False)
+    print(f"24-design magnet sweep: {time.perf_counter() - t0:.1f} s")
+    assert result.designs == 24
+    rows = _rows(tmp_path / "designs.csv")
+    assert sum(r["status"] == "ok" for r in rows) >= 20
+    shutil.rmtree(tmp_path / "cache")

@@ -1,0 +1,123 @@
+"""Reciprocity "the other way round" and the summed-area coil quadrature.
+
+Small model (beads 10..16, one sensor at 13) so the default suite stays fast.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from msens.design.reciprocity import (
+    LinkageTable,
+    _cumtrapz,
+    contact_sensitivities,
+    direct_linkage,
+    linkage_table,
+    p2_probes,
+    rect_integral,
+    region_linkage,
+    source_potentials,
+    villari_sources,
+)
+from msens.field.geometry import BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.regions import Winding
+from msens.field.sensor_model import bias_problem, coil_current_density, load_mesh
+from msens.field.solve import incremental, solve
+
+BEADS = (12, 13, 14)
+
+
+def _geometry(magnet: bool) -> SensorGeometry:
+    unit = SensorUnit(Coil(particle=13), BiasMagnet(particle=13) if magnet else None)
+    return SensorGeometry(beads=BeadChain(first=10, last=16), sensors=(unit,))
+
+
+@pytest.fixture(scope="module")
+def model(tmp_path_factory):
+    g = _geometry(True)
+    axi, _ = load_mesh(g, mesh_dir=tmp_path_factory.mktemp("meshes"))
+    sol = solve(bias_problem(g, axi), max_iter=40)
+    src = villari_sources(sol, g, BEADS)
+    return g, sol, src, source_potentials(sol, src)
+
+
+def test_reciprocity_both_readings_agree(model):
+    g, sol, src, pot = model
+    coil = g.sensors[0].coil
+    lam = region_linkage(sol, pot, "coil_13", coil.turns, coil.area)
+    h1 = incremental(sol, {"coil_13": Winding(coil_current_density(coil))})
+    direct = direct_linkage(h1, src)
+    assert np.all(np.abs(direct) > 0)
+    np.testing.assert_allclose(lam, direct, rtol=1e-9)
+    # the sensor bead and its neighbours sense the same sign at the magnet's centre
+    assert np.all(contact_sensitivities(lam) * lam[1] > 0)
+
+
+def test_table_quadrature_matches_mesh_quadrature(model):
+    g, sol, _, pot = model
+    coil = g.sensors[0].coil
+    rect = g.coil_rect(g.sensors[0])
+    table = linkage_table(sol, pot, (6.4e-3, rect.r1 + 1e-3), (rect.z0 - 1e-3, rect.z1 + 1e-3))
+    got = coil.turns / coil.area * rect_integral(table, np.array([rect.r0]),
+                                                 np.array([rect.r1]), np.array([rect.z0]),
+                                                 np.array([rect.z1]))[0]
+    exact = region_linkage(sol, pot, "coil_13", coil.turns, coil.area)
+    np.testing.assert_allclose(got, exact, rtol=1e-4)
+
+
+def test_p2_probes_match_skfem(model):
+    _, sol, _, pot = model
+    rng = np.random.default_rng(0)
+    r = rng.uniform(6.5e-3, 15e-3, 12)
+    z = rng.uniform(0.05, 0.08, 12)
+    ref = sol.basis.probes(np.vstack([r, z])) @ pot[1]
+    np.testing.assert_allclose(p2_probes(sol.basis, r, z) @ pot[1], ref, rtol=1e-11,
+                               atol=1e-14 * np.max(np.abs(ref)))
+
+
+def test_rect_integral_converges_second_order():
+    def f(r, z):
+        return np.exp(-r) * np.cos(2 * z) * r
+
+    def exact(r0, r1, z0, z1):
+        fr = lambda r: -(r + 1) * np.exp(-r)  # noqa: E731  ∫ r e^-r dr
+        return (fr(r1) - fr(r0)) * (np.sin(2 * z1) - np.sin(2 * z0)) / 2
+
+    rng = np.random.default_rng(3)
+    r0, r1 = np.sort(rng.uniform(0.0, 1.0, (2, 40)), axis=0)
+    z0, z1 = np.sort(rng.uniform(-1.0, 1.0, (2, 40)), axis=0)
+    errs = []
+    for n in (11, 21, 41, 81, 161):
+        r = np.linspace(0.0, 1.0, n)
+        z = np.linspace(-1.0, 1.0, 2 * n - 1)
+        cum = _cumtrapz(_cumtrapz(f(*np.meshgrid(r, z, indexing="ij"))[None], r[1] - r[0], 1),
+                        z[1] - z[0], 2)
+        t = LinkageTable(r, z, cum)
+        got = rect_integral(t, r0, r1, z0, z1)[:, 0]
+        errs.append(np.max(np.abs(got - exact(r0, r1, z0, z1))))
+    order = -np.polyfit(np.log([11, 21, 41, 81, 161]), np.log(errs), 1)[0]
+    assert 1.8 < order < 2.3, (order, errs)
+
+
+def test_no_magnet_no_villari_sensitivity(tmp_path):
+    g = _geometry(False)
+    axi, _ = load_mesh(g, mesh_dir=tmp_path)
+    sol = solve(bias_problem(g, axi), max_iter=40)
+    src = villari_sources(sol, g, (13,))
+    assert np.all(src[0][1] == 0.0)
+    coil = g.sensors[0].coil
+    pot = source_potentials(sol, src)
+    assert region_linkage(sol, pot, "coil_13", coil.turns, coil.area)[0] == 0.0
+
+
+def test_bead_sensitivities_match_transducer_implementation(model):
+    from msens.design.reciprocity import bead_stress
+    from msens.villari import villari_sensitivities
+
+    g, sol, _, pot = model
+    coil = g.sensors[0].coil
+    mine = region_linkage(sol, pot, "coil_13", coil.turns, coil.area)
+    theirs = villari_sensitivities(sol, g, coil, bead_stress(g))
+    sel = np.isin(theirs.particles, BEADS)
+    np.testing.assert_allclose(mine, theirs.sensitivity[sel], rtol=1e-9)

@@ -223,3 +223,20 @@ def format_field(report, written: dict[str, str]) -> str:
     lines += ["", "wrote " + ", ".join(f"{k} ({v})" if v.startswith("skipped") else k
                                      for k, v in written.items())]
     return "\n".join(lines)
+
+
+def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str | None = None,
+           workers: int | None = None, progress: bool = True):
+    """Sweep coil/magnet designs of the study's MsS (:mod:`msens.design`); writes
+    ``designs.csv``, ``pareto.png`` and ``recommendation.json`` into ``out``."""
+    from msens.design import load_sweep, run_design
+
+    return run_design(study, load_sweep(sweep), out, scheduler=scheduler, workers=workers,
+                      progress=progress)
+
+
+def format_design(result) -> str:
+    """Plain-text summary of a design sweep."""
+    from msens.design import format_result
+
+    return format_result(result)

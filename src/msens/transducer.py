@@ -36,7 +36,7 @@ import numpy as np
 
 from msens.errors import InputError, require
 from msens.field.build import MeshOptions
-from msens.field.cache import default_mesh_dir, geometry_key
+from msens.field.cache import committed_mesh_dirs, default_mesh_dir, geometry_key
 from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import (
     bias_problem,
@@ -409,6 +409,9 @@ def _atomic_write_json(path: Path, data: dict) -> None:
     try:
         with os.fdopen(fd, "w") as fh:
             json.dump(data, fh, indent=1)
+        umask = os.umask(0)  # mkstemp makes 0600; give the file the usual permissions
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -421,27 +424,38 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
                       law: JilesAthertonSablik = DEFAULT_STEEL,
                       material: ElasticMaterial = BEAD_STEEL, reluctance: bool = True,
                       refresh: bool = False) -> TransducerReport:
-    """Cached :func:`compute_transducers` (``<cache_dir>/transducer-<key>.json``).
+    """Cached :func:`compute_transducers` (``transducer-<key>.json``).
 
-    ``cache_dir`` defaults to the mesh directory (:func:`msens.field.cache.default_mesh_dir`),
-    so committed meshes and transducers travel together. ``refresh`` recomputes.
+    Lookup follows the mesh cache (:mod:`msens.field.cache`): with ``cache_dir`` only that
+    folder; otherwise the committed folders (:func:`msens.field.cache.committed_mesh_dirs`,
+    where the project commits the transducers of its default studies beside their meshes),
+    and new results go to :func:`msens.field.cache.default_mesh_dir` (the user cache, never
+    the committed ``meshes/``). ``refresh`` recomputes.
     """
     force = geometry.beads.contact_load if stress_force is None else float(stress_force)
     key = cache_key(geometry, options, stress_force=force, law=law, material=material,
                     reluctance=reluctance)
-    directory = Path(cache_dir) if cache_dir is not None else (
-        Path(mesh_dir) if mesh_dir is not None else default_mesh_dir())
-    directory.mkdir(parents=True, exist_ok=True)
-    path = directory / f"transducer-{key}.json"
-    if path.is_file() and not refresh:
-        try:
-            return _from_json(json.loads(path.read_text()))
-        except (ValueError, KeyError) as exc:
-            raise InputError(f"transducer cache {path} is unreadable ({exc}); delete it") from exc
+    name = f"transducer-{key}.json"
+    if cache_dir is not None:
+        directory = Path(cache_dir)
+        search = [directory]
+    else:
+        directory = default_mesh_dir()
+        search = [*committed_mesh_dirs(), directory]
+    if not refresh:
+        for d in search:
+            path = d / name
+            if path.is_file():
+                try:
+                    return _from_json(json.loads(path.read_text()))
+                except (ValueError, KeyError) as exc:
+                    raise InputError(f"transducer cache {path} is unreadable ({exc}); "
+                                     "delete it") from exc
     report = compute_transducers(geometry, options=options, mesh_dir=mesh_dir,
                                  stress_force=force, law=law, material=material,
                                  reluctance=reluctance)
-    _atomic_write_json(path, _to_json(report))
+    directory.mkdir(parents=True, exist_ok=True)
+    _atomic_write_json(directory / name, _to_json(report))
     return report
 
 

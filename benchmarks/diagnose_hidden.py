@@ -19,7 +19,7 @@ from msens.diagnose.effects import NAMES, Context
 from msens.diagnose.hidden import hidden_case, without_precompression
 from msens.diagnose.predict import Predictor, baseline_state
 from msens.pipeline import calibrate_dissipation, output_times
-from msens.study import default_study_path, load_study
+from msens.study import PAPER_TABLE2, builtin_study_path, load_study
 
 
 def setup_for(effect: str) -> str:
@@ -31,7 +31,7 @@ def rel_error(found: dict, truth: dict) -> float:
 
 
 def main(quick: bool = False) -> dict:
-    study = without_precompression(load_study(default_study_path()))
+    study = without_precompression(load_study(builtin_study_path(PAPER_TABLE2)))
     fit = calibrate_dissipation(study, output_times(study))
     predictor = Predictor(output_times(study))
     bases = {}

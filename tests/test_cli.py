@@ -9,9 +9,9 @@ import sys
 import pytest
 
 from msens.cli import main
-from msens.study import default_study_path
+from msens.study import PAPER_TABLE2, builtin_study_path
 
-GOOD = default_study_path().read_text()
+GOOD = builtin_study_path(PAPER_TABLE2).read_text()
 
 
 def _study(tmp_path, text, name="s.toml"):

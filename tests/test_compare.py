@@ -13,13 +13,13 @@ from msens.compare import compare
 from msens.errors import InputError
 from msens.io.read import read_waveform
 from msens.io.waveform import Channel, Waveform
-from msens.study import default_study_path
+from msens.study import PAPER_TABLE2, builtin_study_path
 from msens.synth import RigEffects, synthesize, truth_gain_key
 
 
 @pytest.fixture(scope="module")
 def result():
-    study = api.load_default()
+    study = api.load_paper_table2()
     return api.run(study)
 
 
@@ -67,7 +67,7 @@ def test_study_not_matching_data(result):
 
 def test_cli_synth_compare_roundtrip(tmp_path):
     data = tmp_path / "shots.npz"
-    study = str(default_study_path())
+    study = str(builtin_study_path(PAPER_TABLE2))
     assert main(["synth", study, "--out", str(data), "--setup", "rod", "--shots", "2"]) == 0
     assert read_waveform(data).metadata["synthetic"] == "true"
     assert main(["synth", study, "--out", str(data)]) == 2  # never overwrites
@@ -79,7 +79,7 @@ def test_cli_synth_compare_roundtrip(tmp_path):
 
 
 def test_cli_bad_setup_exit_2(tmp_path, capsys):
-    code = main(["synth", str(default_study_path()), "--out", str(tmp_path / "x.csv"),
+    code = main(["synth", str(builtin_study_path(PAPER_TABLE2)), "--out", str(tmp_path / "x.csv"),
                  "--setup", "laser"])
     assert code == 2
     assert "--setup must be one of" in capsys.readouterr().err

@@ -8,8 +8,10 @@ import pytest
 
 from msens.errors import InputError
 from msens.study import (
+    PAPER_TABLE2,
     Damping,
     SensorKind,
+    builtin_study_path,
     default_study_path,
     load_study,
     parse_study,
@@ -28,8 +30,14 @@ particle = 5
 """
 
 
-def test_default_study_loads_three_setups():
+def test_default_study_is_the_physics_mss():
     s = load_study(default_study_path())
+    assert s.name == "paper-mss"
+    assert [x.particle for x in s.setups[0].sensors] == [13, 18]
+
+
+def test_table2_study_loads_three_setups():
+    s = load_study(builtin_study_path(PAPER_TABLE2))
     assert [x.name for x in s.setups] == ["bead", "rod", "mss"]
     assert s.striker.velocity_m_per_s == pytest.approx(math.sqrt(2 * 9.80665 * 0.0072))
     assert s.chain.n_particles == 30
@@ -43,7 +51,7 @@ def test_default_study_loads_three_setups():
 @pytest.mark.parametrize("name", ["paper-table2", "paper-mss"])
 def test_studies_folder_copy_matches_builtin(pytestconfig, name):
     root = pytestconfig.rootpath
-    builtin = default_study_path().parent / f"{name}.toml"
+    builtin = builtin_study_path(name)
     assert (root / "studies" / f"{name}.toml").read_text() == builtin.read_text()
     load_study(builtin)
 

@@ -13,9 +13,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from msens.output import OutputDir
 from msens.pipeline import StudyResult, run_study
-from msens.study import Study, default_study_path, load_study
+from msens.study import PAPER_TABLE2, Study, builtin_study_path, default_study_path, load_study
 
 
 def load(path: str | Path) -> Study:
@@ -24,8 +26,13 @@ def load(path: str | Path) -> Study:
 
 
 def load_default() -> Study:
-    """The built-in default study."""
+    """The built-in default study (the paper's MsS predicted from physics)."""
     return load_study(default_study_path())
+
+
+def load_paper_table2() -> Study:
+    """The paper's three setups (Table 2) with its Eq. 10 calibration."""
+    return load_study(builtin_study_path(PAPER_TABLE2))
 
 
 def run(study: Study) -> StudyResult:
@@ -57,7 +64,7 @@ def summary(result: StudyResult) -> dict:
         }
         for s in result.setups
     }
-    return {
+    out = {
         "study": result.study.name,
         "source": result.study.source,
         "striker_velocity_m_per_s": result.study.striker.velocity_m_per_s,
@@ -65,16 +72,105 @@ def summary(result: StudyResult) -> dict:
         "setups": static,
         "rows": result.rows(),
     }
+    out.update(physics_summary(result))
+    return out
+
+
+def _trough(record) -> dict:
+    """Is there a dip of the integrated signal before its main (incident) peak?"""
+    f = record.weighted_force
+    i_peak = int(np.argmax(f))
+    before = f[:i_peak + 1]
+    depth = float(-before.min()) if before.size else 0.0
+    peak = float(f[i_peak])
+    return {"present": bool(depth > 0.01 * peak), "depth_fraction_of_peak": depth / peak,
+            "time_us": float(record.t[int(np.argmin(before))] * 1e6)}
+
+
+def physics_summary(result: StudyResult) -> dict:
+    """Physics-MsS part of ``summary.json``: per-coil voltage and sensitivity profile, the
+    magnet's precompression per contact and the dominant transduction mechanism."""
+    coils, villari, reluctance = [], 0.0, 0.0
+    precompression = []
+    for s in result.setups:
+        if not s.transducers:
+            continue
+        from msens.electronics import resonance
+        from msens.transducer import magnetic_precompression
+
+        magnetic = magnetic_precompression(s.transducers)
+        for c, f in enumerate(np.cumsum(magnetic)[:-1], start=1):
+            if abs(f) > 1e-3:
+                precompression.append({"setup": s.setup.name, "contact": c, "upper": c,
+                                       "lower": c + 1, "force_N": float(f)})
+        for r in s.sensors:
+            if r.mss is None:
+                continue
+            tr = s.transducers[r.sensor.particle]
+            villari += float(np.sum(np.abs(tr.sensitivity_villari)))
+            reluctance += float(np.sum(np.abs(tr.sensitivity_reluctance)))
+            f0, q = resonance(r.mss.circuit)
+            coils.append({
+                "setup": s.setup.name, "particle": r.sensor.particle,
+                "peak_voltage_V": float(np.max(np.abs(r.mss.voltage))),
+                "peak_emf_V": float(np.max(np.abs(r.mss.emf))),
+                "resistance_ohm": tr.resistance_ohm, "inductance_H": tr.inductance_H,
+                "resonance_Hz": f0, "quality_factor": q,
+                "pre_peak_trough": _trough(r.mss),
+                "sensitivity_profile": [
+                    {"contact": int(c), "dLambda_dF_Wb_per_N": float(v + g),
+                     "villari_Wb_per_N": float(v), "reluctance_Wb_per_N": float(g)}
+                    for c, v, g in zip(tr.contacts, tr.sensitivity_villari,
+                                       tr.sensitivity_reluctance, strict=True)],
+            })
+    if not coils:
+        return {}
+    return {"coils": coils, "magnetic_precompression_N": precompression,
+            "dominant_mechanism": "villari" if villari >= reluctance else "reluctance",
+            "mechanism_magnitude_Wb_per_N": {"villari": villari, "reluctance": reluctance}}
 
 
 FIGURES = ("contact_forces.png", "sensor_profiles.png", "sensor_records.png", "table2.png")
+PHYSICS_FIGURES = ("mss_voltage.png", "mss_integrated.png", "sensitivity_profile.png",
+                   "field_B.png")
 
 
 def prepare_outputs(out: str | Path, *, figures: bool = True) -> OutputDir:
     """Open ``out`` and check, before any work, that no user file would be overwritten."""
     d = OutputDir(out)
-    d.check(["summary.json", *(FIGURES if figures else ())])
+    d.check(["summary.json", *(FIGURES + PHYSICS_FIGURES if figures else ())])
     return d
+
+
+def _figure_makers(result: StudyResult) -> dict:
+    from msens import plots
+
+    makers = {
+        "contact_forces.png": lambda: plots.contact_profiles(result),
+        "sensor_records.png": lambda: plots.sensor_records(result),
+    }
+    if any(s.setup.inserts or len(result.setups) > 1 for s in result.setups):
+        makers["sensor_profiles.png"] = lambda: plots.sensor_profiles(result)
+    if result.study.reference:
+        makers["table2.png"] = lambda: plots.table2(result.rows())
+    if any(s.transducers for s in result.setups):
+        makers["mss_voltage.png"] = lambda: plots.mss_voltages(result)
+        makers["mss_integrated.png"] = lambda: plots.mss_integrated(result)
+        makers["sensitivity_profile.png"] = lambda: plots.sensitivity_profile(result)
+    return makers
+
+
+def _field_map(result: StudyResult, d: OutputDir) -> Path | None:
+    """The bias-field map of the first physics setup (re-solves the cached field model)."""
+    from msens.field.report import plot_field_map
+    from msens.field.sensor_model import run_field_model
+    from msens.fieldsetup import geometry_from_study
+
+    setup = next((s.setup for s in result.setups if s.transducers), None)
+    if setup is None:
+        return None
+    report = run_field_model(geometry_from_study(result.study, setup), inductance=False)
+    return d.write("field_B.png", lambda p: plot_field_map(report, p))
 
 
 def write_outputs(result: StudyResult, out: str | Path | OutputDir, *,
@@ -85,16 +181,13 @@ def write_outputs(result: StudyResult, out: str | Path | OutputDir, *,
     d = out if isinstance(out, OutputDir) else prepare_outputs(out, figures=figures)
     written = [d.write_json("summary.json", summary(result))]
     if figures:
-        makers = dict(zip(FIGURES, (
-            lambda: plots.contact_profiles(result),
-            lambda: plots.sensor_profiles(result),
-            lambda: plots.sensor_records(result),
-            lambda: plots.table2(result.rows()),
-        ), strict=True))
-        for name, make in makers.items():
+        for name, make in _figure_makers(result).items():
             fig = make()
             written.append(d.savefig(name, fig, dpi=150))
             plots.close(fig)
+        field_map = _field_map(result, d)
+        if field_map is not None:
+            written.append(field_map)
     return written
 
 
@@ -240,3 +333,56 @@ def format_design(result) -> str:
     from msens.design import format_result
 
     return format_result(result)
+
+
+def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | None = None,
+             passes: int = 1) -> tuple[dict, list[Path]]:
+    """Name the effect the model of ``study`` misses; write ``diagnosis.json`` and
+    ``diagnosis.png`` into ``out``.
+
+    Either ``data`` (a measured waveform; its sensors choose the study's setup) or
+    ``reference`` (a setup name: its ``[reference]`` rows are the measurement) is given.
+    """
+    import json
+
+    from msens.diagnose import diagnose_passes, diagnose_reference
+    from msens.diagnose.report import FILES
+    from msens.diagnose.report import write as write_diagnosis
+    from msens.errors import InputError
+    from msens.io.read import read_waveform
+
+    if (data is None) == (reference is None):
+        raise InputError("diagnose needs either DATA (a waveform file) or --reference SETUP, "
+                         "not both")
+    if not 1 <= passes <= 7:
+        raise InputError(f"--passes must be from 1 to 7, got {passes}")
+    target = OutputDir(out)
+    target.check(list(FILES))
+    if data is not None:
+        results = diagnose_passes(read_waveform(data), study, passes=passes)
+    else:
+        results, added = [], []
+        for _ in range(passes):
+            d = diagnose_reference(study, reference, added=tuple(added))
+            results.append(d)
+            if d.effect == "none":
+                break
+            added.append((d.effect, d.parameters))
+    written = write_diagnosis(results, target)
+    report = json.loads(written[0].read_text())
+    return report, written
+
+
+def format_diagnosis(report: dict) -> str:
+    """Plain-text summary of ``diagnosis.json``."""
+    lines = [f"setup {report['setup']} ({report['mode']}): disagreement mostly at the "
+             f"{report['disagreement']['where']}",
+             f"{'effect':<24} {'score (dBIC)':>13} {'misfit':>10}  parameters"]
+    for c in report["candidates"]:
+        pars = ", ".join(f"{k}={v:.4g}" for k, v in c["parameters"].items())
+        lines.append(f"{c['effect']:<24} {c['score']:>13.1f} {c['misfit']:>10.4g}  {pars}")
+    for i, p in enumerate(report["passes"], 1):
+        pars = ", ".join(f"{k}={v:.4g}" for k, v in p["parameters"].items())
+        lines.append(f"pass {i}: {p['effect']}" + (f" ({pars})" if pars else "")
+                     + f"; misfit {p['misfit_before']:.4g} -> {p['misfit_after']:.4g}")
+    return "\n".join(lines)

@@ -129,7 +129,7 @@ def _compare(args: argparse.Namespace) -> int:
 def _diagnose(args: argparse.Namespace) -> int:
     from msens import api
 
-    study = api.load(args.study) if args.study else api.load_default()
+    study = api.load(args.study) if args.study else api.load_paper_table2()
     data = Path(args.data) if args.data else None
     report, written = api.diagnose(study, data, Path(args.out), reference=args.reference,
                                    passes=args.passes)

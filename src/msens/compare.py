@@ -21,7 +21,6 @@ from msens.processing import integrate_drift_corrected, lowpass, xcorr_delay
 from msens.sensors import SensorKind
 from msens.study import SetupSpec
 
-
 #: Peaks and times are read from records low-passed at this frequency, Hz — the model's too,
 #: so the filter biases neither side. Solitary pulses here last ~20 µs (content < 100 kHz);
 #: the filter removes the noise that would otherwise bias a peak's maximum upward.

@@ -18,7 +18,7 @@ from msens.chain.integrate import ChainResult, simulate
 from msens.chain.model import Chain
 from msens.features import PulseFeatures, centre_distance, pulse_features, wave_speed
 from msens.sensors import SensorKind, observe, time_derivative
-from msens.study import ReferenceRow, SensorSpec, SetupSpec, Study
+from msens.study import MssModel, ReferenceRow, SensorSpec, SetupSpec, Study
 
 
 @dataclass(frozen=True)
@@ -33,10 +33,13 @@ class SensorResult:
     force : ndarray, shape (nt,)
         Dynamic force the sensor reads, N (for the four-contact MsS: mean of its contacts).
     voltage_shape : ndarray, shape (nt,) or None
-        For an MsS, d(force)/dt, N/s — the paper's model of the coil voltage (Eq. 5),
-        up to its unknown conversion factor.
+        For a four-contact MsS, d(force)/dt, N/s — the paper's model of the coil voltage
+        (Eq. 5), up to its unknown conversion factor. For a physics MsS, the predicted DAQ
+        voltage, V, on the chain's time grid.
     features : PulseFeatures
         Scalar features of ``force``.
+    mss : MssRecord or None
+        For a physics MsS: flux change, EMF and DAQ voltage (:mod:`msens.mss`).
     """
 
     sensor: SensorSpec
@@ -44,6 +47,7 @@ class SensorResult:
     force: np.ndarray
     voltage_shape: np.ndarray | None
     features: PulseFeatures
+    mss: object | None = None
 
 
 @dataclass(frozen=True)
@@ -61,6 +65,8 @@ class SetupResult:
     sensors : tuple of SensorResult
     speed_incident, speed_reflected : float
         Pulse speed between the top and bottom sensor, m/s (NaN with one sensor).
+    transducers : dict or None
+        Physics MsS transducers by coil particle (:class:`msens.transducer.Transducer`).
     """
 
     setup: SetupSpec
@@ -70,6 +76,7 @@ class SetupResult:
     sensors: tuple[SensorResult, ...]
     speed_incident: float
     speed_reflected: float
+    transducers: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -154,11 +161,36 @@ def _positions(sensors: tuple[SensorSpec, ...]) -> list[str]:
             else f"middle-{s.particle}" for s in sensors]
 
 
-def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult) -> SetupResult:
-    """Sensor records, features and speeds of one simulated setup."""
+def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static: np.ndarray,
+                 transducers: dict, study: Study, index: int) -> SensorResult:
+    from msens.mss import mss_record, readout
+    from msens.study import CoilSpec
+
+    tr = transducers[sensor.particle]
+    circuit = readout(tr, sensor.coil or CoilSpec(), study.electronics)
+    rec = mss_record(tr, circuit, history.t, history.force, study.electronics,
+                     static=static, seed_offset=index)
+    voltage = np.interp(history.t, rec.t_daq, rec.voltage)
+    return SensorResult(sensor=sensor, position=position, force=rec.weighted_force,
+                        voltage_shape=voltage,
+                        features=pulse_features(rec.weighted_force, history.t), mss=rec)
+
+
+def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
+                  transducers: dict | None = None, study: Study | None = None) -> SetupResult:
+    """Sensor records, features and speeds of one simulated setup.
+
+    Physics MsS sensors need the setup's ``transducers`` and the ``study`` (electronics).
+    """
     t = history.t
+    static = static_contact_forces(chain)
     results = []
-    for sensor, position in zip(setup.sensors, _positions(setup.sensors), strict=True):
+    for i, (sensor, position) in enumerate(zip(setup.sensors, _positions(setup.sensors),
+                                               strict=True)):
+        if sensor.model is MssModel.PHYSICS:
+            results.append(_physics_mss(sensor, position, history, static, transducers,
+                                        study, i))
+            continue
         force = observe(sensor.kind, history.force, sensor.particle)
         shape = time_derivative(force, t) if sensor.kind is SensorKind.MSS else None
         results.append(SensorResult(sensor=sensor, position=position, force=force,
@@ -172,9 +204,9 @@ def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult) -> Setup
             speed_in = float(wave_speed(d, top.features.t_incident, bot.features.t_incident))
             speed_out = float(wave_speed(d, bot.features.t_reflected,
                                          top.features.t_reflected))
-    return SetupResult(setup=setup, chain=chain, history=history,
-                       static_force=static_contact_forces(chain), sensors=tuple(results),
-                       speed_incident=speed_in, speed_reflected=speed_out)
+    return SetupResult(setup=setup, chain=chain, history=history, static_force=static,
+                       sensors=tuple(results), speed_incident=speed_in,
+                       speed_reflected=speed_out, transducers=transducers)
 
 
 def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:
@@ -189,6 +221,16 @@ def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:
         lambda gc, gw: build_chain(study, setup, gamma_contact=gc, gamma_wall=gw),
         sensors=(particles[0], particles[-1]), ar_top=spec.ar_top, ar_bottom=spec.ar_bottom,
         velocity=study.striker.velocity_m_per_s, t_out=t, kind=kind)
+
+
+def setup_transducers(study: Study, setup: SetupSpec) -> dict | None:
+    """Field-model transducers of a setup's physics MsS sensors (cached on disk), or None."""
+    if not any(s.model is MssModel.PHYSICS for s in setup.sensors):
+        return None
+    from msens.fieldsetup import geometry_from_study
+    from msens.transducer import transducers_for
+
+    return transducers_for(geometry_from_study(study, setup))
 
 
 def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = None,
@@ -215,8 +257,15 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
     setups = []
     for setup in study.setups:
         extra = (static_forces or {}).get(setup.name)
+        transducers = setup_transducers(study, setup)
+        if transducers:
+            from msens.transducer import magnetic_precompression
+
+            magnetic = magnetic_precompression(transducers)
+            extra = magnetic if extra is None else extra + magnetic
         chain = build_chain(study, setup, gamma_contact=gc, gamma_wall=gw, static_force=extra)
         history = simulate(chain, study.striker.velocity_m_per_s, t, dt=study.simulation.dt_s)
-        setups.append(observe_setup(setup, chain, history))
+        setups.append(observe_setup(setup, chain, history, transducers=transducers,
+                                    study=study))
     return StudyResult(study=study, gamma_contact=gc, gamma_wall=gw, fit=fit,
                        setups=tuple(setups))

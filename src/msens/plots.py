@@ -154,3 +154,72 @@ def overlay(setup: SetupResult, shots: list, t_max_s: float | None = None) -> Fi
     fig.suptitle(f"Measured (calibrated, aligned) vs model: setup {setup.setup.name}")
     fig.tight_layout()
     return fig
+
+
+def _physics(result: StudyResult):
+    """(setup, sensor) pairs of physics MsS sensors."""
+    return [(s, r) for s in result.setups for r in s.sensors if r.mss is not None]
+
+
+def mss_voltages(result: StudyResult, t_max_s: float = 600e-6) -> Figure:
+    """Predicted coil EMF and DAQ voltage of every physics MsS."""
+    pairs = _physics(result)
+    fig, axes = plt.subplots(len(pairs), 1, figsize=(7, 2.6 * len(pairs)), sharex=True,
+                             squeeze=False)
+    for ax, (_, r) in zip(axes[:, 0], pairs, strict=True):
+        m = r.mss
+        keep = m.t <= t_max_s
+        kd = m.t_daq <= t_max_s
+        ax.plot(m.t[keep] * _US, m.emf[keep] * 1e3, color="0.6", lw=1.0, label="EMF")
+        ax.plot(m.t_daq[kd] * _US, m.voltage[kd] * 1e3, "C0", lw=1.2, label="at the DAQ")
+        ax.set_ylabel(f"coil @{r.sensor.particle} (mV)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1, 0].set_xlabel("time since impact (µs)")
+    fig.suptitle("Predicted MsS voltage (field model + Villari + chain + read-out)")
+    fig.tight_layout()
+    return fig
+
+
+def mss_integrated(result: StudyResult, t_max_s: float = 600e-6) -> Figure:
+    """Sensitivity-weighted contact force (the integrated coil signal) next to the paper's
+    four-contact average on the same chain run."""
+    from msens.sensors import mss_four_contact
+
+    pairs = _physics(result)
+    fig, axes = plt.subplots(len(pairs), 1, figsize=(7, 2.6 * len(pairs)), sharex=True,
+                             squeeze=False)
+    for ax, (s, r) in zip(axes[:, 0], pairs, strict=True):
+        t = s.history.t
+        keep = t <= t_max_s
+        four = mss_four_contact(s.history.force, r.sensor.particle)
+        ax.plot(t[keep] * _US, four[keep], "k--", lw=1.0, label="four-contact mean (paper)")
+        ax.plot(t[keep] * _US, r.force[keep], "C3", lw=1.2,
+                label="physics: ΔΛ / Σ ∂Λ/∂F (integrated voltage)")
+        ax.set_ylabel(f"@{r.sensor.particle} (N)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1, 0].set_xlabel("time since impact (µs)")
+    fig.suptitle("Integrated MsS signal vs the paper's four-contact hypothesis")
+    fig.tight_layout()
+    return fig
+
+
+def sensitivity_profile(result: StudyResult) -> Figure:
+    """∂Λ/∂F_c along the chain for each physics MsS, by mechanism."""
+    pairs = _physics(result)
+    fig, ax = plt.subplots(figsize=(7, 3.4))
+    for i, (s, r) in enumerate(pairs):
+        tr = s.transducers[r.sensor.particle]
+        c = np.asarray(tr.contacts)
+        ax.plot(c, np.asarray(tr.sensitivity_villari) * 1e9, "o-", color=f"C{i}", ms=3,
+                label=f"coil @{r.sensor.particle}: Villari")
+        ax.plot(c, np.asarray(tr.sensitivity_reluctance) * 1e9, "s--", color=f"C{i}", ms=3,
+                alpha=0.6, label=f"coil @{r.sensor.particle}: contact reluctance")
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.set_xlabel("contact c (joins particles c and c+1)")
+    ax.set_ylabel("∂Λ/∂F_c (nWb/N)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig

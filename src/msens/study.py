@@ -27,7 +27,10 @@ from msens.tomlreader import Table
 from msens.units import G0
 
 SCHEMA = "msens.study/1"
-DEFAULT_STUDY = "paper-table2"
+#: The main job: the paper's MsS predicted from physics.
+DEFAULT_STUDY = "paper-mss"
+#: The paper's three sensing setups (Table 2); the default study of ``msens diagnose``.
+PAPER_TABLE2 = "paper-table2"
 
 
 class MssModel(enum.Enum):
@@ -299,9 +302,14 @@ def load_study(path: str | Path) -> Study:
     return parse_study(text, source=str(path), base_dir=path.parent)
 
 
+def builtin_study_path(name: str) -> Path:
+    """A study shipped with the package (``paper-mss``, ``paper-table2``)."""
+    return Path(str(resources.files("msens") / "data" / f"{name}.toml"))
+
+
 def default_study_path() -> Path:
-    """The built-in default study shipped with the package."""
-    return Path(str(resources.files("msens") / "data" / f"{DEFAULT_STUDY}.toml"))
+    """The built-in default study of ``msens run``."""
+    return builtin_study_path(DEFAULT_STUDY)
 
 
 def parse_study(text: str, *, source: str = "<memory>", base_dir: Path | None = None) -> Study:

@@ -237,7 +237,7 @@ class TransducerReport:
     transducers : dict of int -> Transducer
     details : dict
         JSON-ready diagnostics: per coil the bead sensitivities S_i, reciprocity errors,
-        reluctance finite differences; timings; mesh size.
+        contact-approach derivatives ∂Λ/∂δ_c; timings; mesh size.
     """
 
     transducers: dict[int, Transducer]
@@ -272,6 +272,8 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
     max_iter : int
         Newton iterations allowed in the bias solves.
     """
+    force = geometry.beads.contact_load if stress_force is None else float(stress_force)
+    require(math.isfinite(force) and force > 0, f"stress_force must be > 0 N, got {force}")
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     axi, path = load_mesh(geometry, options, mesh_dir)
@@ -279,8 +281,6 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
     t0 = time.perf_counter()
     sol = solve(bias_problem(geometry, axi), max_iter=max_iter)
     timings["bias_solve"] = time.perf_counter() - t0
-    force = geometry.beads.contact_load if stress_force is None else float(stress_force)
-    require(math.isfinite(force) and force > 0, f"stress_force must be > 0 N, got {force}")
     t0 = time.perf_counter()
     bs = bead_stress(geometry, force, material)
     sampler = StressSampler(bs)
@@ -311,11 +311,11 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
         t0 = time.perf_counter()
         near = [p for p in range(coil.particle - direct_beads, coil.particle + direct_beads + 1)
                 if p in geometry.beads.particles]
+        state = bead_state(sol, coil)
         vil = villari_sensitivities(sol, geometry, coil, bs, law=law, direct=near,
-                                    operator=operator, sampler=sampler)
+                                    operator=operator, sampler=sampler, state=state)
         contacts, s_vil = contact_sensitivity(vil.particles, vil.sensitivity,
                                               geometry.beads.count)
-        state = bead_state(sol, coil)
         inductance = coil_flux_linkage(state.incremental, state.incremental.a, coil)
         s_rel = np.zeros_like(s_vil)
         dl_da = np.zeros_like(s_vil)

@@ -359,7 +359,8 @@ def villari_sensitivities(sol: FieldSolution, geometry: SensorGeometry, coil: Co
                           bs: BeadStress, *, law: JilesAthertonSablik = DEFAULT_STEEL,
                           direct: bool | Sequence[int] = False,
                           operator: TangentOperator | None = None,
-                          sampler: StressSampler | None = None) -> VillariResult:
+                          sampler: StressSampler | None = None,
+                          state: BeadState | None = None) -> VillariResult:
     """Villari sensitivity S_i of ``coil`` to a symmetric load on each modelled bead.
 
     Parameters
@@ -376,8 +377,8 @@ def villari_sensitivities(sol: FieldSolution, geometry: SensorGeometry, coil: Co
     direct : bool or sequence of int
         Also re-solve the linearised problem with ΔM as the source (for all beads, or for the
         listed particles) and take the coil's flux-linkage change.
-    operator, sampler : optional
-        Reused factorised tangent operator and stress sampler.
+    operator, sampler, state : optional
+        Reused factorised tangent operator, stress sampler and bead state of ``coil``.
 
     Returns
     -------
@@ -385,7 +386,8 @@ def villari_sensitivities(sol: FieldSolution, geometry: SensorGeometry, coil: Co
     """
     require(any(u.coil.particle == coil.particle for u in geometry.sensors),
             f"coil at particle {coil.particle} is not part of the geometry")
-    state = bead_state(sol, coil)
+    state = state if state is not None else bead_state(sol, coil)
+    require(state.coil == coil, "villari_sensitivities: state belongs to another coil")
     sampler = sampler or StressSampler(bs)
     parts = np.array(list(geometry.beads.particles))
     if direct is True:

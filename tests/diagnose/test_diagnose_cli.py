@@ -14,13 +14,13 @@ from msens.diagnose.predict import Predictor, baseline_state
 from msens.io.read import write_waveform
 from msens.io.waveform import Waveform
 from msens.pipeline import output_times
-from msens.study import default_study_path, load_study
+from msens.study import PAPER_TABLE2, builtin_study_path, load_study
 
 
 @pytest.fixture(scope="module")
 def data(tmp_path_factory):
     """A bead-setup measurement whose wall is aluminium-like (70 GPa)."""
-    study = load_study(default_study_path())
+    study = load_study(builtin_study_path(PAPER_TABLE2))
     ctx = Context(study, study.setup("bead"))
     from msens.pipeline import calibrate_dissipation
 
@@ -67,7 +67,7 @@ def test_feature_only_mode_on_table2(tmp_path):
     ["diagnose", "{data}/missing.csv"],
 ])
 def test_bad_input_exits_2(data, tmp_path, args, capsys):
-    text = default_study_path().read_text()
+    text = builtin_study_path(PAPER_TABLE2).read_text()
     # a study whose only setup has rods at 13 and 18: bead data do not match it
     parts = text.split("[[setup]]")  # header, bead, rod, mss (+ calibration, reference)
     (data / "rods.toml").write_text(parts[0] + "[[setup]]" + parts[2])

@@ -11,12 +11,12 @@ from msens.assemble import build_chain
 from msens.chain.model import DampingLaw
 from msens.diagnose.effects import NAMES, Context, FirstOrderLowpass, get, registry
 from msens.diagnose.predict import _sim_key, baseline_state
-from msens.study import default_study_path, load_study
+from msens.study import PAPER_TABLE2, builtin_study_path, load_study
 
 
 @pytest.fixture(scope="module")
 def study():
-    return load_study(default_study_path())
+    return load_study(builtin_study_path(PAPER_TABLE2))
 
 
 def _base(study, setup):

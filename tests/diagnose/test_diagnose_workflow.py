@@ -21,7 +21,7 @@ from msens.diagnose.report import write
 from msens.errors import InputError
 from msens.io.waveform import Waveform
 from msens.pipeline import output_times
-from msens.study import default_study_path, load_study
+from msens.study import PAPER_TABLE2, builtin_study_path, load_study
 from msens.synth import RigEffects
 
 #: A fixed baseline dissipation (the paper's gamma_c) instead of the Eq. 10 fit: the data are
@@ -39,7 +39,7 @@ def fixed_fit(gc: float = GAMMA_C, gw: float = 0.0) -> DissipationFit:
 
 @pytest.fixture(scope="module")
 def bench():
-    study = load_study(default_study_path())
+    study = load_study(builtin_study_path(PAPER_TABLE2))
     ctx = Context(study, study.setup("bead"))
     base = baseline_state(ctx, GAMMA_C, 0.0)
     return study, ctx, base, Predictor(output_times(study))

@@ -24,7 +24,7 @@ from msens.diagnose.effects import NAMES, Context
 from msens.diagnose.hidden import hidden_case, without_precompression
 from msens.diagnose.predict import Predictor, baseline_state
 from msens.pipeline import output_times
-from msens.study import default_study_path, load_study
+from msens.study import PAPER_TABLE2, builtin_study_path, load_study
 
 GAMMA_C = 4.8
 FIT = DissipationFit(gamma_c=GAMMA_C, gamma_w=0.0, objective=math.nan, ar_top_model=math.nan,
@@ -34,7 +34,7 @@ FIT = DissipationFit(gamma_c=GAMMA_C, gamma_w=0.0, objective=math.nan, ar_top_mo
 
 @pytest.fixture(scope="module")
 def bench():
-    study = without_precompression(load_study(default_study_path()))
+    study = without_precompression(load_study(builtin_study_path(PAPER_TABLE2)))
     predictor = Predictor(output_times(study))
     bases = {}
     for name in ("bead", "mss"):

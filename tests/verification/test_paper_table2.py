@@ -14,7 +14,7 @@ from msens import api
 
 @pytest.fixture(scope="module")
 def result():
-    return api.run(api.load_default())
+    return api.run(api.load_paper_table2())
 
 
 def test_fit_reproduces_zero_wall_dissipation(result):

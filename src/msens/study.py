@@ -14,17 +14,25 @@ from __future__ import annotations
 
 import enum
 import math
-import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
+import numpy as np
+
 from msens.chain.model import DampingLaw as Damping
 from msens.errors import InputError
-from msens.materials import BEAD_STEEL, MAGNET_GRADES, PIEZO_ROD, PIEZO_ROD_LENGTH, PIEZO_ROD_MASS
+from msens.materials import (
+    BEAD_STEEL,
+    MAGNET_GRADES,
+    PIEZO_ROD,
+    PIEZO_ROD_LENGTH,
+    PIEZO_ROD_MASS,
+    BHCurve,
+)
 from msens.sensors import SensorKind
-from msens.tomlreader import Table
-from msens.units import G0
+from msens.tomlreader import Table, read_document
+from msens.units import G0, MU0
 
 SCHEMA = "msens.study/1"
 #: The main job: the paper's MsS predicted from physics.
@@ -218,6 +226,9 @@ class FieldSpec:
         Lower bound of the flat radius and an air gap between flats, m.
     air_radius_m, air_margin_m : float or None
         Truncation of open space, m.
+    steel_bh : BHCurve or None
+        User B–H table of the beads and pole pieces (``steel_bh`` = [[B_T, H_A_per_m], ...]);
+        None means the field model's default, AISI 1018 (FEMM library).
     """
 
     beads: tuple[int, int] | None = None
@@ -226,6 +237,7 @@ class FieldSpec:
     contact_gap_m: float | None = None
     air_radius_m: float | None = None
     air_margin_m: float | None = None
+    steel_bh: BHCurve | None = None
 
 
 @dataclass(frozen=True)
@@ -314,14 +326,7 @@ def default_study_path() -> Path:
 
 def parse_study(text: str, *, source: str = "<memory>", base_dir: Path | None = None) -> Study:
     """Validate the TOML ``text`` of a study (see :func:`load_study`)."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{source}: not valid TOML: {exc}") from None
-    root = Table(data, "", source)
-    schema = root.string("schema", required=True)
-    if schema != SCHEMA:
-        raise root.error("schema", f"must be {SCHEMA!r}, got {schema!r}")
+    root = read_document(text, source=source, schema=SCHEMA)
     name = root.string("name", required=True)
     chain_t = root.table("chain", required=True)
     chain = _chain(chain_t)
@@ -331,15 +336,15 @@ def parse_study(text: str, *, source: str = "<memory>", base_dir: Path | None = 
     setups = _setups(root, chain, name, top_inserts)
     simulation = _simulation(root.table("simulation"))
     electronics = _electronics(root.table("electronics"))
-    field_spec = _field(root.table("field"), chain)
+    field_spec = _field(root.table("field"), chain, source)
     calib = root.table("calibration")
     fit = _dissipation_fit(calib, setups) if calib is not None else None
     reference = _reference(root.table("reference"), setups)
     measurement_file = _measurement(root.table("measurement"), base_dir)
     root.finish()
     return Study(name=name, chain=chain, striker=striker, setups=setups, simulation=simulation,
-                 electronics=electronics, field=field_spec, dissipation_fit=fit, reference=reference,
-                 measurement_file=measurement_file, source=source)
+                 electronics=electronics, field=field_spec, dissipation_fit=fit,
+                 reference=reference, measurement_file=measurement_file, source=source)
 
 
 def _chain(t: Table) -> ChainSpec:
@@ -574,7 +579,7 @@ def _electronics(t: Table | None) -> ElectronicsSpec:
     return spec
 
 
-def _field(t: Table | None, chain: ChainSpec) -> FieldSpec:
+def _field(t: Table | None, chain: ChainSpec, source: str) -> FieldSpec:
     if t is None:
         return FieldSpec()
     beads = t.raw("beads")
@@ -594,9 +599,63 @@ def _field(t: Table | None, chain: ChainSpec) -> FieldSpec:
                      min_flat_radius_m=opt("min_flat_radius_m", 1e-2),
                      contact_gap_m=opt("contact_gap_m", 1e-3),
                      air_radius_m=opt("air_radius_m", 100.0),
-                     air_margin_m=opt("air_margin_m", 100.0))
+                     air_margin_m=opt("air_margin_m", 100.0),
+                     steel_bh=_steel_bh(t, source))
     t.finish()
     return spec
+
+
+#: Largest flux density accepted in a B–H table, T (iron-cobalt alloys saturate near 2.4 T;
+#: B = 5 T would need H of order 2e6 A/m, far beyond any sensor's field).
+BH_MAX_B = 5.0
+#: Smallest slope ΔH/ΔB of a table's last interval, A/(m T): the field model joins the table to
+#: the saturation line B = B_n + μ0 (H − H_n) with a monotone cubic, which needs the last secant
+#: to be at least 1/(3 μ0) (Fritsch–Carlson bound; see msens.field.bh.monotone_bh).
+BH_MIN_LAST_SLOPE = 1.0 / (3.0 * MU0)
+
+
+def _steel_bh(t: Table, source: str) -> BHCurve | None:
+    """``field.steel_bh``: [[B_T, H_A_per_m], ...] from (0, 0), both strictly increasing."""
+    raw = t.raw("steel_bh")
+    if raw is None:
+        return None
+    key = "steel_bh"
+    if not isinstance(raw, list) or len(raw) < 3:
+        got = f"{len(raw)} pair(s)" if isinstance(raw, list) else repr(raw)
+        raise t.error(key, f"must be an array of at least 3 pairs [[B_T, H_A_per_m], ...], "
+                           f"got {got}")
+    rows = []
+    for i, pair in enumerate(raw):
+        ok = (isinstance(pair, list) and len(pair) == 2
+              and all(isinstance(v, int | float) and not isinstance(v, bool) for v in pair)
+              and all(math.isfinite(v) for v in pair))
+        if not ok:
+            raise t.error(f"{key}[{i}]", f"must be a pair of finite numbers [B_T, H_A_per_m], "
+                                         f"got {pair!r}")
+        rows.append((float(pair[0]), float(pair[1])))
+    if rows[0] != (0.0, 0.0):
+        raise t.error(f"{key}[0]", f"must be [0, 0] (the curve starts at the origin), got "
+                                   f"{list(raw[0])!r}")
+    for i in range(1, len(rows)):
+        (b0, h0), (b1, h1) = rows[i - 1], rows[i]
+        if not b1 > b0:
+            raise t.error(f"{key}[{i}]", f"B must be strictly increasing: B = {b1} T follows "
+                                         f"{b0} T")
+        if not h1 > h0:
+            raise t.error(f"{key}[{i}]", f"H must be strictly increasing: H = {h1} A/m follows "
+                                         f"{h0} A/m")
+        if not b1 < BH_MAX_B:
+            raise t.error(f"{key}[{i}]", f"B must be below {BH_MAX_B} T, got {b1} T")
+    (b0, h0), (b1, h1) = rows[-2], rows[-1]
+    if (h1 - h0) / (b1 - b0) < BH_MIN_LAST_SLOPE:
+        raise t.error(f"{key}[{len(rows) - 1}]",
+                      f"ends too steeply: the last interval's dH/dB = {(h1 - h0) / (b1 - b0):.4g} "
+                      f"A/(m T) must be at least 1/(3 mu0) = {BH_MIN_LAST_SLOPE:.4g} A/(m T) to "
+                      f"join the saturation line; extend the table to higher fields")
+    b, h = (np.array(c) for c in zip(*rows, strict=True))
+    b.flags.writeable = False
+    h.flags.writeable = False
+    return BHCurve(name="user table", b=b, h=h, source=source)
 
 
 def _two_sensor_setup(t: Table, key: str, setups: tuple[SetupSpec, ...]) -> str:

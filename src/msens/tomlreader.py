@@ -8,6 +8,7 @@ reported instead of silently ignored.
 from __future__ import annotations
 
 import math
+import tomllib
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -47,6 +48,10 @@ class Table:
 
     def has(self, name: str) -> bool:
         return name in self._data
+
+    def keys(self) -> list[str]:
+        """The keys present in this table."""
+        return list(self._data)
 
     def _raw(self, name: str, default: Any, required: bool) -> Any:
         self._used.add(name)
@@ -140,3 +145,16 @@ class Table:
                 f"{self._source}: unknown key '{self.key(unknown[0])}'; "
                 f"allowed keys here: {known}"
             )
+
+
+def read_document(text: str, *, source: str, schema: str) -> Table:
+    """Parse a TOML document and check its ``schema`` key; the root :class:`Table`."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{source}: not valid TOML: {exc}") from None
+    root = Table(data, "", source)
+    found = root.string("schema", required=True)
+    if found != schema:
+        raise root.error("schema", f"must be {schema!r}, got {found!r}")
+    return root

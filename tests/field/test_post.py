@@ -1,4 +1,4 @@
-"""Tests of post-processing (msens.field.post) and coil formulas (msens.field.coil)."""
+"""Tests of post-processing (msens.field.post)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from msens.errors import InputError
-from msens.field.coil import AWG36, coil_resistance, winding_outer_radius
 from msens.field.post import energy, field_strength, flux_density, flux_linkage, force_z
 from msens.field.regions import Air, NonlinearSoft, PermanentMagnet, Winding
 from msens.field.solve import MagnetostaticProblem, incremental, solve
@@ -114,25 +113,3 @@ def test_flux_linkage_rejects_bad_input(beads_solution):
         flux_linkage(beads_solution, "winding", 10)
 
 
-def test_paper_coil_winding_and_resistance():
-    r2 = winding_outer_radius(1100, 7e-3, 7.95e-3, AWG36.insulated_diameter)
-    assert r2 == pytest.approx(7.95e-3 + 1100 * 0.152e-3**2 / 7e-3, rel=1e-12)  # 11.58 mm
-    wire_length = 1100 * 2 * np.pi * (7.95e-3 + r2) / 2
-    expected = 1.7241e-8 * wire_length / (np.pi * 0.127e-3**2 / 4)
-    assert coil_resistance(1100, 7.95e-3, r2, AWG36.bare_diameter) == pytest.approx(expected)
-    assert 85 < expected < 100  # ~92 ohm
-    hot = coil_resistance(1100, 7.95e-3, r2, AWG36.bare_diameter, temperature=45.0)
-    assert hot == pytest.approx(expected * (1 + 0.00393 * 25))
-
-
-def test_awg36_is_0127_mm():
-    assert AWG36.bare_diameter == pytest.approx(0.127e-3, rel=1e-12)
-
-
-def test_coil_inputs_are_validated():
-    with pytest.raises(InputError, match="turns"):
-        coil_resistance(0, 1e-3, 2e-3, 1e-4)
-    with pytest.raises(InputError, match="inner < outer"):
-        coil_resistance(10, 2e-3, 1e-3, 1e-4)
-    with pytest.raises(InputError, match="turns"):
-        winding_outer_radius(0, 7e-3, 7.95e-3, 0.152e-3)

@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -54,7 +53,7 @@ from msens.field.geometry import (
 )
 from msens.materials import MAGNET_GRADES
 from msens.study import SensorSpec, SetupSpec, Study
-from msens.tomlreader import Table
+from msens.tomlreader import Table, read_document
 
 SCHEMA = "msens.sweep/1"
 
@@ -163,14 +162,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
 
 def parse_sweep(text: str, *, source: str = "<memory>") -> SweepSpec:
     """Validate the TOML ``text`` of a sweep (see the module docstring)."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{source}: not valid TOML: {exc}") from None
-    root = Table(data, "", source)
-    schema = root.string("schema", required=True)
-    if schema != SCHEMA:
-        raise root.error("schema", f"must be {SCHEMA!r}, got {schema!r}")
+    root = read_document(text, source=source, schema=SCHEMA)
     name = root.string("name", required=True)
     sensor = root.integer("sensor", 0, low=0)
     axes: list[tuple[str, tuple[Any, ...]]] = []
@@ -178,13 +170,12 @@ def parse_sweep(text: str, *, source: str = "<memory>") -> SweepSpec:
         t = root.table(section)
         if t is None:
             continue
-        raw = dict(data[section])
-        for key in raw:
+        for key in t.keys():
             if key not in params:
                 raise t.error(key, f"is not a sweep parameter; allowed in [{section}]: "
                                    f"{', '.join(params)}")
         for key, (kind, low, high) in params.items():
-            if key in raw:
+            if t.has(key):
                 axes.append((f"{section}.{key}", _values(t, key, t.raw(key), kind, low, high)))
         t.finish()
     if not axes:

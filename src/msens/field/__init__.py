@@ -9,13 +9,12 @@ Core API (see the modules for details):
   :class:`FieldSolution`, :class:`FieldSolveError` (``solve`` itself is not re-exported
   here: it would shadow the submodule ``msens.field.solve``)
 - :mod:`.post`: :func:`flux_density`, :func:`field_strength`, :func:`flux_linkage`,
-  :func:`force_z`, :func:`energy`, :func:`coil_resistance`
+  :func:`force_z`, :func:`energy`
 - :mod:`.verify`: :func:`run_all`, :func:`format_table`
 """
 
 from msens.field.mesh import AxiMesh, read_gmsh, refined
 from msens.field.post import (
-    coil_resistance,
     energy,
     field_strength,
     flux_density,
@@ -41,7 +40,6 @@ __all__ = [
     "NonlinearSoft",
     "PermanentMagnet",
     "Winding",
-    "coil_resistance",
     "energy",
     "field_strength",
     "flux_density",

@@ -17,7 +17,6 @@ from numpy.typing import ArrayLike
 from scipy.sparse.linalg import spsolve
 
 from msens.errors import InputError, require
-from msens.field.coil import coil_resistance
 from msens.field.constitutive import energy_density, reluctivities, tangent
 from msens.field.forms import flux_density_qp, potential_qp
 from msens.field.mesh import AxiMesh
@@ -25,7 +24,7 @@ from msens.field.regions import Air, Winding
 from msens.field.solve import FieldSolution, solve
 from msens.units import MU0
 
-__all__ = ["coil_resistance", "eggshell", "energy", "field_strength", "flux_density",
+__all__ = ["eggshell", "energy", "field_strength", "flux_density",
            "flux_linkage", "force_z", "potential_energy"]
 
 TWO_PI = 2.0 * np.pi

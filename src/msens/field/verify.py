@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from msens.coil import winding_from_coil
 from msens.field import analytic
 from msens.field.bh import monotone_bh
-from msens.field.coil import AWG36, winding_outer_radius
 from msens.field.mesh import AxiMesh, refined
 from msens.field.post import energy, field_strength, flux_density, flux_linkage, force_z
 from msens.field.regions import Air, LinearMagnetic, NonlinearSoft, PermanentMagnet, Winding
@@ -190,8 +190,8 @@ PAPER_COIL = {"turns": 1100, "inner_radius": 7.95e-3, "length": 7e-3}
 
 def paper_coil_outer_radius() -> float:
     """Winding outer radius of the paper's coil with layer (square) packing, m (11.58 mm)."""
-    return winding_outer_radius(PAPER_COIL["turns"], PAPER_COIL["length"],
-                                PAPER_COIL["inner_radius"], AWG36.insulated_diameter)
+    return winding_from_coil(PAPER_COIL["turns"], PAPER_COIL["length"],
+                             PAPER_COIL["inner_radius"], "AWG36", "square").outer_radius
 
 
 def reference_inductance(r1: float, r2: float, length: float, turns: int) -> float:

@@ -4,13 +4,15 @@ The field package knows nothing of studies; this module maps a setup's MsS senso
 magnet tables) and the study's ``[field]`` options onto :class:`SensorGeometry`, the way
 :mod:`msens.assemble` maps a setup onto the chain. Dimensions a study leaves out take the
 field model's documented defaults (the paper's coil; an *equivalent* ring magnet with two
-pole pieces standing in for the undocumented bridge magnet).
+pole pieces standing in for the undocumented bridge magnet; 1018 steel unless ``[field]``
+gives a ``steel_bh`` table).
 """
 
 from __future__ import annotations
 
 import dataclasses
 
+from msens.coil import awg_diameter, heavy_build_diameter
 from msens.errors import InputError
 from msens.field.geometry import (
     WIRES,
@@ -20,6 +22,7 @@ from msens.field.geometry import (
     Coil,
     SensorGeometry,
     SensorUnit,
+    Wire,
 )
 from msens.materials import MAGNET_GRADES
 from msens.sensors import SensorKind
@@ -38,13 +41,20 @@ def _given(**kw: float | None) -> dict[str, float]:
     return {k: v for k, v in kw.items() if v is not None}
 
 
+def wire_for(name: str) -> Wire:
+    """Heavy-build enamelled wire of an AWG name (``"AWG36"``): the field model's table
+    where it has the gauge, else ASTM B258 bare and heavy-build diameters (msens.coil)."""
+    name = name.upper()
+    if name in WIRES:
+        return WIRES[name]
+    gauge = int(name.removeprefix("AWG"))
+    return Wire(f"AWG{gauge}", awg_diameter(gauge), heavy_build_diameter(gauge))
+
+
 def coil_geometry(spec: CoilSpec, particle: int) -> Coil:
     """The field model's coil for a study's coil table."""
-    if spec.wire.upper() not in WIRES:
-        raise InputError(f"coil at particle {particle}: wire {spec.wire!r} has no insulation "
-                         f"data for the field model; allowed: {', '.join(sorted(WIRES))}")
     return Coil(particle=particle, turns=spec.turns, length=spec.length_m,
-                inner_radius=spec.inner_radius_m, wire=WIRES[spec.wire.upper()],
+                inner_radius=spec.inner_radius_m, wire=wire_for(spec.wire),
                 axial_offset=spec.axial_offset_m,
                 **_given(packing_factor=spec.packing_factor))
 
@@ -95,7 +105,9 @@ def geometry_from_study(study: Study, setup: SetupSpec | None = None) -> SensorG
                                min_flat_radius=f.min_flat_radius_m,
                                contact_gap=f.contact_gap_m))
     air = AirBox(**_given(radius=f.air_radius_m, margin=f.air_margin_m))
-    return SensorGeometry(beads=beads, sensors=units, air=air)
+    # A study without [field] steel_bh keeps the geometry's default 1018 curve.
+    steel = {} if f.steel_bh is None else {"steel": f.steel_bh}
+    return SensorGeometry(beads=beads, sensors=units, air=air, **steel)
 
 
 def with_magnets(geometry: SensorGeometry, enabled: bool) -> SensorGeometry:

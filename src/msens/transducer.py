@@ -352,20 +352,33 @@ def _canonical(obj: object) -> object:
     if dataclasses.is_dataclass(obj):
         return {"__type__": type(obj).__name__,
                 **{f.name: _canonical(getattr(obj, f.name)) for f in dataclasses.fields(obj)}}
+    if isinstance(obj, np.ndarray):
+        return _canonical(obj.tolist())
     if isinstance(obj, tuple | list):
         return [_canonical(v) for v in obj]
     if isinstance(obj, float):
         return repr(obj)
+    if isinstance(obj, np.floating):
+        return repr(float(obj))
+    if isinstance(obj, np.integer):
+        return int(obj)
     return obj
 
 
 def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
               stress_force: float, law: JilesAthertonSablik, material: ElasticMaterial,
               reluctance: bool) -> str:
-    """Content hash (16 hex digits) of everything a transducer set depends on."""
+    """Content hash (16 hex digits) of everything a transducer set depends on.
+
+    The mesh key leaves out the steel's B–H curve (a material, not geometry); a curve other
+    than the default 1018 table enters here by its points, so default keys are unchanged.
+    """
     payload = {"version": TRANSDUCER_VERSION, "mesh": geometry_key(geometry, options),
                "stress_force": repr(float(stress_force)), "law": _canonical(law),
                "material": _canonical(material), "reluctance": bool(reluctance)}
+    if not geometry.default_steel:
+        payload["steel_bh"] = {"b": _canonical(geometry.steel.b),
+                               "h": _canonical(geometry.steel.h)}
     text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

@@ -37,7 +37,7 @@ from msens.design.reciprocity import (
     linkage_table,
     rect_integral,
 )
-from msens.design.sweep import Design, SweepSpec, design_unit, mss_setup
+from msens.design.sweep import Design, SweepSpec, design_unit
 from msens.field.geometry import SensorGeometry, SensorUnit
 from msens.field.regions import Winding
 from msens.field.sensor_model import (
@@ -46,6 +46,7 @@ from msens.field.sensor_model import (
     regions_for,
 )
 from msens.field.solve import FieldSolution, MagnetostaticProblem, incremental, solve
+from msens.fieldsetup import mss_setup
 from msens.study import Study
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm

@@ -40,19 +40,16 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from msens.coil import awg_diameter, heavy_build_diameter
 from msens.errors import InputError
 from msens.field.geometry import (
-    BeadChain,
     BiasMagnet,
-    Coil,
     SensorGeometry,
     SensorUnit,
     Tube,
-    Wire,
 )
+from msens.fieldsetup import geometry_from_study, mss_setup, wire_for
 from msens.materials import MAGNET_GRADES
-from msens.study import SensorSpec, SetupSpec, Study
+from msens.study import SensorSpec, Study
 from msens.tomlreader import Table, read_document
 
 SCHEMA = "msens.sweep/1"
@@ -282,14 +279,6 @@ def _recommend(t: Table | None) -> Recommend:
 
 # ----------------------------------------------------------------------------- geometry
 
-def mss_setup(study: Study) -> SetupSpec:
-    """The first setup of ``study`` with an MsS sensor (InputError if none)."""
-    for setup in study.setups:
-        if any(s.kind.value == "mss" for s in setup.sensors):
-            return setup
-    raise InputError(f"study {study.name!r} has no MsS sensor (kind = \"mss\") to design")
-
-
 def sweep_sensor(study: Study, spec: SweepSpec) -> SensorSpec:
     """The study's MsS sensor the sweep varies."""
     mss = [s for s in mss_setup(study).sensors if s.kind.value == "mss"]
@@ -302,44 +291,15 @@ def sweep_sensor(study: Study, spec: SweepSpec) -> SensorSpec:
                      f"{study.name!r} (MsS particles: {[s.particle for s in mss]})")
 
 
-def wire(name: str) -> Wire:
-    """Heavy-build enamelled wire of an AWG name, e.g. ``"AWG36"``."""
-    gauge = int(name.upper().removeprefix("AWG"))
-    return Wire(f"AWG{gauge}", awg_diameter(gauge), heavy_build_diameter(gauge))
-
-
-def _unit(sensor: SensorSpec) -> SensorUnit:
-    c = sensor.coil
-    coil = Coil(particle=sensor.particle, turns=c.turns, length=c.length_m,
-                inner_radius=c.inner_radius_m, wire=wire(c.wire), axial_offset=c.axial_offset_m)
-    m = sensor.magnet
-    if m is None or not m.enabled:
-        return SensorUnit(coil, None)
-    kw: dict[str, Any] = {"particle": sensor.particle, "axial_offset": m.axial_offset_m}
-    if m.grade is not None:
-        g = MAGNET_GRADES[m.grade]
-        kw.update(grade=m.grade, remanence=g.remanence, recoil_permeability=g.recoil_permeability)
-    else:
-        kw.update(grade="custom", remanence=m.remanence_t,
-                  recoil_permeability=m.recoil_permeability)
-    for attr in ("inner_radius", "outer_radius", "length", "pole_inner_radius",
-                 "pole_outer_radius", "pole_thickness"):
-        value = getattr(m, f"{attr}_m")
-        if value is not None:
-            kw[attr] = value
-    return SensorUnit(coil, BiasMagnet(**kw))
-
-
 def base_geometry(study: Study, bead_padding: int = 4) -> SensorGeometry:
-    """Field-model geometry of the study's MsS setup (all its MsS sensors), beads from
-    ``bead_padding`` above the top sensor to ``bead_padding`` below the bottom one."""
-    units = tuple(_unit(s) for s in mss_setup(study).sensors if s.kind.value == "mss")
-    parts = [u.coil.particle for u in units]
-    count = study.chain.n_particles
-    beads = BeadChain(first=max(2, min(parts) - bead_padding),
-                      last=min(count, max(parts) + bead_padding), count=count,
-                      diameter=study.chain.bead_diameter_m)
-    return SensorGeometry(beads=beads, tube=Tube(), sensors=units)
+    """Field-model geometry of the study's MsS setup (all its MsS sensors, the study's
+    ``[field]`` options and steel), beads from ``bead_padding`` above the top sensor to
+    ``bead_padding`` below the bottom one."""
+    full = geometry_from_study(study)
+    parts = [u.coil.particle for u in full.sensors]
+    beads = replace(full.beads, first=max(2, min(parts) - bead_padding),
+                    last=min(full.beads.count, max(parts) + bead_padding))
+    return replace(full, beads=beads)
 
 
 def design_unit(unit: SensorUnit, values: tuple[tuple[str, Any], ...], tube: Tube
@@ -351,7 +311,7 @@ def design_unit(unit: SensorUnit, values: tuple[tuple[str, Any], ...], tube: Tub
         section, name = key.split(".", 1)
         if section == "coil":
             if name == "wire":
-                coil_kw["wire"] = wire(v)
+                coil_kw["wire"] = wire_for(v)
             else:
                 coil_kw[name.removesuffix("_m")] = v
         elif name == "grade":
@@ -389,4 +349,4 @@ def validate_designs(base: SensorGeometry, particle: int, designs: list[Design],
 
 __all__ = ["COIL_PARAMETERS", "MAGNET_PARAMETERS", "SCHEMA", "Design", "Recommend",
            "SweepSpec", "base_geometry", "design_geometry", "design_unit", "load_sweep",
-           "mss_setup", "parse_sweep", "sweep_sensor", "validate_designs", "wire"]
+           "parse_sweep", "sweep_sensor", "validate_designs"]

@@ -16,6 +16,8 @@ import os
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
 from msens.field.build import MeshOptions, build_mesh
 from msens.field.geometry import SensorGeometry
 
@@ -24,14 +26,26 @@ BUILDER_VERSION = "sensor-mesh/3"
 
 
 def _canonical(obj: object) -> object:
-    """JSON-ready form of nested frozen dataclasses (floats by repr, exact)."""
+    """JSON-ready form of nested frozen dataclasses (floats by repr, exact).
+
+    Dataclass fields with ``metadata={"mesh": False}`` (materials, such as
+    :attr:`SensorGeometry.steel`) are left out: the mesh does not depend on them. numpy arrays
+    become nested lists.
+    """
     if dataclasses.is_dataclass(obj):
         return {"__type__": type(obj).__name__,
-                **{f.name: _canonical(getattr(obj, f.name)) for f in dataclasses.fields(obj)}}
+                **{f.name: _canonical(getattr(obj, f.name)) for f in dataclasses.fields(obj)
+                   if f.metadata.get("mesh", True)}}
+    if isinstance(obj, np.ndarray):
+        return _canonical(obj.tolist())
     if isinstance(obj, tuple | list):
         return [_canonical(v) for v in obj]
     if isinstance(obj, float):
         return repr(obj)
+    if isinstance(obj, np.floating):
+        return repr(float(obj))
+    if isinstance(obj, np.integer):
+        return int(obj)
     return obj
 
 

@@ -25,8 +25,10 @@ import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from msens.errors import InputError, require
-from msens.materials import BEAD_STEEL, MAGNET_GRADES
+from msens.materials import BEAD_STEEL, MAGNET_GRADES, STEEL_1018_BH, BHCurve
 from msens.units import G0
 
 #: Bead diameter of the paper, m (McMaster-Carr 96455K51, paper §2).
@@ -400,6 +402,11 @@ class Rect:
                 and min(self.z1, other.z1) - max(self.z0, other.z0) > tol)
 
 
+def same_bh(a: BHCurve, b: BHCurve) -> bool:
+    """True when two B–H curves have the same points (names and sources aside)."""
+    return a is b or (np.array_equal(a.b, b.b) and np.array_equal(a.h, b.h))
+
+
 def _default_sensors() -> tuple[SensorUnit, ...]:
     return tuple(SensorUnit(Coil(particle=p), BiasMagnet(particle=p)) for p in (13, 18))
 
@@ -411,12 +418,24 @@ class SensorGeometry:
     Validation (raises :class:`msens.errors.InputError`): parts may not overlap, beads must fit
     in the tube, coils and magnets must lie outside the tube, each coil must sit at a modelled
     particle, and the air box must enclose everything.
+
+    Attributes
+    ----------
+    beads : BeadChain
+    tube : Tube
+    sensors : tuple of SensorUnit
+    air : AirBox
+    steel : BHCurve
+        Normal magnetisation curve of the beads and pole pieces (default AISI 1018, FEMM
+        library). It is a material, not a dimension: the mesh does not depend on it
+        (:func:`msens.field.cache.geometry_key` leaves it out).
     """
 
     beads: BeadChain = field(default_factory=BeadChain)
     tube: Tube = field(default_factory=Tube)
     sensors: tuple[SensorUnit, ...] = field(default_factory=_default_sensors)
     air: AirBox = field(default_factory=AirBox)
+    steel: BHCurve = field(default=STEEL_1018_BH, metadata={"mesh": False})
 
     def __post_init__(self) -> None:
         b, t = self.beads, self.tube
@@ -452,6 +471,11 @@ class SensorGeometry:
         require(self.air.radius > 1.5 * r_max,
                 f"air box radius {self.air.radius} m must exceed 1.5 x the largest part "
                 f"radius {r_max} m")
+
+    @property
+    def default_steel(self) -> bool:
+        """True when :attr:`steel` tabulates the same points as the default 1018 curve."""
+        return same_bh(self.steel, STEEL_1018_BH)
 
     def coil_rect(self, unit: SensorUnit) -> Rect:
         """Winding cross-section of a sensor's coil."""

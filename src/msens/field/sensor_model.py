@@ -1,8 +1,9 @@
 """The MsS field model: bias field, bead fields, contact forces, coil R and L.
 
 Pipeline: :class:`~msens.field.geometry.SensorGeometry` -> cached gmsh mesh -> regions (beads
-and pole pieces nonlinear 1018 steel, magnets on their recoil line, windings, air) -> nonlinear
-bias solve (:func:`msens.field.solve.solve`) -> post-processing:
+and pole pieces nonlinear steel on the geometry's B–H curve, default 1018; magnets on their
+recoil line, windings, air) -> nonlinear bias solve (:func:`msens.field.solve.solve`) ->
+post-processing:
 
 - B at each bead centre (on the axis, B_z = 2 dA/dr there);
 - the static compression each contact carries from the magnetic forces: minus the axial force
@@ -37,7 +38,7 @@ from msens.field.geometry import Coil, SensorGeometry
 from msens.field.mesh import AxiMesh, from_arrays, read_gmsh
 from msens.field.regions import Air, NonlinearSoft, PermanentMagnet, Region, Winding
 from msens.field.solve import FieldSolution, MagnetostaticProblem, incremental, solve
-from msens.materials import STEEL_1018_BH
+from msens.materials import BHCurve
 from msens.units import MU0, RHO_COPPER, TWO_PI
 
 #: Statement carried into every output that uses the magnet.
@@ -59,11 +60,12 @@ def regions_for(geometry: SensorGeometry, names: Sequence[str], *, magnets: bool
     magnets : bool
         False switches the remanence off and makes magnets air (air-core runs).
     steel : bool
-        False makes beads and pole pieces air (air-core runs).
+        False makes beads and pole pieces air (air-core runs); True gives them the
+        nonlinear curve ``geometry.steel``.
     """
     magnet = {f"magnet_{u.magnet.particle}": u.magnet for u in geometry.sensors
               if u.magnet is not None}
-    soft = NonlinearSoft(STEEL_1018_BH)
+    soft = NonlinearSoft(geometry.steel)
     out: dict[str, Region] = {}
     for name in names:
         if name.startswith(("bead_", "pole_")):
@@ -200,8 +202,21 @@ def group_force(sol: FieldSolution, bodies: Sequence[str],
     return force
 
 
+def _flat_curve(sol: FieldSolution, boundary: str) -> BHCurve:
+    """B–H curve of the bead above the contact flat ``contact_<k>_<k+1>`` (bead ``k``)."""
+    upper = f"bead_{boundary.split('_')[1]}"
+    region = sol.problem.regions.get(upper)
+    if not isinstance(region, NonlinearSoft):
+        raise ValueError(f"contact flat {boundary!r}: the bead above it, {upper!r}, is not a "
+                         "nonlinear steel region")
+    return region.curve
+
+
 def _flat_force(sol: FieldSolution, boundary: str) -> float:
-    """-∫ (B_z² - (μ0 H_r)²)/(2 μ0) dA over a contact flat (force on the body above it)."""
+    """-∫ (B_z² - (μ0 H_r)²)/(2 μ0) dA over a contact flat (force on the body above it).
+
+    H_r is evaluated with the upper bead's B–H curve (H_r is continuous across the flat).
+    """
     axi = sol.problem.mesh
     facets = axi.boundaries[boundary]
     fb = skfem.FacetBasis(axi.mesh, sol.basis.elem, facets=facets,
@@ -211,7 +226,7 @@ def _flat_force(sol: FieldSolution, boundary: str) -> float:
     da = a.grad
     br = -da[1]
     bz = da[0] + np.asarray(a) / r
-    law = monotone_bh(STEEL_1018_BH)
+    law = monotone_bh(_flat_curve(sol, boundary))
     bmag = np.sqrt(br**2 + bz**2)
     mu0_hr = MU0 * law.reluctivity(bmag) * br
     integrand = (bz**2 - mu0_hr**2) / (2 * MU0) * TWO_PI * r
@@ -484,7 +499,7 @@ def run_field_model(geometry: SensorGeometry, out_dir: str | Path | None = None,
 __all__ = [
     "MAGNET_NOTE", "BeadField", "CoilResult", "ContactForce", "FieldReport", "axis_profile",
     "bead_fields", "bias_problem", "coil_current_density", "coil_resistance", "coil_results",
-    "contact_forces", "flux_density_at", "flux_linkage", "geometry_from_mapping",
+    "contact_forces", "flux_density_at", "flux_linkage",
     "group_force", "load_mesh",
     "regions_for", "run_field_model", "shell_function", "total_energy", "virtual_work_force",
 ]

@@ -20,7 +20,6 @@ Sign conventions
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import json
 import math
@@ -36,6 +35,7 @@ import numpy as np
 
 from msens.errors import InputError, require
 from msens.field.build import MeshOptions
+from msens.field.cache import canonical as _canonical
 from msens.field.cache import committed_mesh_dirs, default_mesh_dir, geometry_key
 from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import (
@@ -347,23 +347,6 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
 
 
 # ----------------------------------------------------------------------------- cache
-
-def _canonical(obj: object) -> object:
-    if dataclasses.is_dataclass(obj):
-        return {"__type__": type(obj).__name__,
-                **{f.name: _canonical(getattr(obj, f.name)) for f in dataclasses.fields(obj)}}
-    if isinstance(obj, np.ndarray):
-        return _canonical(obj.tolist())
-    if isinstance(obj, tuple | list):
-        return [_canonical(v) for v in obj]
-    if isinstance(obj, float):
-        return repr(obj)
-    if isinstance(obj, np.floating):
-        return repr(float(obj))
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
-
 
 def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
               stress_force: float, law: JilesAthertonSablik, material: ElasticMaterial,

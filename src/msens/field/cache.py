@@ -25,7 +25,7 @@ from msens.field.geometry import SensorGeometry
 BUILDER_VERSION = "sensor-mesh/3"
 
 
-def _canonical(obj: object) -> object:
+def canonical(obj: object) -> object:
     """JSON-ready form of nested frozen dataclasses (floats by repr, exact).
 
     Dataclass fields with ``metadata={"mesh": False}`` (materials, such as
@@ -34,12 +34,12 @@ def _canonical(obj: object) -> object:
     """
     if dataclasses.is_dataclass(obj):
         return {"__type__": type(obj).__name__,
-                **{f.name: _canonical(getattr(obj, f.name)) for f in dataclasses.fields(obj)
+                **{f.name: canonical(getattr(obj, f.name)) for f in dataclasses.fields(obj)
                    if f.metadata.get("mesh", True)}}
     if isinstance(obj, np.ndarray):
-        return _canonical(obj.tolist())
+        return canonical(obj.tolist())
     if isinstance(obj, tuple | list):
-        return [_canonical(v) for v in obj]
+        return [canonical(v) for v in obj]
     if isinstance(obj, float):
         return repr(obj)
     if isinstance(obj, np.floating):
@@ -51,8 +51,8 @@ def _canonical(obj: object) -> object:
 
 def geometry_key(geometry: SensorGeometry, options: MeshOptions | None = None) -> str:
     """Content hash (16 hex digits) of a geometry and its mesh options."""
-    payload = {"builder": BUILDER_VERSION, "geometry": _canonical(geometry),
-               "options": _canonical(options or MeshOptions())}
+    payload = {"builder": BUILDER_VERSION, "geometry": canonical(geometry),
+               "options": canonical(options or MeshOptions())}
     text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -137,7 +137,7 @@ def cached_mesh(geometry: SensorGeometry, options: MeshOptions | None = None,
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-    meta = {"key": key, "builder": BUILDER_VERSION, "geometry": _canonical(geometry),
-            "options": _canonical(options)}
+    meta = {"key": key, "builder": BUILDER_VERSION, "geometry": canonical(geometry),
+            "options": canonical(options)}
     _atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=1, sort_keys=True))
     return path

@@ -96,7 +96,7 @@ def synthesize(setup: SetupResult, effects: RigEffects = RigEffects(), *,
     rng = np.random.default_rng(effects.seed)
     t = setup.history.t
     dt = float(t[1] - t[0])
-    n_pre = int(round(effects.pretrigger_s / dt))
+    n_pre = round(effects.pretrigger_s / dt)
     delay = float(rng.uniform(*effects.trigger_delay_s))
     # the record spans the model's time span, starting n_pre samples before the trigger
     n_rec = t.size - int(np.ceil((delay + effects.jitter_s) / dt)) + n_pre - 1

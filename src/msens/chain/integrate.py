@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
@@ -23,9 +24,11 @@ from msens.chain.equilibrium import static_contact_forces, static_equilibrium
 from msens.chain.model import Chain, DampingLaw
 
 #: Default steps per Hertz collision time of the stiffest, lightest contact at the impact
-#: speed. With 10, the paper chain (t_c = 15.6 us, dt = 1.56 us) has a peak-force error of
-#: ~1e-7 against a converged reference (benchmarks/chain_speed.py); 12 gives 4e-8, 8 gives 4e-7.
-STEPS_PER_CONTACT_TIME = 10
+#: speed: the fewest that keep the paper chain's peak-force error below 1e-6 with a margin of
+#: two. Measured against a converged reference (t_c = 15.6 us, 1 ms, per-contact peaks):
+#: LINEAR 1.4e-7 / 4.5e-7 / 6.5e-7 / 1.8e-6 at 10 / 8 / 7 / 6 steps; LINEAR_LOADING
+#: 2.4e-8 / 8.2e-8 / 1.6e-7 / 1.5e-7; HERTZ_KUWABARA_KONO 1.2e-7 / 1.9e-7 / 6.3e-7 at 10 / 8 / 7.
+STEPS_PER_CONTACT_TIME = 8
 #: Steps per period of the highest linearised (precompressed) chain frequency.
 STEPS_PER_LINEAR_PERIOD = 10
 #: Hertz collision time of two bodies in terms of the prefactor A: energy conservation
@@ -39,6 +42,8 @@ HERTZ_TIME_CONSTANT = 2.0 * 1.25**0.4 * 0.4 * float(beta(0.4, 0.5))
 #: cannot follow; the error of the first step shrinks like 2^{-2.5 K} (2^{-1.5 K}).
 GRADE_LEVELS = {DampingLaw.LINEAR: 4, DampingLaw.LINEAR_LOADING: 4,
                 DampingLaw.HERTZ_KUWABARA_KONO: 10}
+#: Runs per work item of :func:`simulate_batch`'s parallel loop.
+BATCH_CHUNK = 4
 #: Approach rates below this fraction of the impact speed do not switch the loading-only
 #: dashpot (noise-level rates of the resting part of the chain would otherwise chatter).
 RATE_TOL = 1e-12
@@ -179,8 +184,11 @@ def simulate(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
     dt = stable_step(chain, striker_velocity) if dt is None else _check_dt(dt)
     u0, v0 = _initial_state(chain, striker_velocity)
     n = chain.n_particles
-    shape = (t.size, n) if states else (1, n)
-    out = [np.empty((t.size, n)), np.empty((t.size, n)), np.empty(shape), np.empty(shape)]
+    # One block for all outputs: separate large arrays each page-fault afresh (glibc mmaps
+    # them), which cost as much as the integration itself for 10^4 samples.
+    block = np.empty((4 if states else 2, t.size, n))
+    dummy = np.empty((1, n))
+    out = [block[0], block[1], block[2] if states else dummy, block[3] if states else dummy]
     steps = kernel.integrate(u0, v0, chain.mass, chain.stiffness, chain.damping,
                              _LAW_CODE[chain.damping_law], chain.load(), t, dt,
                              GRADE_LEVELS[chain.damping_law], _rate_tol(striker_velocity), states,
@@ -234,9 +242,13 @@ def simulate_batch(chains: Sequence[Chain], striker_velocities: ArrayLike, t_out
     load = np.array([c.load() for c in chains])
     force = np.empty((runs, t.size, n))
     approach = np.empty((runs, t.size, n))
-    steps = kernel.integrate_batch(u0, v0, stack["mass"], stack["stiffness"], stack["damping"],
-                                   _LAW_CODE[law], load, t, steps_dt, GRADE_LEVELS[law],
-                                   np.array([_rate_tol(vi) for vi in v]), force, approach)
+    # Small chunks, handed out dynamically: run times differ (contact events) and a thread
+    # may share its core with other work; numba's default splits the runs evenly up front.
+    with numba.parallel_chunksize(BATCH_CHUNK):
+        steps = kernel.integrate_batch(u0, v0, stack["mass"], stack["stiffness"],
+                                       stack["damping"], _LAW_CODE[law], load, t, steps_dt,
+                                       GRADE_LEVELS[law], np.array([_rate_tol(vi) for vi in v]),
+                                       force, approach)
     return ChainResult(t=t, force=force, approach=approach, dt=steps_dt, steps=steps)
 
 

@@ -36,6 +36,16 @@ All functions are compiled with ``cache=True`` (first call ~5 s, then loaded fro
 Output at arbitrary times uses the quintic Hermite interpolant of u through (u, v, a) at the
 two ends of the step that contains the time (error O(h^6) in u, O(h^5) in v), and the
 contact forces are evaluated from the interpolated state with the step's contact states.
+When only forces and approaches are wanted, the interpolant is applied directly to the gaps
+and approach rates (it is linear in the end data), fused with the force law.
+
+Performance layout (measured on the paper chain, n = 30: ~1.5 us per step including events,
+~60 ns per output sample): the particle arrays are padded with zeros to a multiple of 8
+entries past the wall, so the wall contact needs no special case and the force, stage and
+sampling loops vectorise without scalar remainders; the contact states enter as the products
+closed * A and dashpot * gamma, updated only when a contact toggles. A 6th-order 7-stage
+Runge-Kutta formula (Butcher 1964) was tried in place of DOP853: it needs t_c/16 steps for
+the 1e-6 peak-force target against t_c/8 here, so no net gain.
 """
 
 from __future__ import annotations
@@ -47,6 +57,11 @@ from scipy.integrate._ivp import dop853_coefficients as _dop
 N_STAGES = _dop.N_STAGES
 RK_A = np.ascontiguousarray(_dop.A[:N_STAGES, :N_STAGES], dtype=np.float64)
 RK_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
+# Second-order form (u' = v): nodes c = A 1, and the coefficients of the stage and final
+# displacements in the stage accelerations, A A and b A.
+RK_C = RK_A.sum(axis=1)
+RK_AA = RK_A @ RK_A
+RK_BA = RK_B @ RK_A
 #: Order of the Runge-Kutta formula.
 RK_ORDER = 8
 
@@ -59,83 +74,98 @@ _THETA_NOW = 1e-9
 # Newton refinement of a crossing stops when |gap| < _GAP_TOL * h * |d(gap)/dt|.
 _GAP_TOL = 1e-7
 _NEWTON_MAX = 4
+# State arrays are padded to a multiple of this length (8 doubles = one AVX-512 register).
+_PAD = 8
 
 
-_FM = {"contract"}  # allow fused multiply-add only; no reassociation
+# Fused multiply-add, and no NaN/Inf/signed-zero special cases so that max() and sqrt
+# vectorise; no reassociation (sums keep their order, results are reproducible).
+_FM = {"contract", "nnan", "ninf", "nsz"}
 
 
 @nb.njit(cache=True, fastmath=_FM)
-def contact_forces(u, v, A, gam, law, closed, damp, out):
-    """Contact forces (N) into ``out`` for displacements ``u`` and velocities ``v``.
+def contact_forces(u, v, cA, cg, law, Fp):
+    """Contact forces (N) on the padded layout, shifted by one into ``Fp``.
 
-    ``closed`` (elastic part on) and ``damp`` (dashpot on) are 1.0 or 0.0 per contact
-    (floats so that the loop vectorises without branches).
+    Padded layout: ``p`` >= n is n rounded up to a multiple of ``_PAD`` and ``u``, ``v``
+    have shape (p + 1,) with zeros from entry n on (entry n is the wall), so contact k is
+    always between entries k and k + 1 and every loop runs over p entries, vectorised
+    without a scalar remainder. ``cA`` = closed * A and ``cg`` = dashpot-on * gamma, shape
+    (p,), zero past n, carry the contact states (so the loop has no branches). ``Fp``
+    (p + 1,) receives ``Fp[0] = 0`` and ``Fp[k + 1]`` = force of contact k.
     """
-    n = u.shape[0]
+    n = cA.shape[0]
+    Fp[0] = 0.0
     if law == LAW_HKK:
-        for k in range(n - 1):
+        for k in range(n):
             dp = max(u[k] - u[k + 1], 0.0)
-            out[k] = np.sqrt(dp) * (closed[k] * A[k] * dp + damp[k] * gam[k] * (v[k] - v[k + 1]))
-        dp = max(u[n - 1], 0.0)
-        out[n - 1] = np.sqrt(dp) * (closed[n - 1] * A[n - 1] * dp
-                                    + damp[n - 1] * gam[n - 1] * v[n - 1])
+            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (v[k] - v[k + 1]))
     else:
-        for k in range(n - 1):
+        for k in range(n):
             dp = max(u[k] - u[k + 1], 0.0)
-            out[k] = closed[k] * A[k] * dp * np.sqrt(dp) + damp[k] * gam[k] * (v[k] - v[k + 1])
-        dp = max(u[n - 1], 0.0)
-        out[n - 1] = (closed[n - 1] * A[n - 1] * dp * np.sqrt(dp)
-                      + damp[n - 1] * gam[n - 1] * v[n - 1])
+            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (v[k] - v[k + 1])
 
 
 @nb.njit(cache=True, fastmath=_FM)
-def accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, out):
-    """Accelerations (m/s^2) into ``out``; ``F`` receives the contact forces."""
-    n = u.shape[0]
-    contact_forces(u, v, A, gam, law, closed, damp, F)
-    out[0] = (load[0] - F[0]) * inv_m[0]
-    for i in range(1, n):
-        out[i] = (load[i] + F[i - 1] - F[i]) * inv_m[i]
+def accelerations(u, v, cA, cg, law, load, inv_m, Fp, out):
+    """Accelerations (m/s^2) into ``out`` (p + 1,) on the padded layout (zero past n).
+
+    ``load`` and ``inv_m`` are padded with zeros to (p,).
+
+    ``Fp`` receives the shifted contact forces (:func:`contact_forces`), which makes the
+    particle balance one branch-free loop.
+    """
+    n = cA.shape[0]
+    contact_forces(u, v, cA, cg, law, Fp)
+    for i in range(n):
+        out[i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+    for i in range(n, u.shape[0]):
+        out[i] = 0.0
 
 
 @nb.njit(cache=True, fastmath=_FM)
-def rk_step(u, v, a0, h, A, gam, law, closed, damp, load, inv_m, ku, kv, tu, F, u1, v1):
+def rk_step(u, v, a0, h, cA, cg, law, load, inv_m, kv, tu, tv, Fp, u1, v1):
     """One DOP853 step of size ``h`` from (u, v) with a0 = acceleration at (u, v).
 
-    ``ku[s]`` holds the stage velocities (the derivative of u), ``kv[s]`` the stage
-    accelerations; ``tu`` is scratch for the stage displacements (``tv`` is unused).
+    Padded layout (see :func:`contact_forces`). ``kv[s]`` receives the stage accelerations;
+    ``tu``, ``tv`` are scratch for the stage state. Since u' = v, the stage displacements
+    are u + c_s h v + h^2 sum_l (A A)_sl kv_l and the stage velocities v + h sum_l A_sl kv_l
+    (the same Runge-Kutta method as on the first-order system): one pass over the stage
+    accelerations serves both sums and no stage velocities are stored.
     """
-    n = u.shape[0]
-    for i in range(n):
-        ku[0, i] = v[i]
+    m = cA.shape[0]  # p: entry p of every array stays 0
+    hh = h * h
+    for i in range(m):
         kv[0, i] = a0[i]
     for s in range(1, N_STAGES):
-        for i in range(n):
-            tu[i] = u[i]
-            ku[s, i] = v[i]
+        ch = h * RK_C[s]
+        for i in range(m):
+            tu[i] = u[i] + ch * v[i]
+            tv[i] = v[i]
         for j in range(s):
-            c = h * RK_A[s, j]
-            if c != 0.0:
-                for i in range(n):
-                    tu[i] += c * ku[j, i]
-                    ku[s, i] += c * kv[j, i]
-        accelerations(tu, ku[s], A, gam, law, closed, damp, load, inv_m, F, kv[s])
-    for i in range(n):
-        u1[i] = u[i]
+            cu = hh * RK_AA[s, j]
+            cv = h * RK_A[s, j]
+            if cu == 0.0 and cv == 0.0:
+                continue
+            for i in range(m):
+                tu[i] += cu * kv[j, i]
+                tv[i] += cv * kv[j, i]
+        accelerations(tu, tv, cA, cg, law, load, inv_m, Fp, kv[s])
+    for i in range(m):
+        u1[i] = u[i] + h * v[i]
         v1[i] = v[i]
     for s in range(N_STAGES):
-        b = h * RK_B[s]
-        if b != 0.0:
-            for i in range(n):
-                u1[i] += b * ku[s, i]
-                v1[i] += b * kv[s, i]
+        bu = hh * RK_BA[s]
+        bv = h * RK_B[s]
+        for i in range(m):
+            u1[i] += bu * kv[s, i]
+            v1[i] += bv * kv[s, i]
 
 
 @nb.njit(cache=True, inline="always")
-def _gap(x, k, n):
-    if k < n - 1:
-        return x[k] - x[k + 1]
-    return x[k]
+def _gap(x, k):
+    # Padded layout: x[n] is the wall, so the wall contact needs no special case.
+    return x[k] - x[k + 1]
 
 
 @nb.njit(cache=True)
@@ -181,52 +211,94 @@ def _hermite3(p0, d0, p1, d1, t):
             + (-2 * t3 + 3 * t2) * p1 + (t3 - t2) * d1)
 
 
-@nb.njit(cache=True)
-def _sample(t_out, j, t0, h, tiny, u0, v0, a0, u1, v1, a1, A, gam, law, closed, damp,
-            store_uv,
-            out_F, out_d, out_u, out_v, us, vs, F):
-    """Write the quintic-Hermite samples with t0 < t_out[j] <= t0 + h; return the next j."""
-    n = u0.shape[0]
+@nb.njit(cache=True, fastmath=_FM)
+def _sample(t_out, j, t0, h, tiny, u0, v0, a0, u1, v1, a1, cA, cg, law, store_uv,
+            out_F, out_d, out_u, out_v, us, vs, Fp, gs):
+    """Write the quintic-Hermite samples with t0 < t_out[j] <= t0 + h; return the next j.
+
+    Padded layout (see :func:`contact_forces`); ``us``, ``vs``, ``Fp`` (m,) and ``gs``
+    (6, n) are scratch. Without ``store_uv`` the interpolant is evaluated directly on the
+    contact gaps and rates (the Hermite form is linear in the end data), fused with the
+    force law: one pass per sample, no particle arrays.
+    """
+    n = out_F.shape[1]
+    m = cA.shape[0]
     nt = t_out.shape[0]
+    hh = h * h
+    inv_h = 1.0 / h
+    if j >= nt or t_out[j] > t0 + h:
+        return j
+    gap_space = not store_uv and h >= tiny
+    if gap_space:
+        # Gap-space end data: gap, its change over the step, rates, relative accelerations.
+        for k in range(n):
+            gs[0, k] = u0[k] - u0[k + 1]
+            gs[1, k] = (u1[k] - u1[k + 1]) - gs[0, k]
+            gs[2, k] = v0[k] - v0[k + 1]
+            gs[3, k] = a0[k] - a0[k + 1]
+            gs[4, k] = v1[k] - v1[k + 1]
+            gs[5, k] = a1[k] - a1[k + 1]
+    hkk = law == LAW_HKK
     while j < nt and t_out[j] <= t0 + h:
-        s = (t_out[j] - t0) / h
+        tau = t_out[j] - t0
+        # Quintic Hermite basis on [0, 1] (h00 + h01 = 1) and its derivative (e00 = -e01),
+        # with the step factors folded in once per sample rather than per particle.
+        s = tau * inv_h
         s2 = s * s
         s3 = s2 * s
         s4 = s3 * s
         s5 = s4 * s
-        # Quintic Hermite basis on [0, 1] and its derivative.
-        h10 = s - 6 * s3 + 8 * s4 - 3 * s5
-        h20 = 0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5
         h01 = 10 * s3 - 15 * s4 + 6 * s5
-        h11 = -4 * s3 + 7 * s4 - 3 * s5
-        h21 = 0.5 * s3 - s4 + 0.5 * s5
+        c_v0 = h * (s - 6 * s3 + 8 * s4 - 3 * s5)
+        c_a0 = hh * (0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5)
+        c_v1 = h * (-4 * s3 + 7 * s4 - 3 * s5)
+        c_a1 = hh * (0.5 * s3 - s4 + 0.5 * s5)
+        d_du = (30 * s2 - 60 * s3 + 30 * s4) * inv_h
         e10 = 1 - 18 * s2 + 32 * s3 - 15 * s4
-        e20 = s - 4.5 * s2 + 6 * s3 - 2.5 * s4
-        e01 = 30 * s2 - 60 * s3 + 30 * s4
+        d_a0 = h * (s - 4.5 * s2 + 6 * s3 - 2.5 * s4)
         e11 = -12 * s2 + 28 * s3 - 15 * s4
-        e21 = 1.5 * s2 - 4 * s3 + 2.5 * s4
-        hh = h * h
+        d_a1 = h * (1.5 * s2 - 4 * s3 + 2.5 * s4)
+        if gap_space:
+            # One fused pass per sample (the law test is hoisted out of the loop).
+            if hkk:
+                for k in range(n):
+                    g = (gs[0, k] + h01 * gs[1, k] + c_v0 * gs[2, k] + c_a0 * gs[3, k]
+                         + c_v1 * gs[4, k] + c_a1 * gs[5, k])
+                    r = (d_du * gs[1, k] + e10 * gs[2, k] + d_a0 * gs[3, k] + e11 * gs[4, k]
+                         + d_a1 * gs[5, k])
+                    dp = max(g, 0.0)
+                    out_d[j, k] = dp
+                    out_F[j, k] = np.sqrt(dp) * (cA[k] * dp + cg[k] * r)
+            else:
+                for k in range(n):
+                    g = (gs[0, k] + h01 * gs[1, k] + c_v0 * gs[2, k] + c_a0 * gs[3, k]
+                         + c_v1 * gs[4, k] + c_a1 * gs[5, k])
+                    r = (d_du * gs[1, k] + e10 * gs[2, k] + d_a0 * gs[3, k] + e11 * gs[4, k]
+                         + d_a1 * gs[5, k])
+                    dp = max(g, 0.0)
+                    out_d[j, k] = dp
+                    out_F[j, k] = cA[k] * dp * np.sqrt(dp) + cg[k] * r
+            j += 1
+            continue
         if h < tiny:
             # A sliver step (cut at a contact event): Taylor from the left end, error O(h^3);
             # the Hermite form would divide rounding noise of u1 - u0 by h.
-            tau = t_out[j] - t0
-            for i in range(n):
+            for i in range(m):
                 us[i] = u0[i] + tau * (v0[i] + 0.5 * tau * a0[i])
                 vs[i] = v0[i] + tau * a0[i]
         else:
-            for i in range(n):
-                # h00 + h01 = 1 and e00 = -e01: written with u1 - u0 to limit cancellation.
+            for i in range(m):
+                # Written with u1 - u0 to limit cancellation.
                 du = u1[i] - u0[i]
-                us[i] = (u0[i] + h01 * du + h10 * h * v0[i] + h20 * hh * a0[i]
-                         + h11 * h * v1[i] + h21 * hh * a1[i])
-                vs[i] = (e01 * du / h + e10 * v0[i] + e20 * h * a0[i]
-                         + e11 * v1[i] + e21 * h * a1[i])
-        contact_forces(us, vs, A, gam, law, closed, damp, F)
+                us[i] = (u0[i] + h01 * du + c_v0 * v0[i] + c_a0 * a0[i]
+                         + c_v1 * v1[i] + c_a1 * a1[i])
+                vs[i] = d_du * du + e10 * v0[i] + d_a0 * a0[i] + e11 * v1[i] + d_a1 * a1[i]
+        contact_forces(us, vs, cA, cg, law, Fp)
         for k in range(n):
-            out_F[j, k] = F[k]
-            g = _gap(us, k, n)
-            out_d[j, k] = g if g > 0.0 else 0.0
-            if store_uv:
+            out_F[j, k] = Fp[k + 1]
+            out_d[j, k] = max(us[k] - us[k + 1], 0.0)
+        if store_uv:
+            for k in range(n):
                 out_u[j, k] = us[k]
                 out_v[j, k] = vs[k]
         j += 1
@@ -234,16 +306,23 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, u1, v1, a1, A, gam, law, closed, 
 
 
 @nb.njit(cache=True)
-def _toggle(kind, k, closed, damp):
-    """Switch contact k's elastic state (kind 0) or its dashpot (kind 1); True if it closed."""
+def _toggle(kind, k, closed, damp, A, gam, cA, cg):
+    """Switch contact k's elastic state (kind 0) or its dashpot (kind 1); True if it closed.
+
+    Updates the coefficient arrays ``cA = closed * A`` and ``cg = damp * gam`` of contact k.
+    """
+    closed_now = False
     if kind == 1:
         damp[k] = 1.0 - damp[k]
-        return False
-    closed[k] = 1.0 - closed[k]
-    # A contact closes while loading (dashpot on for every law) and opens while unloading
-    # (the loading-only dashpot is then already off).
-    damp[k] = closed[k]
-    return closed[k] > 0.0
+    else:
+        closed[k] = 1.0 - closed[k]
+        # A contact closes while loading (dashpot on for every law) and opens while unloading
+        # (the loading-only dashpot is then already off).
+        damp[k] = closed[k]
+        closed_now = closed[k] > 0.0
+    cA[k] = closed[k] * A[k]
+    cg[k] = damp[k] * gam[k]
+    return closed_now
 
 
 @nb.njit(cache=True)
@@ -259,35 +338,47 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     number of steps taken (event cuts and Newton re-steps included).
     """
     n = u_init.shape[0]
-    inv_m = 1.0 / mass
-    u = u_init.copy()
-    v = v_init.copy()
-    u1 = np.empty(n)
-    v1 = np.empty(n)
-    a0 = np.empty(n)
-    a1 = np.empty(n)
-    ku = np.empty((N_STAGES, n))
-    kv = np.empty((N_STAGES, n))
-    tu = np.empty(n)
-    F = np.empty(n)
-    us = np.empty(n)
-    vs = np.empty(n)
+    p = -(-n // _PAD) * _PAD  # padded layout (see contact_forces): entries n.. stay 0
+    m = p + 1
+    inv_m = np.zeros(p)
+    inv_m[:n] = 1.0 / mass
+    load_p = np.zeros(p)
+    load_p[:n] = load
+    u = np.zeros(m)
+    v = np.zeros(m)
+    u[:n] = u_init
+    v[:n] = v_init
+    u1 = np.zeros(m)
+    v1 = np.zeros(m)
+    a0 = np.zeros(m)
+    a1 = np.zeros(m)
+    kv = np.zeros((N_STAGES, m))
+    tu = np.zeros(m)
+    tv = np.zeros(m)
+    F = np.zeros(m)
+    us = np.zeros(m)
+    gs = np.zeros((6, n))
+    vs = np.zeros(m)
     closed = np.zeros(n)
     damp = np.zeros(n)
+    cA = np.zeros(p)
+    cg = np.zeros(p)
     loading = law == LAW_LINEAR_LOADING
     for k in range(n):
-        g = _gap(u, k, n)
-        r = _gap(v, k, n)
+        g = _gap(u, k)
+        r = _gap(v, k)
         closed[k] = 1.0 if (g > 0.0 or (g == 0.0 and r > 0.0)) else 0.0
         damp[k] = closed[k] * (1.0 if (not loading or r > 0.0) else 0.0)
+        cA[k] = closed[k] * A[k]
+        cg[k] = damp[k] * gam[k]
     nt = t_out.shape[0]
     t_end = t_out[nt - 1]
-    accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, a0)
+    accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
     j = 0
     # Samples at the initial time.
     while j < nt and t_out[j] <= 0.0:
-        j = _sample(t_out, j, -1.0, 1.0, 0.0, u, v, a0, u, v, a0, A, gam, law, closed, damp,
-                    store_uv, out_F, out_d, out_u, out_v, us, vs, F)
+        j = _sample(t_out, j, -1.0, 1.0, 0.0, u, v, a0, u, v, a0, cA, cg, law,
+                    store_uv, out_F, out_d, out_u, out_v, us, vs, F, gs)
     t = 0.0
     steps = 0
     toggles_here = 0
@@ -295,7 +386,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     # Steps left in a geometric grading after a contact closed (sizes dt 2^-min(grade, K)).
     grade = 0
     for k in range(n):
-        if closed[k] > 0.0 and _gap(u, k, n) == 0.0:
+        if closed[k] > 0.0 and _gap(u, k) == 0.0:
             grade = grade_levels + 1
     while j < nt:
         h = dt
@@ -305,9 +396,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             # Approach a closed contact that is about to open in halving steps.
             for k in range(n):
                 if closed[k] > 0.0:
-                    r = _gap(v, k, n)
+                    r = _gap(v, k)
                     if r < 0.0:
-                        tau = -_gap(u, k, n) / r
+                        tau = -_gap(u, k) / r
                         if 2.0 * h_floor < tau < 2.0 * h:
                             h = 0.5 * tau
         if t + h > t_end - 0.01 * dt:
@@ -315,29 +406,29 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             h = t_end - t
         if h <= 0.0:
             h = dt  # only rounding left: finish the last samples with one more step
-        rk_step(u, v, a0, h, A, gam, law, closed, damp, load, inv_m, ku, kv, tu, F, u1, v1)
+        rk_step(u, v, a0, h, cA, cg, law, load_p, inv_m, kv, tu, tv, F, u1, v1)
         steps += 1
         if loading:
-            accelerations(u1, v1, A, gam, law, closed, damp, load, inv_m, F, a1)
+            accelerations(u1, v1, cA, cg, law, load_p, inv_m, F, a1)
         # Find the earliest violated contact state: kind 0 = gap (open/closed), kind 1 = the
         # sign of the approach rate (dashpot on/off, loading law only).
         kmin = -1
         kind = 0
         th_min = 2.0
         for k in range(n):
-            g1 = _gap(u1, k, n)
+            g1 = _gap(u1, k)
             if (closed[k] > 0.0 and g1 < 0.0) or (closed[k] == 0.0 and g1 > 0.0):
-                th = _first_violation(_gap(u, k, n), h * _gap(v, k, n), g1,
-                                      h * _gap(v1, k, n), closed[k] > 0.0)
+                th = _first_violation(_gap(u, k), h * _gap(v, k), g1,
+                                      h * _gap(v1, k), closed[k] > 0.0)
                 if th < th_min:
                     th_min = th
                     kmin = k
                     kind = 0
             elif loading and closed[k] > 0.0:
-                r1 = _gap(v1, k, n)
+                r1 = _gap(v1, k)
                 if (damp[k] > 0.0 and r1 < -rate_tol) or (damp[k] == 0.0 and r1 > rate_tol):
-                    th = _first_violation(_gap(v, k, n), h * _gap(a0, k, n), r1,
-                                          h * _gap(a1, k, n), damp[k] > 0.0)
+                    th = _first_violation(_gap(v, k), h * _gap(a0, k), r1,
+                                          h * _gap(a1, k), damp[k] > 0.0)
                     if th < th_min:
                         th_min = th
                         kmin = k
@@ -346,28 +437,27 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             if th_min <= _THETA_NOW and toggles_here < 4 * n:
                 # The contact changes state now: toggle and redo the step.
                 toggles_here += 1
-                if _toggle(kind, kmin, closed, damp):
+                if _toggle(kind, kmin, closed, damp, A, gam, cA, cg):
                     grade = grade_levels + 1
-                accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, a0)
+                accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
                 continue
             if th_min > _THETA_NOW:
                 # Cut the step back to the crossing; refine by Newton on the event function.
                 hc = th_min * h
                 for it in range(_NEWTON_MAX + 1):
-                    rk_step(u, v, a0, hc, A, gam, law, closed, damp, load, inv_m, ku, kv, tu,
-                            F, u1, v1)
+                    rk_step(u, v, a0, hc, cA, cg, law, load_p, inv_m, kv, tu, tv, F, u1, v1)
                     steps += 1
                     if it == _NEWTON_MAX or kind == 1:
                         # A rate switch is only a kink of the force: the cubic estimate of its
                         # time (error O(h^4)) is ample, no Newton refinement.
                         break
                     if kind == 0:
-                        g = _gap(u1, kmin, n)
-                        r = _gap(v1, kmin, n)
+                        g = _gap(u1, kmin)
+                        r = _gap(v1, kmin)
                     else:
-                        accelerations(u1, v1, A, gam, law, closed, damp, load, inv_m, F, a1)
-                        g = _gap(v1, kmin, n)
-                        r = _gap(a1, kmin, n)
+                        accelerations(u1, v1, cA, cg, law, load_p, inv_m, F, a1)
+                        g = _gap(v1, kmin)
+                        r = _gap(a1, kmin)
                     if abs(g) <= _GAP_TOL * h * abs(r) or r == 0.0:
                         break
                     hn = hc - g / r
@@ -376,9 +466,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                     hc = hn
                 # (u1, v1) is the state at t + hc.
                 h = hc
-        accelerations(u1, v1, A, gam, law, closed, damp, load, inv_m, F, a1)
-        j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, u1, v1, a1, A, gam, law, closed, damp,
-                    store_uv, out_F, out_d, out_u, out_v, us, vs, F)
+        accelerations(u1, v1, cA, cg, law, load_p, inv_m, F, a1)
+        j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, u1, v1, a1, cA, cg, law,
+                    store_uv, out_F, out_d, out_u, out_v, us, vs, F, gs)
         t += h
         u, u1 = u1, u
         v, v1 = v1, v
@@ -386,9 +476,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         if grade > 0:
             grade -= 1
         if kmin >= 0 and th_min > _THETA_NOW:
-            if _toggle(kind, kmin, closed, damp):
+            if _toggle(kind, kmin, closed, damp, A, gam, cA, cg):
                 grade = grade_levels + 1
-            accelerations(u, v, A, gam, law, closed, damp, load, inv_m, F, a0)
+            accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
         else:
             a0, a1 = a1, a0
     return steps

@@ -90,13 +90,3 @@ def build_chain(study: Study, setup: SetupSpec, *, gamma_contact: float | None =
         force = force + np.asarray(static_force, dtype=float)
     return Chain(mass=mass, stiffness=stiffness, damping=damping, static_force=force,
                  gravity=c.gravity_m_per_s2, damping_law=c.damping, length=length)
-
-
-def sensor_positions(chain: Chain) -> np.ndarray:
-    """Axial position of each particle's centre at rest, m, from the striker's centre.
-
-    Shape (n,). Used for distances between sensors (wave speed).
-    """
-    length = chain.length
-    centres = np.concatenate([[0.0], np.cumsum(0.5 * (length[:-1] + length[1:]))])
-    return centres

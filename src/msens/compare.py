@@ -32,9 +32,13 @@ def smooth(record: np.ndarray, dt: float) -> np.ndarray:
     return lowpass(record, dt, min(FEATURE_CUTOFF_HZ, 0.4 / dt), order=4)
 
 
-def model_features(sensor: SensorResult, t: np.ndarray) -> PulseFeatures:
-    """Features of the model record after the same smoothing as the measurement."""
-    return pulse_features(smooth(_model_force(sensor), float(t[1] - t[0])), t)
+def smoothed_features(force: np.ndarray, t: np.ndarray) -> PulseFeatures:
+    """Features of records (..., nt) after the smoothing measurements get (:func:`smooth`)."""
+    dt = float(t[1] - t[0])
+    force = np.asarray(force, dtype=float)
+    flat = force.reshape(-1, force.shape[-1])
+    smoothed = np.array([smooth(f, dt) for f in flat]).reshape(force.shape)
+    return pulse_features(smoothed, t)
 
 
 @dataclass(frozen=True)
@@ -139,6 +143,8 @@ def _sensor(setup: SetupResult, channel: Channel) -> SensorResult:
 def shot_records(setup: SetupResult, waveform: Waveform) -> list[list[ShotRecord]]:
     """Aligned and calibrated records, per shot and channel."""
     t = setup.history.t
+    model_peak = {id(s): float(smoothed_features(_model_force(s), t).f_incident)
+                  for s in setup.sensors}
     out = []
     for channels in _shots(waveform):
         delay = align_shot(setup, waveform, channels)
@@ -149,10 +155,9 @@ def shot_records(setup: SetupResult, waveform: Waveform) -> list[list[ShotRecord
                             left=np.nan, right=np.nan)
             filled = smooth(np.where(np.isfinite(raw), raw, 0.0), float(t[1] - t[0]))
             f_raw = pulse_features(filled, t)
-            model_peak = float(model_features(sensor, t).f_incident)
             if not np.isfinite(f_raw.f_incident) or f_raw.f_incident == 0:
                 raise InputError(f"channel {ch.name}: no incident pulse found")
-            gain = model_peak / float(f_raw.f_incident)
+            gain = model_peak[id(sensor)] / float(f_raw.f_incident)
             feats = pulse_features(gain * filled, t)
             records.append(ShotRecord(channel=ch, t=t, raw=raw, gain=gain, delay_s=delay,
                                       features=feats))
@@ -160,13 +165,13 @@ def shot_records(setup: SetupResult, waveform: Waveform) -> list[list[ShotRecord
     return out
 
 
-def _metrics(record: ShotRecord, sensor: SensorResult) -> dict[str, float]:
+def _metrics(record: ShotRecord, sensor: SensorResult, m: PulseFeatures) -> dict[str, float]:
     model = _model_force(sensor)
     ok = np.isfinite(record.raw)
     diff = record.force[ok] - model[ok]
     scale = float(np.max(np.abs(model[ok])))
     corr = float(np.corrcoef(record.force[ok], model[ok])[0, 1])
-    f, m = record.features, model_features(sensor, record.t)
+    f = record.features
     return {
         "gain": record.gain,
         "tof_us": float(f.tof) * 1e6,
@@ -205,12 +210,12 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
     shots = shot_records(setup, waveform)
     channels = []
     for sensor in setup.sensors:
+        m = smoothed_features(_model_force(sensor), setup.history.t)
         per_shot = [
-            _metrics(r, sensor) for recs in shots for r in recs
+            _metrics(r, sensor, m) for recs in shots for r in recs
             if r.channel.kind == sensor.sensor.kind.value
             and r.channel.particle == sensor.sensor.particle
         ]
-        m = model_features(sensor, setup.history.t)
         channels.append({
             "channel": f"{sensor.sensor.kind.value}@{sensor.sensor.particle}",
             "kind": sensor.sensor.kind.value,

@@ -10,8 +10,6 @@ gives a ``steel_bh`` table).
 
 from __future__ import annotations
 
-import dataclasses
-
 from msens.coil import awg_diameter, heavy_build_diameter
 from msens.errors import InputError
 from msens.field.geometry import (
@@ -108,10 +106,3 @@ def geometry_from_study(study: Study, setup: SetupSpec | None = None) -> SensorG
     # A study without [field] steel_bh keeps the geometry's default 1018 curve.
     steel = {} if f.steel_bh is None else {"steel": f.steel_bh}
     return SensorGeometry(beads=beads, sensors=units, air=air, **steel)
-
-
-def with_magnets(geometry: SensorGeometry, enabled: bool) -> SensorGeometry:
-    """The same geometry with every bias magnet kept or removed."""
-    units = tuple(dataclasses.replace(u, magnet=u.magnet if enabled else None)
-                  for u in geometry.sensors)
-    return dataclasses.replace(geometry, sensors=units)

@@ -15,9 +15,8 @@ import numpy as np
 from msens.assemble import build_chain
 from msens.chain.equilibrium import static_contact_forces
 from msens.chain.integrate import ChainResult, simulate_batch
-from msens.compare import smooth
+from msens.compare import smoothed_features as model_features_of
 from msens.diagnose.effects.base import Context, ModelState
-from msens.features import PulseFeatures, pulse_features
 from msens.pipeline import SensorResult, SetupResult
 from msens.sensors import SensorKind, observe, time_derivative
 
@@ -126,14 +125,6 @@ def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> Setup
                        history=ChainResult(t=t, force=res, approach=np.zeros_like(res)),
                        static_force=static_contact_forces(state.chain), sensors=tuple(sensors),
                        speed_incident=float("nan"), speed_reflected=float("nan"))
-
-
-def model_features_of(force: np.ndarray, t: np.ndarray) -> PulseFeatures:
-    """Features of force records (nt,) or (sensors, nt) after the comparison's smoothing."""
-    dt = float(t[1] - t[0])
-    force = np.asarray(force, dtype=float)
-    smoothed = np.array([smooth(f, dt) for f in force.reshape(-1, force.shape[-1])])
-    return pulse_features(smoothed.reshape(force.shape), t)
 
 
 def positions(particles: Sequence[int]) -> list[str]:

@@ -5,7 +5,8 @@ gmsh mesh refined uniformly; NGSolve gets the very same triangles (netgen mesh b
 arrays) and the same weak form ν [∂zu ∂zv + (∂ru + u/r)(∂rv + v/r)] r with A = 0 on the axis
 and outer boundary, order 2 (same dof count). Both run single-threaded (no NGSolve
 TaskManager; numpy/SuperLU single-threaded). Timed: discretisation set-up + assembly + sparse
-direct solve (msens: SuperLU, MMD(AᵀA) ordering; NGSolve: its sparse Cholesky).
+direct solve (msens: numba sparsity pattern, SuperLU with MMD ordering of Aᵀ + A;
+NGSolve: its sparse Cholesky).
 Prints JSON: times (s, best of ``REPEATS``), dofs, ratio = t_msens / t_ngsolve, and the
 relative difference of the two solutions' B_z at the core centre.
 

@@ -57,11 +57,11 @@ def _smooth_run(dt, n=10, F0=5.0, T=2e-4):
     v0 = np.zeros(n)
     v0[0] = 0.05
     t = np.array([0.0, T])
-    out = [np.empty((2, n)) for _ in range(4)]
+    out = [np.empty((2, kernel.padded_length(n))) for _ in range(4)]
     kernel.integrate(u0, v0, c.mass, c.stiffness, c.damping, kernel.LAW_LINEAR, load, t, dt,
                      5, 1e-14, True, *out)
-    assert out[1].min() > 0.0  # no contact opened
-    return out[3][-1]
+    assert out[1][:, :n].min() > 0.0  # no contact opened
+    return out[3][-1, :n]
 
 
 def test_convergence_order_is_eight_on_a_smooth_problem():

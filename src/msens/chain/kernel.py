@@ -420,14 +420,17 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         if grade > 0:
             h = dt / 2.0 ** min(grade, grade_levels)
         else:
-            # Approach a closed contact that is about to open in halving steps.
+            # Approach a closed contact that is about to open in halving steps: half the
+            # least time to opening (gap / opening rate) above 2 h_floor, if below 2 dt.
+            # Branch-free, so that the scan over contacts vectorises.
+            tau_min = 2.0 * dt
             for k in range(n):
-                if closed[k] > 0.0:
-                    r = _gap(v, k)
-                    if r < 0.0:
-                        tau = -_gap(u, k) / r
-                        if 2.0 * h_floor < tau < 2.0 * h:
-                            h = 0.5 * tau
+                r = v[k] - v[k + 1]
+                tau = (u[k] - u[k + 1]) / max(-r, 1e-300)
+                tau = tau if (closed[k] > 0.0 and r < 0.0 and tau > 2.0 * h_floor) else 2.0 * dt
+                tau_min = min(tau_min, tau)
+            if tau_min < 2.0 * dt:
+                h = 0.5 * tau_min
         # Loading law: end the step where a dashpot is predicted to switch (the zero of the
         # approach rate, extrapolated from the previous step's cubic), instead of stepping
         # past it and redoing the step to the crossing.
@@ -468,7 +471,15 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         kmin = -1
         kind = 0
         th_min = 2.0
+        # Any violated state at all? (A branch-free pass; the detailed scan below is rare.)
+        bad = 0.0
         for k in range(n):
+            g1 = u1[k] - u1[k + 1]
+            r1 = v1[k] - v1[k + 1]
+            x = closed[k] * (g1 < 0.0) + (1.0 - closed[k]) * (g1 > 0.0)
+            y = damp[k] * (r1 < -rate_tol) + (closed[k] - damp[k]) * (r1 > rate_tol)
+            bad = max(bad, x + loading * y)
+        for k in range(n if bad > 0.0 else 0):
             g1 = _gap(u1, k)
             if (closed[k] > 0.0 and g1 < 0.0) or (closed[k] == 0.0 and g1 > 0.0):
                 th = _first_violation(_gap(u, k), h * _gap(v, k), g1,

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from msens.chain import paper_chain, static_contact_forces, static_equilibrium, uniform_chain
+from msens.chain.equilibrium import contact_forces_from_loads, equilibrium_from_loads
 
 
 def test_contact_forces_are_cumulative_weights():
@@ -38,3 +39,20 @@ def test_striker_force_balance_is_zero_and_uncompressed_chain_touches():
     c = uniform_chain(4, 1e-3, 5e9, 7e9, gravity=0.0)
     np.testing.assert_array_equal(static_equilibrium(c), np.zeros(4))
     assert static_contact_forces(c)[0] == 0.0
+
+
+def test_batched_equilibrium_equals_per_chain():
+    """The batched initial state of simulate_batch is the per-chain equilibrium, bit for bit."""
+    chains = [paper_chain(static_force=np.linspace(0.0, s, 30)) for s in (0.0, 0.5, 2.0)]
+    load = np.array([c.load() for c in chains])
+    stiffness = np.array([c.stiffness for c in chains])
+    u = equilibrium_from_loads(load, stiffness)
+    for c, ui in zip(chains, u, strict=True):
+        np.testing.assert_array_equal(ui, static_equilibrium(c))
+
+
+def test_batched_tension_names_the_run():
+    load = np.ones((3, 5))
+    load[2, 3] = -10.0
+    with pytest.raises(ValueError, match=r"contact c_4 .* in run \(2,\) in tension"):
+        contact_forces_from_loads(load)

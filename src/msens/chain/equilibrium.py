@@ -32,18 +32,30 @@ def static_contact_forces(chain: Chain) -> np.ndarray:
     ValueError
         If the loads would put a contact in tension (the chain would come apart).
     """
-    load = chain.load()
-    force = np.zeros(chain.n_particles)
-    force[1:] = np.cumsum(load[1:])
-    scale = np.cumsum(np.abs(load[1:]))
+    return contact_forces_from_loads(chain.load())
+
+
+def contact_forces_from_loads(load: np.ndarray) -> np.ndarray:
+    """:func:`static_contact_forces` from the particle loads (N), shape (..., n).
+
+    Leading axes are independent chains (batches of runs).
+    """
+    force = np.zeros(load.shape)
+    force[..., 1:] = np.cumsum(load[..., 1:], axis=-1)
+    scale = np.cumsum(np.abs(load[..., 1:]), axis=-1)
     # Forces at rounding level of the loads above them count as zero, not as tension.
-    tension = force[1:] < -1e-12 * np.maximum(scale, 1e-300)
+    tension = force[..., 1:] < -1e-12 * np.maximum(scale, 1e-300)
     if np.any(tension):
-        k = int(np.flatnonzero(tension)[0]) + 1
-        what = "the wall" if k == chain.n_particles - 1 else f"particle {k + 2}"
+        idx = np.argwhere(tension)[0]
+        k = int(idx[-1]) + 1
+        n = load.shape[-1]
+        what = "the wall" if k == n - 1 else f"particle {k + 2}"
+        pos = (*(int(i) for i in idx[:-1]), k)
+        run = f" in run {pos[:-1]}" if load.ndim > 1 else ""
         raise ValueError(
-            f"static loads put contact c_{k + 1} (particle {k + 1} on {what}) in tension "
-            f"({force[k]:.6g} N): the chain cannot be in static equilibrium")
+            f"static loads put contact c_{k + 1} (particle {k + 1} on {what}){run} in tension "
+            f"({force[pos]:.6g} N): the chain cannot be in static "
+            "equilibrium")
     return np.maximum(force, 0.0)
 
 
@@ -60,7 +72,13 @@ def static_equilibrium(chain: Chain) -> np.ndarray:
         u0 with u0[n-1] = delta_wall, u0[k] = u0[k+1] + delta_k, and u0[0] = u0[1]
         (striker just touching).
     """
-    delta = (static_contact_forces(chain) / chain.stiffness) ** (2.0 / 3.0)
-    delta[0] = 0.0
+    return equilibrium_from_loads(chain.load(), chain.stiffness)
+
+
+def equilibrium_from_loads(load: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
+    """:func:`static_equilibrium` from loads (N) and Hertz prefactors (N/m^1.5), shape
+    (..., n); leading axes are independent chains."""
+    delta = (contact_forces_from_loads(load) / stiffness) ** (2.0 / 3.0)
+    delta[..., 0] = 0.0
     # u_k = sum_{j >= k} delta_j, summed from the wall up.
-    return np.cumsum(delta[::-1])[::-1]
+    return np.cumsum(delta[..., ::-1], axis=-1)[..., ::-1]

@@ -20,7 +20,11 @@ from scipy.integrate import solve_ivp
 from scipy.special import beta
 
 from msens.chain import kernel
-from msens.chain.equilibrium import static_contact_forces, static_equilibrium
+from msens.chain.equilibrium import (
+    equilibrium_from_loads,
+    static_contact_forces,
+    static_equilibrium,
+)
 from msens.chain.model import Chain, DampingLaw
 
 #: Default steps per Hertz collision time of the stiffest, lightest contact at the impact
@@ -237,12 +241,13 @@ def simulate_batch(chains: Sequence[Chain], striker_velocities: ArrayLike, t_out
         steps_dt = np.broadcast_to(np.asarray(dt, dtype=float), (runs,)).copy()
         for d in steps_dt:
             _check_dt(d)
-    init = [_initial_state(c, vi) for c, vi in zip(chains, v, strict=True)]
-    u0 = np.array([i[0] for i in init])
-    v0 = np.array([i[1] for i in init])
     stack = {name: np.array([getattr(c, name) for c in chains])
              for name in ("mass", "stiffness", "damping")}
     load = np.array([c.load() for c in chains])
+    # Initial states of all runs at once (see _initial_state).
+    u0 = np.ascontiguousarray(equilibrium_from_loads(load, stack["stiffness"]))
+    v0 = np.zeros((runs, n))
+    v0[:, 0] = v
     block = np.empty((2, runs, t.size, kernel.padded_length(n)))  # see simulate
     force, approach = block[0], block[1]
     # Small chunks, handed out dynamically: run times differ (contact events) and a thread

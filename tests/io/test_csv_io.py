@@ -99,3 +99,36 @@ def test_round_trip_is_exact_for_awkward_floats(tmp_path: Path) -> None:
     assert back == w
     assert np.array_equal(np.signbit(back.data), np.signbit(w.data))
     assert format_csv(back) == path.read_text()
+
+
+def _scope_text(times: np.ndarray, fmt: str = "{:.5e}") -> str:
+    """An oscilloscope-style export: times printed with 6 significant digits."""
+    rows = [f"{fmt.format(float(t))},{np.sin(1e4 * t):.6f}" for t in times]
+    return "time_s,mss@13\n" + "\n".join(rows) + "\n"
+
+
+def test_scope_times_with_six_digits_are_regularised() -> None:
+    """A 10 MHz record from -0.1 ms printed as %.5e deviates from its grid by up to 5e-3 dt
+    (over TIME_RTOL): accepted, and the least-squares grid recovers the true times to
+    < 1e-4 dt (the rounding errors average out)."""
+    dt = 1e-7
+    exact = -1e-4 + dt * np.arange(20000)
+    w = parse_csv(_scope_text(exact), "scope.csv")
+    assert np.max(np.abs(w.time - exact)) < 1e-4 * dt
+    assert np.diff(w.time).std() < 1e-9 * dt
+
+
+def test_scope_times_still_catch_a_missing_sample() -> None:
+    dt = 1e-7
+    times = np.delete(-1e-4 + dt * np.arange(2000), 700)
+    with pytest.raises(InputError, match=r"scope\.csv:\d+: time_s is not uniformly sampled"):
+        parse_csv(_scope_text(times), "scope.csv")
+
+
+def test_full_precision_jitter_is_still_rejected() -> None:
+    """With repr-printed times there is no rounding to allow for: 1 % jitter is rejected."""
+    dt = 1e-7
+    times = -1e-4 + dt * np.arange(2000)
+    times[1000] += 0.01 * dt
+    with pytest.raises(InputError, match="not uniformly sampled"):
+        parse_csv(_scope_text(times, "{!r}"), "jitter.csv")

@@ -16,7 +16,12 @@ Rules the reader enforces, each failure an :class:`~msens.errors.InputError` nam
   :class:`~msens.io.waveform.Channel`), no duplicates;
 - every data line has as many comma-separated cells as the header, each a decimal number
   (NaN and infinity rejected); blank lines are skipped;
-- the time column passes :func:`~msens.io.waveform.check_time`.
+- the time column passes :func:`~msens.io.waveform.check_time`, with the rounding of the
+  printed times allowed for: an oscilloscope export with, say, 6 significant digits of a
+  10 MHz record is accepted, and its time axis is replaced by the least-squares uniform grid
+  (:func:`~msens.io.waveform.uniform_axis`) when the printed values deviate from a uniform grid
+  by more than :data:`~msens.io.waveform.TIME_RTOL` dt. Files with full-precision times (as
+  the writer makes them) keep their times exactly.
 
 Text is UTF-8 (a byte-order mark is allowed); line ends may be LF or CRLF. The writer
 prints floats with ``repr`` (shortest text that reads back to the same float64), so a
@@ -26,6 +31,7 @@ write-read round trip is exact.
 from __future__ import annotations
 
 import os
+from decimal import Decimal
 
 import numpy as np
 
@@ -33,6 +39,7 @@ from msens.errors import InputError
 from msens.io._files import atomic_write_bytes, read_bytes
 from msens.io.waveform import (
     TIME_NAME,
+    TIME_RTOL,
     VERSION,
     VERSION_KEY,
     Channel,
@@ -41,6 +48,7 @@ from msens.io.waveform import (
     check_metadata_item,
     check_time,
     check_values,
+    uniform_axis,
 )
 
 
@@ -86,11 +94,14 @@ def parse_csv(text: str, source: str) -> Waveform:
         return f"{source}:{line_numbers[i]}"
 
     table = np.array(rows, dtype=np.float64)
-    check_time(table[:, 0], source, locate)
+    time = table[:, 0]
+    check_time(time, source, locate, resolution=_printed_resolution(lines, line_numbers))
+    if _grid_deviation(time) > TIME_RTOL:
+        time = uniform_axis(time)  # printed with too few digits: the rounding is undone
     for j, ch in enumerate(channels):
         check_values(table[:, j + 1], ch.name, source, locate)
     try:
-        return Waveform(table[:, 0], table[:, 1:], channels, metadata)
+        return Waveform(time, table[:, 1:], channels, metadata)
     except InputError as exc:  # pragma: no cover - the checks above come first
         raise InputError(f"{source}: {exc}") from None
 
@@ -188,6 +199,28 @@ def _parse_rows(
     if not rows:
         raise InputError(f"{source}: empty file: the header is followed by no data lines")
     return rows, line_numbers
+
+
+def _printed_resolution(lines: list[str], line_numbers: list[int]) -> float:
+    """Rounding of a fixed-format time column, s; 0 for any other.
+
+    Instruments print times in a fixed format (e.g. ``-1.00000e-04``: the same number of
+    significant digits in every nonzero value, trailing zeros kept); then each value is
+    known to half a unit of its last digit, and the largest such half unit is returned.
+    Shortest-repr text (msens's own files) has varying digit counts and is exact: 0.
+    """
+    cells = [Decimal(lines[i - 1].split(",", 1)[0].strip()).as_tuple() for i in line_numbers]
+    # inf/nan (non-int exponents) are rejected later; zeros carry no digit count.
+    finite = [c for c in cells if isinstance(c.exponent, int) and any(c.digits)]
+    if len(finite) < 3 or len({len(c.digits) for c in finite}) != 1:
+        return 0.0
+    return 0.5 * 10.0 ** max(int(c.exponent) for c in finite)
+
+
+def _grid_deviation(time: np.ndarray) -> float:
+    """Largest deviation of ``time`` from the grid through its end points, in steps."""
+    dt = (time[-1] - time[0]) / (time.size - 1)
+    return float(np.max(np.abs(time - (time[0] + dt * np.arange(time.size)))) / dt)
 
 
 def _number(cell: str) -> float:

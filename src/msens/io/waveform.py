@@ -31,9 +31,11 @@ TIME_NAME = "time_s"
 
 #: Largest allowed deviation of a time stamp from the uniform grid, as a fraction of dt.
 #: Float64 files written by msens deviate by ~1e-10; a missing or doubled sample deviates
-#: by ~0.5. The limit rejects irregular sampling while accepting instrument files that print
-#: time with about log10(n_samples) + 4 significant digits.
+#: by ~0.5. The limit rejects irregular sampling; text files whose times are printed with few
+#: digits get the printed resolution on top (see ``check_time``'s ``resolution``).
 TIME_RTOL = 1e-3
+#: Most that the rounding of printed times may add to the allowed deviation, in steps.
+PRINTED_RTOL_MAX = 0.1
 
 _CHANNEL_RE = re.compile(r"(bead|rod|mss)@([1-9][0-9]*)(?:#([1-9][0-9]*))?")
 #: Format-version key written by the CSV writer and consumed by the reader; reserved.
@@ -115,7 +117,10 @@ class Channel:
 
 
 def check_time(
-    time: np.ndarray, where: str, locate: Callable[[int], str] = _default_locate
+    time: np.ndarray,
+    where: str,
+    locate: Callable[[int], str] = _default_locate,
+    resolution: float = 0.0,
 ) -> None:
     """Check a time axis: >= 2 finite samples, strictly increasing, uniform.
 
@@ -127,6 +132,12 @@ def check_time(
         Name of the source (file or object) for messages.
     locate : callable
         Maps a sample index to a location text (e.g. ``"data.csv:14"``).
+    resolution : float
+        Rounding of the times as stored, s (half a unit of the last printed digit for text
+        files; 0 for binary). A uniform grid printed with few digits deviates from itself by
+        up to this much at each sample and at both end points, so ``2 * resolution`` is
+        allowed on top of ``TIME_RTOL * dt``, but at most :data:`PRINTED_RTOL_MAX` dt (a
+        missing sample, 0.5 dt, is always caught).
 
     Raises
     ------
@@ -155,12 +166,26 @@ def check_time(
     # Deviation from the grid through the end points; exact for uniform float64 times.
     deviation = np.abs(time - (time[0] + dt * np.arange(n))) / dt
     worst = int(np.argmax(deviation))
-    if deviation[worst] > TIME_RTOL:
+    allowed = TIME_RTOL + min(2.0 * resolution / dt, PRINTED_RTOL_MAX)
+    if deviation[worst] > allowed:
+        printed = (f" ({TIME_RTOL:g} dt + twice the printed resolution {resolution:.3g} s)"
+                   if resolution > 0.0 else "")
         raise InputError(
             f"{locate(worst)}: {TIME_NAME} is not uniformly sampled: sample deviates from the "
             f"uniform grid (dt = {dt:.6g} s) by {deviation[worst]:.3g} dt, allowed "
-            f"{TIME_RTOL:g} dt; resample to a uniform grid"
+            f"{allowed:.3g} dt{printed}; resample to a uniform grid"
         )
+
+
+def uniform_axis(time: np.ndarray) -> np.ndarray:
+    """The uniform grid t0 + k dt closest (least squares) to ``time`` (s), shape (nt,).
+
+    For time columns printed with fewer digits than the sampling needs: the rounding errors
+    of the individual samples average out in t0 and dt.
+    """
+    k = np.arange(time.size, dtype=np.float64)
+    dt, t0 = np.polyfit(k, time, 1)
+    return t0 + dt * k
 
 
 def check_values(

@@ -161,14 +161,25 @@ def _first_violation(g0, r0, g1, r1, closed):
             hi = th
             lo = (j - 1) / m
             break
+    # Newton on the cubic inside the bracket, falling back to bisection when a Newton step
+    # leaves it; the bracket keeps p(lo) <= 0 < p(hi), and hi is returned.
+    th = 0.5 * (lo + hi)
     for _ in range(60):
         if hi - lo < 1e-13:
             break
-        mid = 0.5 * (lo + hi)
-        if _hermite3(p0, d0, p1, d1, mid) > 0.0:
-            hi = mid
+        p = _hermite3(p0, d0, p1, d1, th)
+        if p > 0.0:
+            hi = th
         else:
-            lo = mid
+            lo = th
+        t2 = th * th
+        dp = ((6.0 * t2 - 6.0 * th) * (p0 - p1) + (3.0 * t2 - 4.0 * th + 1.0) * d0
+              + (3.0 * t2 - 2.0 * th) * d1)
+        step = p / dp if dp != 0.0 else 0.0
+        nxt = th - step
+        if abs(step) < 1e-14 and p > 0.0:
+            break
+        th = nxt if lo < nxt < hi else 0.5 * (lo + hi)
     return hi
 
 
@@ -438,7 +449,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         if loading and h_prev > 0.0:
             h_max = h * (1.0 + _PRED_STRETCH)
             for k in range(n):
-                if closed[k] > 0.0 and fresh[k] > 0.0:
+                if closed[k] > 0.0 and fresh[k] > 0.0 and gam[k] > 0.0:
                     r = _gap(v, k)
                     q = _gap(a0, k)
                     # Candidates: |rate| above the noise floor, closing in on zero within
@@ -478,7 +489,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             r1 = v1[k] - v1[k + 1]
             x = closed[k] * (g1 < 0.0) + (1.0 - closed[k]) * (g1 > 0.0)
             y = damp[k] * (r1 < -rate_tol) + (closed[k] - damp[k]) * (r1 > rate_tol)
-            bad = max(bad, x + loading * y)
+            bad = max(bad, x + (loading and gam[k] > 0.0) * y)
         for k in range(n if bad > 0.0 else 0):
             g1 = _gap(u1, k)
             if (closed[k] > 0.0 and g1 < 0.0) or (closed[k] == 0.0 and g1 > 0.0):
@@ -488,13 +499,20 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                     th_min = th
                     kmin = k
                     kind = 0
-            elif loading and closed[k] > 0.0:
+            elif loading and closed[k] > 0.0 and gam[k] > 0.0:
+                # (a contact without dashpot has no dashpot switches to track)
                 r1 = _gap(v1, k)
                 if (damp[k] > 0.0 and r1 < -rate_tol) or (damp[k] == 0.0 and r1 > rate_tol):
+                    if k == k_pred and _hermite3(
+                            (1.0 - 2.0 * damp[k]) * _gap(v, k),
+                            (1.0 - 2.0 * damp[k]) * h * _gap(a0, k),
+                            (1.0 - 2.0 * damp[k]) * r1, (1.0 - 2.0 * damp[k]) * h * _gap(a1, k),
+                            1.0 - _PRED_TOL) <= 0.0:
+                        # The predicted switch: the rate's sign is still the allowed one at
+                        # 1 - _PRED_TOL, so it changes at the step's end. Accepted below.
+                        continue
                     th = _first_violation(_gap(v, k), h * _gap(a0, k), r1,
                                           h * _gap(a1, k), damp[k] > 0.0)
-                    if k == k_pred and th >= 1.0 - _PRED_TOL:
-                        continue  # the predicted switch, at the step's end: accepted below
                     if th < th_min:
                         th_min = th
                         kmin = k

@@ -259,24 +259,17 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, u1, v1, a1, cA, cg, law, store_uv
             cs[10, k] = 5.0 * c5 * inv_h
         while j < nt and t_out[j] <= t0 + h:
             x = (t_out[j] - t0) * inv_h
-            # The law test is hoisted out of the contact loop.
-            if hkk:
-                for k in range(m):
-                    g = cs[0, k] + x * (cs[1, k] + x * (cs[2, k] + x * (
-                        cs[3, k] + x * (cs[4, k] + x * cs[5, k]))))
-                    r = cs[6, k] + x * (cs[7, k] + x * (cs[8, k] + x * (
-                        cs[9, k] + x * cs[10, k])))
-                    dp = max(g, 0.0)
-                    out_d[j, k] = dp
+            for k in range(m):
+                g = cs[0, k] + x * (cs[1, k] + x * (cs[2, k] + x * (
+                    cs[3, k] + x * (cs[4, k] + x * cs[5, k]))))
+                r = cs[6, k] + x * (cs[7, k] + x * (cs[8, k] + x * (
+                    cs[9, k] + x * cs[10, k])))
+                dp = max(g, 0.0)
+                out_d[j, k] = dp
+                # (the loop-invariant law test is hoisted by the compiler: loop unswitching)
+                if hkk:
                     out_F[j, k] = np.sqrt(dp) * (cA[k] * dp + cg[k] * r)
-            else:
-                for k in range(m):
-                    g = cs[0, k] + x * (cs[1, k] + x * (cs[2, k] + x * (
-                        cs[3, k] + x * (cs[4, k] + x * cs[5, k]))))
-                    r = cs[6, k] + x * (cs[7, k] + x * (cs[8, k] + x * (
-                        cs[9, k] + x * cs[10, k])))
-                    dp = max(g, 0.0)
-                    out_d[j, k] = dp
+                else:
                     out_F[j, k] = cA[k] * dp * np.sqrt(dp) + cg[k] * r
             j += 1
         return j

@@ -10,8 +10,9 @@ from msens.field.cache import geometry_key
 from msens.field.geometry import SensorGeometry
 from msens.fieldsetup import geometry_from_study
 from msens.materials import BEAD_STEEL, STEEL_1018_BH
+from msens.steel_law import law_for_steel
 from msens.study import default_study_path, load_study
-from msens.transducer import DEFAULT_STEEL, cache_key
+from msens.transducer import cache_key
 
 MSS = default_study_path().read_text()
 
@@ -75,7 +76,8 @@ def test_study_without_table_keeps_1018():
 
 
 def transducer_key(g: SensorGeometry) -> str:
-    return cache_key(g, stress_force=g.beads.contact_load, law=DEFAULT_STEEL,
+    # the key transducer_report uses: the law follows the geometry's table
+    return cache_key(g, stress_force=g.beads.contact_load, law=law_for_steel(g.steel),
                      material=BEAD_STEEL, reluctance=True)
 
 

@@ -228,7 +228,9 @@ class FieldSpec:
         Truncation of open space, m.
     steel_bh : BHCurve or None
         User B–H table of the beads and pole pieces (``steel_bh`` = [[B_T, H_A_per_m], ...]);
-        None means the field model's default, AISI 1018 (FEMM library).
+        None means the field model's default, AISI 1018 (FEMM library). The beads'
+        magnetoelastic (JAS) anhysteretic is fitted to the same table
+        (:func:`msens.steel_law.law_for_steel`).
     """
 
     beads: tuple[int, int] | None = None

@@ -46,8 +46,9 @@ from msens.field.sensor_model import (
     load_mesh,
 )
 from msens.field.solve import FieldSolution, solve
-from msens.magnetoelastic import DEFAULT_STEEL, JilesAthertonSablik
+from msens.magnetoelastic import JilesAthertonSablik
 from msens.materials import BEAD_STEEL, ElasticMaterial
+from msens.steel_law import law_for_steel
 from msens.villari import (
     StressSampler,
     TangentOperator,
@@ -246,7 +247,7 @@ class TransducerReport:
 
 def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None = None,
                         mesh_dir: str | Path | None = None, stress_force: float | None = None,
-                        law: JilesAthertonSablik = DEFAULT_STEEL,
+                        law: JilesAthertonSablik | None = None,
                         material: ElasticMaterial = BEAD_STEEL, reluctance: bool = True,
                         direct_beads: int = 2, max_iter: int = 40) -> TransducerReport:
     """Run the field model and build a :class:`Transducer` for every coil (no cache).
@@ -260,7 +261,9 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
     stress_force : float, optional
         Force at which the bead stress is solved (the secant sensitivity's force), N; default
         the geometry's ``contact_load`` (the static load that sets the model's flats).
-    law : JilesAthertonSablik
+    law : JilesAthertonSablik, optional
+        Magnetoelastic law of the beads; default :func:`msens.steel_law.law_for_steel` of
+        the geometry's B–H table (the stored 1018 fit for the default curve).
     material : ElasticMaterial
         Bead elasticity.
     reluctance : bool
@@ -274,6 +277,7 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
     """
     force = geometry.beads.contact_load if stress_force is None else float(stress_force)
     require(math.isfinite(force) and force > 0, f"stress_force must be > 0 N, got {force}")
+    law = law_for_steel(geometry.steel) if law is None else law
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     axi, path = load_mesh(geometry, options, mesh_dir)
@@ -417,7 +421,7 @@ def _atomic_write_json(path: Path, data: dict) -> None:
 def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None = None,
                       cache_dir: str | Path | None = None, mesh_dir: str | Path | None = None,
                       stress_force: float | None = None,
-                      law: JilesAthertonSablik = DEFAULT_STEEL,
+                      law: JilesAthertonSablik | None = None,
                       material: ElasticMaterial = BEAD_STEEL, reluctance: bool = True,
                       refresh: bool = False) -> TransducerReport:
     """Cached :func:`compute_transducers` (``transducer-<key>.json``).
@@ -429,6 +433,7 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
     the committed ``meshes/``). ``refresh`` recomputes.
     """
     force = geometry.beads.contact_load if stress_force is None else float(stress_force)
+    law = law_for_steel(geometry.steel) if law is None else law
     key = cache_key(geometry, options, stress_force=force, law=law, material=material,
                     reluctance=reluctance)
     name = f"transducer-{key}.json"

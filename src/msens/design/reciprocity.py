@@ -43,12 +43,12 @@ from msens.field.forms import element_stiffness, flux_density_qp
 from msens.field.geometry import SensorGeometry
 from msens.field.solve import FieldSolution, internal_field_strength
 from msens.magnetoelastic import (
-    DEFAULT_STEEL,
     JilesAthertonSablik,
     equivalent_uniaxial_stress,
     piezomagnetic_coefficient,
 )
 from msens.materials import BEAD_STEEL
+from msens.steel_law import law_for_steel
 from msens.units import TWO_PI
 from msens.villari import StressSampler
 
@@ -61,7 +61,7 @@ def bead_stress(geometry: SensorGeometry) -> BeadStress:
 
 
 def villari_sources(bias: FieldSolution, geometry: SensorGeometry, particles: Sequence[int],
-                    *, law: JilesAthertonSablik = DEFAULT_STEEL,
+                    *, law: JilesAthertonSablik | None = None,
                     stress: BeadStress | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
     """μ0 ΔM per newton of a symmetric two-pole load, in each bead's elements.
 
@@ -72,8 +72,9 @@ def villari_sources(bias: FieldSolution, geometry: SensorGeometry, particles: Se
     geometry : SensorGeometry
     particles : sequence of int
         Beads (each a mesh subdomain ``bead_<p>``).
-    law : JilesAthertonSablik
-        Magnetoelastic law of the bead steel.
+    law : JilesAthertonSablik, optional
+        Magnetoelastic law of the bead steel; default :func:`msens.steel_law.law_for_steel`
+        of the geometry's B–H table.
     stress : BeadStress, optional
         Bead stress at F_ref (default :func:`bead_stress`).
 
@@ -84,6 +85,7 @@ def villari_sources(bias: FieldSolution, geometry: SensorGeometry, particles: Se
         shape (n_e, n_qp, 2), T/N.
     """
     stress = stress or bead_stress(geometry)
+    law = law_for_steel(geometry.steel) if law is None else law
     sampler = StressSampler(stress)  # the transducer's fast point location, stress per N
     axi = bias.problem.mesh
     xq = np.asarray(bias.basis.global_coordinates())  # (2, n_el, n_qp)

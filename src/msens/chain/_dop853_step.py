@@ -34,14 +34,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
     for i in range(m):
         tu[i] = (u[i] + ch * v[i])
         tv[i] = (v[i] + cv0 * kv[0, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[1, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # stage 2
@@ -52,14 +48,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
     for i in range(m):
         tu[i] = (u[i] + ch * v[i] + cu0 * kv[0, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv1 * kv[1, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[2, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # stage 3
@@ -71,14 +63,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
     for i in range(m):
         tu[i] = (u[i] + ch * v[i] + cu0 * kv[0, i] + cu1 * kv[1, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv2 * kv[2, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[3, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # stage 4
@@ -92,14 +80,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
     for i in range(m):
         tu[i] = (u[i] + ch * v[i] + cu0 * kv[0, i] + cu1 * kv[1, i] + cu2 * kv[2, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv2 * kv[2, i] + cv3 * kv[3, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[4, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # stage 5
@@ -113,14 +97,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
     for i in range(m):
         tu[i] = (u[i] + ch * v[i] + cu0 * kv[0, i] + cu2 * kv[2, i] + cu3 * kv[3, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[5, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # stage 6
@@ -137,14 +117,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
         tu[i] = (u[i] + ch * v[i] + cu0 * kv[0, i] + cu2 * kv[2, i] + cu3 * kv[3, i]
                   + cu4 * kv[4, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[6, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # stage 7
@@ -164,14 +140,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
                   + cu4 * kv[4, i] + cu5 * kv[5, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i]
                   + cv6 * kv[6, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[7, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # stage 8
@@ -193,14 +165,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
                   + cu4 * kv[4, i] + cu5 * kv[5, i] + cu6 * kv[6, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i]
                   + cv6 * kv[6, i] + cv7 * kv[7, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[8, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # stage 9
@@ -224,14 +192,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
                   + cu4 * kv[4, i] + cu5 * kv[5, i] + cu6 * kv[6, i] + cu7 * kv[7, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i]
                   + cv6 * kv[6, i] + cv7 * kv[7, i] + cv8 * kv[8, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[9, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # stage 10
@@ -258,14 +222,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
                   + cu8 * kv[8, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i]
                   + cv6 * kv[6, i] + cv7 * kv[7, i] + cv8 * kv[8, i] + cv9 * kv[9, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[10, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # stage 11
@@ -295,14 +255,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i]
                   + cv6 * kv[6, i] + cv7 * kv[7, i] + cv8 * kv[8, i] + cv9 * kv[9, i]
                   + cv10 * kv[10, i])
-    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[11, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     # solution

@@ -61,14 +61,10 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
         kv[0, i] = a0[i]
 '''
 
-_FORCES = '''    if hkk:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = np.sqrt(dp) * (cA[k] * dp + cg[k] * (tv[k] - tv[k + 1]))
-    else:
-        for k in range(m):
-            dp = max(tu[k] - tu[k + 1], 0.0)
-            Fp[k + 1] = cA[k] * dp * np.sqrt(dp) + cg[k] * (tv[k] - tv[k + 1])
+_FORCES = '''    for k in range(m):
+        dp = max(tu[k] - tu[k + 1], 0.0)
+        w = np.sqrt(dp)
+        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
     for i in range(m):
         kv[{s}, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
 '''

@@ -158,6 +158,11 @@ def test_outputs_written(symmetric_report, tmp_path):
     assert len(data["axis"]["z_m"]) == len(data["axis"]["Bz_T"]) > 100
     assert data["dofs"] == symmetric_report.dofs and data["newton_iterations"] >= 1
     assert "EQUIVALENT" in data["note"]
+    # the B-H table the solve used is recorded (provenance of every number in the file)
+    steel = data["model"]["steel_bh"]
+    assert steel["name"] == symmetric_report.geometry.steel.name
+    np.testing.assert_array_equal(steel["B_T"], symmetric_report.geometry.steel.b)
+    np.testing.assert_array_equal(steel["H_A_per_m"], symmetric_report.geometry.steel.h)
     vtu = meshio.read(tmp_path / "field.vtu")
     assert vtu.point_data["A_phi"].shape == (len(vtu.points),)
     assert (tmp_path / "field_B.png").stat().st_size > 10_000

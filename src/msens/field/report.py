@@ -82,6 +82,9 @@ def report_dict(report: FieldReport) -> dict:
                          "remanence_T": u.magnet.remanence,
                          "recoil_permeability": u.magnet.recoil_permeability}
                         for u in g.iter_units() if u.magnet is not None],
+            "steel_bh": {"name": g.steel.name, "source": g.steel.source,
+                         "B_T": [float(x) for x in g.steel.b],
+                         "H_A_per_m": [float(x) for x in g.steel.h]},
             "force_sign": "magnetic_force_N > 0 compresses the contact",
             "z_origin": "wall (chain base) at z = 0, z upwards",
         },

@@ -17,6 +17,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.optimize import least_squares
 
+from msens.field.geometry import same_bh
 from msens.magnetoelastic import DEFAULT_STEEL, JilesAthertonSablik, flux_density
 from msens.magnetostriction_data import JA_DEFAULTS_STEEL
 from msens.materials import STEEL_1018_BH, BHCurve
@@ -65,7 +66,7 @@ def law_for_steel(bh: BHCurve) -> JilesAthertonSablik:
     itself (so results and caches of the default studies do not move); any other table its
     own :func:`fit_anhysteretic`.
     """
-    if (np.array_equal(bh.b, STEEL_1018_BH.b) and np.array_equal(bh.h, STEEL_1018_BH.h)):
+    if same_bh(bh, STEEL_1018_BH):
         return DEFAULT_STEEL
     return _fitted(bh.name, tuple(map(float, bh.b)), tuple(map(float, bh.h)))
 

@@ -87,6 +87,7 @@ _PAD = 8
 _FM = set(FASTMATH)
 
 
+@nb.njit(cache=True)
 def padded_length(n: int) -> int:
     """Row length p of the output arrays for n particles: n rounded up to a multiple of 8."""
     return -(-n // _PAD) * _PAD
@@ -173,9 +174,7 @@ def _first_violation(g0, r0, g1, r1, closed):
             hi = th
         else:
             lo = th
-        t2 = th * th
-        dp = ((6.0 * t2 - 6.0 * th) * (p0 - p1) + (3.0 * t2 - 4.0 * th + 1.0) * d0
-              + (3.0 * t2 - 2.0 * th) * d1)
+        dp = _hermite3_slope(p0, d0, p1, d1, th)
         step = p / dp if dp != 0.0 else 0.0
         nxt = th - step
         if abs(step) < 1e-14 and p > 0.0:
@@ -191,10 +190,8 @@ def _extrapolated_zero(p0, d0, p1, d1, th0, th_max):
     inside the interval (then no prediction is made)."""
     th = th0
     for _ in range(8):
-        t2 = th * th
         f = _hermite3(p0, d0, p1, d1, th)
-        df = ((6.0 * t2 - 6.0 * th) * (p0 - p1) + (3.0 * t2 - 4.0 * th + 1.0) * d0
-              + (3.0 * t2 - 2.0 * th) * d1)
+        df = _hermite3_slope(p0, d0, p1, d1, th)
         if df == 0.0:
             return -1.0
         dth = f / df
@@ -204,6 +201,14 @@ def _extrapolated_zero(p0, d0, p1, d1, th0, th_max):
         if abs(dth) < 1e-10:
             return th
     return -1.0
+
+
+@nb.njit(cache=True, inline="always")
+def _hermite3_slope(p0, d0, p1, d1, t):
+    # d/dt of _hermite3
+    t2 = t * t
+    return ((6.0 * t2 - 6.0 * t) * (p0 - p1) + (3.0 * t2 - 4.0 * t + 1.0) * d0
+            + (3.0 * t2 - 2.0 * t) * d1)
 
 
 @nb.njit(cache=True, inline="always")
@@ -357,7 +362,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     number of steps taken (event cuts and Newton re-steps included).
     """
     n = u_init.shape[0]
-    p = -(-n // _PAD) * _PAD  # padded layout (see contact_forces): entries n.. stay 0
+    p = padded_length(n)  # padded layout (see contact_forces): entries n.. stay 0
     m = p + 1
     if out_F.shape[1] != p or out_d.shape[1] != p or (store_uv and (
             out_u.shape[1] != p or out_v.shape[1] != p)):

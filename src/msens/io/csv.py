@@ -48,6 +48,7 @@ from msens.io.waveform import (
     check_metadata_item,
     check_time,
     check_values,
+    grid_deviation,
     uniform_axis,
 )
 
@@ -96,7 +97,7 @@ def parse_csv(text: str, source: str) -> Waveform:
     table = np.array(rows, dtype=np.float64)
     time = table[:, 0]
     check_time(time, source, locate, resolution=_printed_resolution(lines, line_numbers))
-    if _grid_deviation(time) > TIME_RTOL:
+    if grid_deviation(time)[1].max() > TIME_RTOL:
         time = uniform_axis(time)  # printed with too few digits: the rounding is undone
     for j, ch in enumerate(channels):
         check_values(table[:, j + 1], ch.name, source, locate)
@@ -215,12 +216,6 @@ def _printed_resolution(lines: list[str], line_numbers: list[int]) -> float:
     if len(finite) < 3 or len({len(c.digits) for c in finite}) != 1:
         return 0.0
     return 0.5 * 10.0 ** max(int(c.exponent) for c in finite)
-
-
-def _grid_deviation(time: np.ndarray) -> float:
-    """Largest deviation of ``time`` from the grid through its end points, in steps."""
-    dt = (time[-1] - time[0]) / (time.size - 1)
-    return float(np.max(np.abs(time - (time[0] + dt * np.arange(time.size)))) / dt)
 
 
 def _number(cell: str) -> float:

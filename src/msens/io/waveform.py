@@ -161,10 +161,7 @@ def check_time(
             f"{locate(i)}: {TIME_NAME} must increase strictly, but {float(time[i])!r} follows "
             f"{float(time[i - 1])!r}"
         )
-    n = time.size
-    dt = (time[-1] - time[0]) / (n - 1)
-    # Deviation from the grid through the end points; exact for uniform float64 times.
-    deviation = np.abs(time - (time[0] + dt * np.arange(n))) / dt
+    dt, deviation = grid_deviation(time)
     worst = int(np.argmax(deviation))
     allowed = TIME_RTOL + min(2.0 * resolution / dt, PRINTED_RTOL_MAX)
     if deviation[worst] > allowed:
@@ -175,6 +172,13 @@ def check_time(
             f"uniform grid (dt = {dt:.6g} s) by {deviation[worst]:.3g} dt, allowed "
             f"{allowed:.3g} dt{printed}; resample to a uniform grid"
         )
+
+
+def grid_deviation(time: np.ndarray) -> tuple[float, np.ndarray]:
+    """Step dt (s) of the grid through the end points of ``time`` (s, shape (nt,)), and each
+    sample's deviation from it in steps, shape (nt,); exact for uniform float64 times."""
+    dt = (time[-1] - time[0]) / (time.size - 1)
+    return dt, np.abs(time - (time[0] + dt * np.arange(time.size))) / dt
 
 
 def uniform_axis(time: np.ndarray) -> np.ndarray:

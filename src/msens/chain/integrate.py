@@ -28,11 +28,14 @@ from msens.chain.equilibrium import (
 from msens.chain.model import Chain, DampingLaw
 
 #: Default steps per Hertz collision time of the stiffest, lightest contact at the impact
-#: speed: the fewest that keep the paper chain's peak-force error below 1e-6 with a margin of
-#: two. Measured against a converged reference (t_c = 15.6 us, 1 ms, per-contact peaks):
-#: LINEAR 1.4e-7 / 4.5e-7 / 6.5e-7 / 1.8e-6 at 10 / 8 / 7 / 6 steps; LINEAR_LOADING
-#: 2.4e-8 / 8.2e-8 / 1.6e-7 / 1.5e-7; HERTZ_KUWABARA_KONO 1.2e-7 / 1.9e-7 / 6.3e-7 at 10 / 8 / 7.
-STEPS_PER_CONTACT_TIME = 8
+#: speed, per damping law. Measured on the paper chain against a converged reference (t_c =
+#: 15.6 us, 1 ms, 10 MHz samples), as peak-force / whole-waveform errors relative to the peak:
+#: LINEAR 1.0e-8 / 4.3e-8, 3.9e-8 / 1.3e-7, 1.6e-7 / 1.4e-6 at 8 / 5 / 4 steps; LINEAR_LOADING
+#: 9.3e-9 / 4.4e-8, 3.6e-8 / 2.3e-7, 2.0e-7 / 1.4e-6. Five keeps the waveform error four times
+#: below 1e-6 (septic dense output; with the quintic it needed eight for 4.5e-7 / 4.5e-7).
+#: HERTZ_KUWABARA_KONO (quintic output) 1.2e-7 / 1.9e-7 / 6.3e-7 peak error at 10 / 8 / 7.
+STEPS_PER_CONTACT_TIME = {DampingLaw.LINEAR: 5, DampingLaw.LINEAR_LOADING: 5,
+                          DampingLaw.HERTZ_KUWABARA_KONO: 8}
 #: Steps per period of the highest linearised (precompressed) chain frequency.
 STEPS_PER_LINEAR_PERIOD = 10
 #: Hertz collision time of two bodies in terms of the prefactor A: energy conservation
@@ -129,7 +132,7 @@ def stable_step(chain: Chain, striker_velocity: float) -> float:
     v = abs(float(striker_velocity))
     if v > 0.0:
         t_c = HERTZ_TIME_CONSTANT * (np.min(mu) ** 2 / (np.max(chain.stiffness) ** 2 * v)) ** 0.2
-        times.append(t_c / STEPS_PER_CONTACT_TIME)
+        times.append(t_c / STEPS_PER_CONTACT_TIME[chain.damping_law])
     f0 = static_contact_forces(chain)
     k_lin = 1.5 * chain.stiffness ** (2.0 / 3.0) * f0 ** (1.0 / 3.0)  # dF/d(delta), N/m
     k_pad = np.concatenate([[0.0], k_lin])

@@ -41,19 +41,32 @@ nor looped over.
 
 All functions are compiled with ``cache=True`` (first call ~5 s, then loaded from the cache).
 
-Output at arbitrary times uses the quintic Hermite interpolant of u through (u, v, a) at the
-two ends of the step that contains the time (error O(h^6) in u, O(h^5) in v), and the
-contact forces are evaluated from the interpolated state with the step's contact states.
-When only forces and approaches are wanted, the interpolant is applied directly to the gaps
-and approach rates (it is linear in the end data), fused with the force law.
+Dense output (arbitrary output times) is the septic Hermite interpolant through the
+displacement, velocity, acceleration and jerk at the two ends of the step that contains the
+time (error O(h^8) in u, O(h^7) in v); the jerk follows from differentiating Eq. 6 along the
+motion (:func:`jerks`) and is only formed for steps that hold output samples. The contact
+forces are evaluated from the interpolated state with the step's contact states. When only
+forces and approaches are wanted, the interpolant is applied directly to the gaps and
+approach rates (it is linear in the end data), fused with the force law. The
+Kuwabara-Kono force has an unbounded jerk where a contact opens or closes; that law keeps the
+quintic interpolant through (u, v, a) (O(h^6), O(h^5)).
 
-Performance layout (measured on the paper chain, n = 30: ~1 us per step including events,
-~40 ns per output sample): the particle arrays and output rows are padded with zeros to a
-multiple of 8 entries past the wall, so the wall contact needs no special case and the force,
-stage and sampling loops vectorise without scalar remainders; the contact states enter as the
-products closed * A and dashpot * gamma, updated only when a contact toggles. A 6th-order 7-stage
-Runge-Kutta formula (Butcher 1964) was tried in place of DOP853: it needs t_c/16 steps for
-the 1e-6 peak-force target against t_c/8 here, so no net gain.
+Why septic: with the quintic the interpolant, not the integration, set the error. On the
+paper chain at t_c/8 the forces at the step ends erred by <= 1e-8 of the peak force but the
+samples in between by 4.5e-7 (linear dashpot). The jerk costs one force-like pass per sampled
+step; in exchange the step grows to t_c/5 at a peak-force error of 4e-8 (482 instead of 673
+steps per ms).
+
+Performance layout (measured on the paper chain, n = 30: ~1.1 us per step including events,
+~50 ns per output sample with ~20 samples per step): the particle arrays and output rows are
+padded with zeros to a multiple of 8 entries past the wall, so the wall contact needs no
+special case and the force, stage and sampling loops vectorise without scalar remainders; the
+contact states enter as the products closed * A and dashpot * gamma, updated only when a
+contact toggles. Helpers called inside the sampling loops take scalars, not arrays: numba's
+reference counting of array arguments of inlined helpers stopped those loops from
+vectorising (sampling 1.5x slower). A 6th-order 7-stage Runge-Kutta formula (Butcher 1964) was
+tried in place of DOP853: it needs t_c/16 steps for the 1e-6 peak-force target against t_c/8
+for DOP853 (quintic output), so no net gain.
 """
 
 from __future__ import annotations
@@ -78,6 +91,9 @@ _NEWTON_MAX = 4
 # A predicted dashpot switch is accepted at the end of a step when the rate's zero lies
 # within this fraction of the step from it.
 _PRED_TOL = 1e-3
+# Steps with at most this many output samples evaluate the interpolant from its weights;
+# more amortise forming its monomial coefficients.
+_FEW_SAMPLES = 3
 # A step may be stretched by this fraction to end at a predicted dashpot switch.
 _PRED_STRETCH = 1e-2
 # State arrays are padded to a multiple of this length (8 doubles = one AVX-512 register).
@@ -131,6 +147,92 @@ def accelerations(u, v, cA, cg, law, load, inv_m, Fp, out):
         out[i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
     for i in range(n, u.shape[0]):
         out[i] = 0.0
+
+
+@nb.njit(cache=True, fastmath=_FM)
+def jerks(u, v, a, cA, cg, inv_m, dFp, out):
+    """Time derivatives of the accelerations (m/s^3) into ``out`` (p + 1,), linear-dashpot laws.
+
+    Differentiates Eq. 6 along the motion: dF/dt = (3/2) A sqrt(delta) d(delta)/dt
+    + gamma d^2(delta)/dt^2 with the relative acceleration from ``a``. Padded layout as in
+    :func:`accelerations`; ``dFp`` (p + 1,) is scratch. (Not for the Kuwabara-Kono law, whose
+    dF/dt is unbounded where a contact opens or closes.)
+    """
+    n = cA.shape[0]
+    dFp[0] = 0.0
+    for k in range(n):
+        dp = max(u[k] - u[k + 1], 0.0)
+        dFp[k + 1] = 1.5 * cA[k] * np.sqrt(dp) * (v[k] - v[k + 1]) + cg[k] * (a[k] - a[k + 1])
+    for i in range(n):
+        out[i] = (dFp[i] - dFp[i + 1]) * inv_m[i]
+    for i in range(n, u.shape[0]):
+        out[i] = 0.0
+
+
+@nb.njit(cache=True, inline="always")
+def _hermite_coefficients(septic, p0, d0, e0, f0, dp, d1, e1, f1):
+    """Monomial coefficients c1..c7 in s of the Hermite interpolant on s in [0, 1].
+
+    End data: values p0 and p0 + dp, first, second and third derivatives in s (d, e, f =
+    the time derivatives times h, h^2, h^3). Septic (error O(h^8)) with the third
+    derivatives, else quintic (O(h^6); f ignored, c6 = c7 = 0). c0 = p0.
+    """
+    if septic:
+        c4 = (35.0 * dp - 20.0 * d0 - 15.0 * d1 - 5.0 * e0 + 2.5 * e1
+              - (2.0 / 3.0) * f0 - f1 / 6.0)
+        c5 = -84.0 * dp + 45.0 * d0 + 39.0 * d1 + 10.0 * e0 - 7.0 * e1 + f0 + 0.5 * f1
+        c6 = (70.0 * dp - 36.0 * d0 - 34.0 * d1 - 7.5 * e0 + 6.5 * e1
+              - (2.0 / 3.0) * f0 - 0.5 * f1)
+        c7 = -20.0 * dp + 10.0 * d0 + 10.0 * d1 + 2.0 * e0 - 2.0 * e1 + (f0 + f1) / 6.0
+        return d0, 0.5 * e0, f0 / 6.0, c4, c5, c6, c7
+    c3 = 10.0 * dp - 6.0 * d0 - 1.5 * e0 - 4.0 * d1 + 0.5 * e1
+    c4 = -15.0 * dp + 8.0 * d0 + 1.5 * e0 + 7.0 * d1 - e1
+    c5 = 6.0 * dp - 3.0 * d0 - 0.5 * e0 - 3.0 * d1 + 0.5 * e1
+    return d0, 0.5 * e0, c3, c4, c5, 0.0, 0.0
+
+
+@nb.njit(cache=True, inline="always")
+def _hermite_weights(septic, x, h):
+    """Weights of the end data in the Hermite interpolant at s = x of a step of size h.
+
+    Returns (w_dp, w_r0, w_r1, w_q0, w_q1, w_s0, w_s1) for the value, where value = p0
+    + w_dp dp + w_r0 r0 + ... (dp = increment, r rates, q accelerations, s jerks at the two
+    ends), then the same seven weights for its time derivative (rate = v_dp dp + v_r0 r0
+    + ...). Septic or quintic as in :func:`_hermite_coefficients` (jerk weights 0).
+    """
+    x2 = x * x
+    x3 = x2 * x
+    x4 = x3 * x
+    hh = h * h
+    inv_h = 1.0 / h
+    if septic:
+        return (x4 * (35.0 + x * (-84.0 + x * (70.0 - 20.0 * x))),
+                h * x * (1.0 + x3 * (-20.0 + x * (45.0 + x * (-36.0 + 10.0 * x)))),
+                h * x4 * (-15.0 + x * (39.0 + x * (-34.0 + 10.0 * x))),
+                hh * x2 * (0.5 + x2 * (-5.0 + x * (10.0 + x * (-7.5 + 2.0 * x)))),
+                hh * x4 * (2.5 + x * (-7.0 + x * (6.5 - 2.0 * x))),
+                hh * h * x3 * (1.0 / 6.0 + x * (-2.0 / 3.0 + x * (1.0 + x * (-2.0 / 3.0
+                                                                    + x / 6.0)))),
+                hh * h * x4 * (-1.0 / 6.0 + x * (0.5 + x * (-0.5 + x / 6.0))),
+                inv_h * x3 * (140.0 + x * (-420.0 + x * (420.0 - 140.0 * x))),
+                1.0 + x3 * (-80.0 + x * (225.0 + x * (-216.0 + 70.0 * x))),
+                x3 * (-60.0 + x * (195.0 + x * (-204.0 + 70.0 * x))),
+                h * x * (1.0 + x2 * (-20.0 + x * (50.0 + x * (-45.0 + 14.0 * x)))),
+                h * x3 * (10.0 + x * (-35.0 + x * (39.0 - 14.0 * x))),
+                hh * x2 * (0.5 + x * (-8.0 / 3.0 + x * (5.0 + x * (-4.0 + 7.0 * x / 6.0)))),
+                hh * x3 * (-2.0 / 3.0 + x * (2.5 + x * (-3.0 + 7.0 * x / 6.0))))
+    return (x3 * (10.0 + x * (-15.0 + 6.0 * x)),
+            h * x * (1.0 + x2 * (-6.0 + x * (8.0 - 3.0 * x))),
+            h * x3 * (-4.0 + x * (7.0 - 3.0 * x)),
+            hh * x2 * (0.5 + x * (-1.5 + x * (1.5 - 0.5 * x))),
+            hh * x3 * (0.5 + x * (-1.0 + 0.5 * x)),
+            0.0, 0.0,
+            inv_h * x2 * (30.0 + x * (-60.0 + 30.0 * x)),
+            1.0 + x2 * (-18.0 + x * (32.0 - 15.0 * x)),
+            x2 * (-12.0 + x * (28.0 - 15.0 * x)),
+            h * x * (1.0 + x * (-4.5 + x * (6.0 - 2.5 * x))),
+            h * x2 * (1.5 + x * (-4.0 + 2.5 * x)),
+            0.0, 0.0)
 
 
 @nb.njit(cache=True, inline="always")
@@ -220,105 +322,159 @@ def _hermite3(p0, d0, p1, d1, t):
 
 
 @nb.njit(cache=True, fastmath=_FM)
-def _sample(t_out, j, t0, h, tiny, u0, v0, a0, u1, v1, a1, cA, cg, law, store_uv,
-            out_F, out_d, out_u, out_v, us, vs, Fp, cs):
-    """Write the quintic-Hermite samples with t0 < t_out[j] <= t0 + h; return the next j.
+def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
+            store_uv, out_F, out_d, out_u, out_v, us, vs, Fp, cs):
+    """Write the dense-output samples with t0 < t_out[j] <= t0 + h; return the next j.
 
-    Padded layout (see :func:`contact_forces`): the output rows have the padded length p
-    (entries past n come out 0). ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (11, p) are
-    scratch. Without ``store_uv`` the interpolant is applied directly to the contact gaps
-    (the Hermite form is linear in the end data): its monomial coefficients in s = tau / h
-    (six for the gap, five for its rate) are formed once per step, and each sample is one
-    fused pass of Horner sums and the force law.
+    The interpolant is the Hermite polynomial through the states, accelerations and (with
+    ``septic``) jerks ``j0``/``j1`` at both ends of the step: septic, error O(h^8) in the
+    gaps, O(h^7) in their rates; else quintic (O(h^6), O(h^5)). Padded layout (see
+    :func:`contact_forces`): the output rows have the padded length p (entries past n come
+    out 0). ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (15, p + 1) are scratch. Without
+    ``store_uv`` the interpolant is applied directly to the contact gaps (it is linear in the
+    end data): its monomial coefficients in s = tau / h (eight for the gap, seven for its
+    rate) are formed once per step, and each sample is one fused pass of polynomial sums and the
+    force law. With ``store_uv`` the same is done per particle and the forces follow.
     """
     m = cA.shape[0]
     nt = t_out.shape[0]
-    hh = h * h
-    inv_h = 1.0 / h
     if j >= nt or t_out[j] > t0 + h:
         return j
     hkk = law == LAW_HKK
-    if not store_uv and h >= tiny:
-        # Gap g(s) = sum_q cs[q] s^q, rate dg/dtau = sum_q cs[6 + q] s^q, from the gaps,
-        # rates and relative accelerations at both ends (quintic Hermite, error O(h^6)).
-        for k in range(m):
-            g0 = u0[k] - u0[k + 1]
-            dg = (u1[k] - u1[k + 1]) - g0
-            r0 = h * (v0[k] - v0[k + 1])
-            q0 = hh * (a0[k] - a0[k + 1])
-            r1 = h * (v1[k] - v1[k + 1])
-            q1 = hh * (a1[k] - a1[k + 1])
-            c3 = 10.0 * dg - 6.0 * r0 - 1.5 * q0 - 4.0 * r1 + 0.5 * q1
-            c4 = -15.0 * dg + 8.0 * r0 + 1.5 * q0 + 7.0 * r1 - q1
-            c5 = 6.0 * dg - 3.0 * r0 - 0.5 * q0 - 3.0 * r1 + 0.5 * q1
-            cs[0, k] = g0
-            cs[1, k] = r0
-            cs[2, k] = 0.5 * q0
-            cs[3, k] = c3
-            cs[4, k] = c4
-            cs[5, k] = c5
-            cs[6, k] = r0 * inv_h
-            cs[7, k] = q0 * inv_h
-            cs[8, k] = 3.0 * c3 * inv_h
-            cs[9, k] = 4.0 * c4 * inv_h
-            cs[10, k] = 5.0 * c5 * inv_h
+    inv_h = 1.0 / h
+    if h < tiny:
+        # A sliver step (cut at a contact event): Taylor from the left end, error O(h^3);
+        # the Hermite form would divide rounding noise of u1 - u0 by h.
         while j < nt and t_out[j] <= t0 + h:
-            x = (t_out[j] - t0) * inv_h
-            for k in range(m):
-                g = cs[0, k] + x * (cs[1, k] + x * (cs[2, k] + x * (
-                    cs[3, k] + x * (cs[4, k] + x * cs[5, k]))))
-                r = cs[6, k] + x * (cs[7, k] + x * (cs[8, k] + x * (
-                    cs[9, k] + x * cs[10, k])))
-                dp = max(g, 0.0)
-                out_d[j, k] = dp
-                # (the loop-invariant law test is hoisted by the compiler: loop unswitching)
-                if hkk:
-                    out_F[j, k] = np.sqrt(dp) * (cA[k] * dp + cg[k] * r)
-                else:
-                    out_F[j, k] = cA[k] * dp * np.sqrt(dp) + cg[k] * r
-            j += 1
-        return j
-    while j < nt and t_out[j] <= t0 + h:
-        tau = t_out[j] - t0
-        if h < tiny:
-            # A sliver step (cut at a contact event): Taylor from the left end, error O(h^3);
-            # the Hermite form would divide rounding noise of u1 - u0 by h.
-            for i in range(m):
+            tau = t_out[j] - t0
+            for i in range(m + 1):
                 us[i] = u0[i] + tau * (v0[i] + 0.5 * tau * a0[i])
                 vs[i] = v0[i] + tau * a0[i]
-        else:
-            # Quintic Hermite basis on [0, 1] and its derivative, step factors folded in.
-            x = tau * inv_h
-            x2 = x * x
-            x3 = x2 * x
-            x4 = x3 * x
-            x5 = x4 * x
-            h01 = 10 * x3 - 15 * x4 + 6 * x5
-            c_v0 = h * (x - 6 * x3 + 8 * x4 - 3 * x5)
-            c_a0 = hh * (0.5 * x2 - 1.5 * x3 + 1.5 * x4 - 0.5 * x5)
-            c_v1 = h * (-4 * x3 + 7 * x4 - 3 * x5)
-            c_a1 = hh * (0.5 * x3 - x4 + 0.5 * x5)
-            d_du = (30 * x2 - 60 * x3 + 30 * x4) * inv_h
-            e10 = 1 - 18 * x2 + 32 * x3 - 15 * x4
-            d_a0 = h * (x - 4.5 * x2 + 6 * x3 - 2.5 * x4)
-            e11 = -12 * x2 + 28 * x3 - 15 * x4
-            d_a1 = h * (1.5 * x2 - 4 * x3 + 2.5 * x4)
-            for i in range(m):
-                # Written with u1 - u0 to limit cancellation.
-                du = u1[i] - u0[i]
-                us[i] = (u0[i] + h01 * du + c_v0 * v0[i] + c_a0 * a0[i]
-                         + c_v1 * v1[i] + c_a1 * a1[i])
-                vs[i] = d_du * du + e10 * v0[i] + d_a0 * a0[i] + e11 * v1[i] + d_a1 * a1[i]
-        contact_forces(us, vs, cA, cg, law, Fp)
-        for k in range(m):
-            out_F[j, k] = Fp[k + 1]
-            out_d[j, k] = max(us[k] - us[k + 1], 0.0)
-        if store_uv:
+            j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp)
+        return j
+    # Samples in this step: few -> weights of the end data per sample; many -> monomial
+    # coefficients once per step, then two short polynomial sums per sample.
+    ns = 0
+    while j + ns < nt and t_out[j + ns] <= t0 + h:
+        ns += 1
+    if store_uv or ns <= _FEW_SAMPLES:
+        for _ in range(ns):
+            (w_dp, w_r0, w_r1, w_q0, w_q1, w_s0, w_s1,
+             v_dp, v_r0, v_r1, v_q0, v_q1, v_s0, v_s1) = _hermite_weights(
+                septic, (t_out[j] - t0) * inv_h, h)
+            if store_uv:
+                for i in range(m + 1):
+                    du = u1[i] - u0[i]
+                    us[i] = (u0[i] + w_dp * du + w_r0 * v0[i] + w_r1 * v1[i] + w_q0 * a0[i]
+                             + w_q1 * a1[i] + w_s0 * j0[i] + w_s1 * j1[i])
+                    vs[i] = (v_dp * du + v_r0 * v0[i] + v_r1 * v1[i] + v_q0 * a0[i]
+                             + v_q1 * a1[i] + v_s0 * j0[i] + v_s1 * j1[i])
+                j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp)
+                continue
             for k in range(m):
-                out_u[j, k] = us[k]
-                out_v[j, k] = vs[k]
+                g0 = u0[k] - u0[k + 1]
+                dg = (u1[k] - u1[k + 1]) - g0
+                r0 = v0[k] - v0[k + 1]
+                r1 = v1[k] - v1[k + 1]
+                q0 = a0[k] - a0[k + 1]
+                q1 = a1[k] - a1[k + 1]
+                s0 = j0[k] - j0[k + 1]
+                s1 = j1[k] - j1[k + 1]
+                g = (g0 + w_dp * dg + w_r0 * r0 + w_r1 * r1 + w_q0 * q0 + w_q1 * q1
+                     + w_s0 * s0 + w_s1 * s1)
+                r = (v_dp * dg + v_r0 * r0 + v_r1 * r1 + v_q0 * q0 + v_q1 * q1 + v_s0 * s0
+                     + v_s1 * s1)
+                out_d[j, k] = max(g, 0.0)
+                out_F[j, k] = _force(g, r, cA[k], cg[k], hkk)
+            j += 1
+        return j
+    hh = h * h
+    for k in range(m):
+        g0 = u0[k] - u0[k + 1]
+        r0 = v0[k] - v0[k + 1]
+        c1, c2, c3, c4, c5, c6, c7 = _hermite_coefficients(
+            septic, g0, h * r0, hh * (a0[k] - a0[k + 1]), hh * h * (j0[k] - j0[k + 1]),
+            (u1[k] - u1[k + 1]) - g0, h * (v1[k] - v1[k + 1]), hh * (a1[k] - a1[k + 1]),
+            hh * h * (j1[k] - j1[k + 1]))
+        cs[0, k] = g0
+        cs[1, k] = c1
+        cs[2, k] = c2
+        cs[3, k] = c3
+        cs[4, k] = c4
+        cs[5, k] = c5
+        cs[6, k] = c6
+        cs[7, k] = c7
+        cs[8, k] = r0
+        cs[9, k] = 2.0 * c2 * inv_h
+        cs[10, k] = 3.0 * c3 * inv_h
+        cs[11, k] = 4.0 * c4 * inv_h
+        cs[12, k] = 5.0 * c5 * inv_h
+        cs[13, k] = 6.0 * c6 * inv_h
+        cs[14, k] = 7.0 * c7 * inv_h
+    for _ in range(ns):
+        x = (t_out[j] - t0) * inv_h
+        x2 = x * x
+        x4 = x2 * x2
+        for k in range(m):
+            # Estrin's scheme: shorter dependency chains than Horner's (~10 % faster).
+            g = (cs[0, k] + x * cs[1, k] + x2 * (cs[2, k] + x * cs[3, k])
+                 + x4 * (cs[4, k] + x * cs[5, k] + x2 * (cs[6, k] + x * cs[7, k])))
+            r = (cs[8, k] + x * cs[9, k] + x2 * (cs[10, k] + x * cs[11, k])
+                 + x4 * (cs[12, k] + x * cs[13, k] + x2 * cs[14, k]))
+            out_d[j, k] = max(g, 0.0)
+            out_F[j, k] = _force(g, r, cA[k], cg[k], hkk)
         j += 1
     return j
+
+
+@nb.njit(cache=True, inline="always")
+def _force(g, r, cA, cg, hkk):
+    # Force of a contact (coefficients cA = closed * A, cg = dashpot * gamma) from its gap g
+    # and gap rate r. (The loop-invariant law test is hoisted: loop unswitching.)
+    dp = max(g, 0.0)
+    if hkk:
+        return np.sqrt(dp) * (cA * dp + cg * r)
+    return cA * dp * np.sqrt(dp) + cg * r
+
+
+@nb.njit(cache=True, inline="always")
+def _force(g, r, cA, cg, hkk):
+    # Force of a contact (coefficients cA = closed * A, cg = dashpot * gamma) from its gap g
+    # and gap rate r. (The loop-invariant law test is hoisted: loop unswitching.)
+    dp = max(g, 0.0)
+    if hkk:
+        return np.sqrt(dp) * (cA * dp + cg * r)
+    return cA * dp * np.sqrt(dp) + cg * r
+
+
+@nb.njit(cache=True, inline="always")
+def _poly7(cs, k, x, x2, x4):
+    # Degree-7 polynomial in rows 0..7 of column k at x (x2 = x^2, x4 = x^4), by Estrin's
+    # scheme: shorter dependency chains than Horner's (~10 % faster sampling).
+    return (cs[0, k] + x * cs[1, k] + x2 * (cs[2, k] + x * cs[3, k])
+            + x4 * (cs[4, k] + x * cs[5, k] + x2 * (cs[6, k] + x * cs[7, k])))
+
+
+@nb.njit(cache=True, inline="always")
+def _poly6(cs, k, x, x2, x4):
+    # Degree-6 polynomial in rows 8..14 of column k at x (see _poly7).
+    return (cs[8, k] + x * cs[9, k] + x2 * (cs[10, k] + x * cs[11, k])
+            + x4 * (cs[12, k] + x * cs[13, k] + x2 * cs[14, k]))
+
+
+@nb.njit(cache=True)
+def _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp):
+    # Forces and approaches (and with store_uv the states) of row j from (us, vs).
+    m = cA.shape[0]
+    contact_forces(us, vs, cA, cg, law, Fp)
+    for k in range(m):
+        out_F[j, k] = Fp[k + 1]
+        out_d[j, k] = max(us[k] - us[k + 1], 0.0)
+    if store_uv:
+        for k in range(m):
+            out_u[j, k] = us[k]
+            out_v[j, k] = vs[k]
+    return j + 1
 
 
 @nb.njit(cache=True, inline="always")
@@ -384,7 +540,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     tv = np.zeros(m)
     F = np.zeros(m)
     us = np.zeros(m)
-    cs = np.zeros((11, p))
+    cs = np.zeros((15, m))
+    j0 = np.zeros(m)
+    j1 = np.zeros(m)
     vs = np.zeros(m)
     # Loading law: approach rates and relative accelerations at the start of the previous
     # step (size h_prev), for predicting dashpot switches; fresh[k] = 0 right after contact
@@ -399,6 +557,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     cg = np.zeros(p)
     loading = law == LAW_LINEAR_LOADING
     hkk = law == LAW_HKK
+    # Septic dense output from the jerks (the Kuwabara-Kono jerk is unbounded at contact
+    # switches: quintic there).
+    septic = not hkk
     for k in range(n):
         g = _gap(u, k)
         r = _gap(v, k)
@@ -411,10 +572,15 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     nt = t_out.shape[0]
     t_end = t_out[nt - 1]
     accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
+    if septic:
+        jerks(u, v, a0, cA, cg, inv_m, F, j0)
+    # The jerks are only formed for steps with samples: j0 holds those at the step's start
+    # when j0_ok.
+    j0_ok = True
     j = 0
     # Samples at the initial time.
     while j < nt and t_out[j] <= 0.0:
-        j = _sample(t_out, j, -1.0, 1.0, 0.0, u, v, a0, u, v, a0, cA, cg, law,
+        j = _sample(t_out, j, -1.0, 1.0, 0.0, u, v, a0, j0, u, v, a0, j0, cA, cg, law, septic,
                     store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs)
     t = 0.0
     steps = 0
@@ -466,6 +632,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 _toggle(1, k_pred, closed, damp, A, gam, cA, cg)
                 _stale(fresh, k_pred)
                 accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
+                j0_ok = False
                 continue
         if t + h > t_end - 0.01 * dt:
             # Stretch the last step by at most 1% rather than leave a sliver.
@@ -524,6 +691,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                     grade = grade_levels + 1
                 _stale(fresh, kmin)
                 accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
+                j0_ok = False
                 continue
             if th_min > _THETA_NOW:
                 # Cut the step back to the crossing; refine by Newton on the event function.
@@ -568,8 +736,14 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 q_prev[k] = _gap(a0, k)
                 fresh[k] = 1.0
             h_prev = h
-        j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, u1, v1, a1, cA, cg, law,
-                    store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs)
+        j1_ok = False
+        if septic and j < nt and t_out[j] <= t + h:
+            if not j0_ok:
+                jerks(u, v, a0, cA, cg, inv_m, F, j0)
+            jerks(u1, v1, a1, cA, cg, inv_m, F, j1)
+            j1_ok = True
+        j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, j0, u1, v1, a1, j1, cA, cg, law,
+                    septic, store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs)
         t += h
         u, u1 = u1, u
         v, v1 = v1, v
@@ -581,12 +755,16 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 grade = grade_levels + 1
             _stale(fresh, kmin)
             accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
+            j0_ok = False
         elif k_pred >= 0:
             _toggle(1, k_pred, closed, damp, A, gam, cA, cg)
             _stale(fresh, k_pred)
             accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
+            j0_ok = False
         else:
             a0, a1 = a1, a0
+            j0, j1 = j1, j0
+            j0_ok = j1_ok
     return steps
 
 

@@ -133,6 +133,24 @@ def test_paper_chain_converges_fast_through_contact_switches():
     assert errs[-1] < 3e-9
 
 
+@pytest.mark.parametrize("law", list(DampingLaw))
+def test_sparse_and_dense_sampling_agree(law):
+    """Steps with few samples evaluate the interpolant from weights of the end data, steps with
+    many from monomial coefficients; the step sequence does not depend on the output times, so
+    both forms must give the same samples (to rounding)."""
+    c = paper_chain(4.8 if law is not DampingLaw.HERTZ_KUWABARA_KONO else 4.8e3,
+                    damping_law=law)
+    v = striker_velocity()
+    dense = np.linspace(0.0, 3e-4, 6001)  # ~60 samples per step
+    sparse = dense[::150]  # spacing 7.5 us: at most one sample per step
+    a, b = simulate(c, v, dense), simulate(c, v, sparse)
+    assert a.steps == b.steps
+    scale = a.force.max()
+    np.testing.assert_allclose(a.force[::150], b.force, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(a.approach[::150], b.approach, rtol=0,
+                               atol=1e-12 * a.approach.max())
+
+
 def test_batch_equals_single_runs():
     v = striker_velocity()
     chains = [paper_chain(g) for g in (0.0, 2.0, 4.8)]

@@ -5,8 +5,10 @@ Problem: the paper's 30-particle chain (gamma_c = 4.8 kg/s, gravity, striker fro
 relative error of the per-contact peak force against a converged reference (SciPy DOP853 at
 rtol = 1e-13). Speed: msens.chain.simulate against SciPy solve_ivp(DOP853, rtol=1e-10) on the
 same problem, and simulate_batch over 512 chains with varied gamma_c (numba threads over
-runs). Numba compile time is excluded (everything is warmed up first); times are the best of
-several repeats. The 1-minute load average before and after is reported: other work on the
+runs). ``output_share`` is the part of msens' time spent on the 10 MHz output samples (the
+same run with output at its two ends only, ``t_msens_output_at_ends_only_s``, for
+reference). Numba compile time is excluded (everything is warmed up first); times are the best
+of several repeats. The 1-minute load average before and after is reported: other work on the
 machine slows both sides, and the batch throughput most.
 
 Targets (issue 2): ratio >= 300 at peak-force error <= 1e-6; runs_per_s >= 2000 on 2 cores.
@@ -66,6 +68,8 @@ def main() -> dict:
         ref = simulate_reference(chain, v, t, rtol=1e-13).force
         fast = simulate(chain, v, t)  # warm-up (compiles or loads the cache)
         t_msens = _best_time(lambda c=chain: simulate(c, v, t), 20)
+        # The same run with output only at its two ends: what the 10 MHz samples cost.
+        t_ends = _best_time(lambda c=chain: simulate(c, v, t[[0, -1]]), 20)
         t_scipy = _best_time(lambda c=chain: simulate_reference(c, v, t, rtol=1e-10), 3)
         scipy_err = _peak_error(simulate_reference(chain, v, t, rtol=1e-10).force, ref)
         out[law.value] = {
@@ -74,6 +78,7 @@ def main() -> dict:
             "waveform_rel_error": _waveform_error(fast.force, ref),
             "scipy_rtol1e-10_peak_force_rel_error": scipy_err,
             "t_msens_s": t_msens, "t_scipy_s": t_scipy, "ratio": t_scipy / t_msens,
+            "t_msens_output_at_ends_only_s": t_ends, "output_share": 1.0 - t_ends / t_msens,
         }
     # Batch: 512 chains, gamma_c uniform in [0, 9.6] kg/s (seeded), 1 us output sampling.
     gammas = np.random.default_rng(12345).uniform(0.0, 9.6, 512)

@@ -332,9 +332,10 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
     :func:`contact_forces`): the output rows have the padded length p (entries past n come
     out 0). ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (15, p + 1) are scratch. Without
     ``store_uv`` the interpolant is applied directly to the contact gaps (it is linear in the
-    end data): its monomial coefficients in s = tau / h (eight for the gap, seven for its
-    rate) are formed once per step, and each sample is one fused pass of polynomial sums and the
-    force law. With ``store_uv`` the same is done per particle and the forces follow.
+    end data), fused with the force law: in steps with more than ``_FEW_SAMPLES`` samples
+    through its monomial coefficients in s = tau / h (eight for the gap, seven for its rate,
+    formed once per step), else through the weights of the end data at each sample. With
+    ``store_uv`` the weights are applied per particle and the forces follow.
     """
     m = cA.shape[0]
     nt = t_out.shape[0]

@@ -438,31 +438,6 @@ def _force(g, r, cA, cg, hkk):
     return cA * dp * np.sqrt(dp) + cg * r
 
 
-@nb.njit(cache=True, inline="always")
-def _force(g, r, cA, cg, hkk):
-    # Force of a contact (coefficients cA = closed * A, cg = dashpot * gamma) from its gap g
-    # and gap rate r. (The loop-invariant law test is hoisted: loop unswitching.)
-    dp = max(g, 0.0)
-    if hkk:
-        return np.sqrt(dp) * (cA * dp + cg * r)
-    return cA * dp * np.sqrt(dp) + cg * r
-
-
-@nb.njit(cache=True, inline="always")
-def _poly7(cs, k, x, x2, x4):
-    # Degree-7 polynomial in rows 0..7 of column k at x (x2 = x^2, x4 = x^4), by Estrin's
-    # scheme: shorter dependency chains than Horner's (~10 % faster sampling).
-    return (cs[0, k] + x * cs[1, k] + x2 * (cs[2, k] + x * cs[3, k])
-            + x4 * (cs[4, k] + x * cs[5, k] + x2 * (cs[6, k] + x * cs[7, k])))
-
-
-@nb.njit(cache=True, inline="always")
-def _poly6(cs, k, x, x2, x4):
-    # Degree-6 polynomial in rows 8..14 of column k at x (see _poly7).
-    return (cs[8, k] + x * cs[9, k] + x2 * (cs[10, k] + x * cs[11, k])
-            + x4 * (cs[12, k] + x * cs[13, k] + x2 * cs[14, k]))
-
-
 @nb.njit(cache=True)
 def _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp):
     # Forces and approaches (and with store_uv the states) of row j from (us, vs).

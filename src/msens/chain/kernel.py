@@ -331,11 +331,11 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
     ``septic``) jerks ``j0``/``j1`` at both ends of the step: septic, error O(h^8) in the
     gaps, O(h^7) in their rates; else quintic (O(h^6), O(h^5)). Padded layout (see
     :func:`contact_forces`): the output rows have the padded length p (entries past n come
-    out 0). ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (15, p + 1) are scratch. Without
+    out 0). ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (8, p + 1) are scratch. Without
     ``store_uv`` the interpolant is applied directly to the contact gaps (it is linear in the
     end data), fused with the force law: in steps with more than ``_FEW_SAMPLES`` samples
-    through its monomial coefficients in s = tau / h (eight for the gap, seven for its rate,
-    formed once per step), else through the weights of the end data at each sample. With
+    through its eight monomial coefficients in s = tau / h (formed once per step; the rate is
+    the derivative), else through the weights of the end data at each sample. With
     ``store_uv`` the weights are applied per particle and the forces follow.
     """
     m = cA.shape[0]
@@ -355,7 +355,7 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
             j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp)
         return j
     # Samples in this step: few -> weights of the end data per sample; many -> monomial
-    # coefficients once per step, then two short polynomial sums per sample.
+    # coefficients once per step, then one Horner pass (value and derivative) per sample.
     ns = 0
     while j + ns < nt and t_out[j + ns] <= t0 + h:
         ns += 1
@@ -406,25 +406,29 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
         cs[5, k] = c5
         cs[6, k] = c6
         cs[7, k] = c7
-        cs[8, k] = r0
-        cs[9, k] = 2.0 * c2 * inv_h
-        cs[10, k] = 3.0 * c3 * inv_h
-        cs[11, k] = 4.0 * c4 * inv_h
-        cs[12, k] = 5.0 * c5 * inv_h
-        cs[13, k] = 6.0 * c6 * inv_h
-        cs[14, k] = 7.0 * c7 * inv_h
     for _ in range(ns):
         x = (t_out[j] - t0) * inv_h
-        x2 = x * x
-        x4 = x2 * x2
         for k in range(m):
-            # Estrin's scheme: shorter dependency chains than Horner's (~10 % faster).
-            g = (cs[0, k] + x * cs[1, k] + x2 * (cs[2, k] + x * cs[3, k])
-                 + x4 * (cs[4, k] + x * cs[5, k] + x2 * (cs[6, k] + x * cs[7, k])))
-            r = (cs[8, k] + x * cs[9, k] + x2 * (cs[10, k] + x * cs[11, k])
-                 + x4 * (cs[12, k] + x * cs[13, k] + x2 * cs[14, k]))
+            # Horner's scheme for the gap and, alongside, its derivative in s: the eight
+            # coefficients are loaded once (loads, not arithmetic, bound this loop: 25 %
+            # faster than separate sums for the gap and its rate).
+            g = cs[7, k]
+            d = g
+            g = g * x + cs[6, k]
+            d = d * x + g
+            g = g * x + cs[5, k]
+            d = d * x + g
+            g = g * x + cs[4, k]
+            d = d * x + g
+            g = g * x + cs[3, k]
+            d = d * x + g
+            g = g * x + cs[2, k]
+            d = d * x + g
+            g = g * x + cs[1, k]
+            d = d * x + g
+            g = g * x + cs[0, k]
             out_d[j, k] = max(g, 0.0)
-            out_F[j, k] = _force(g, r, cA[k], cg[k], hkk)
+            out_F[j, k] = _force(g, d * inv_h, cA[k], cg[k], hkk)
         j += 1
     return j
 
@@ -517,7 +521,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     tv = np.zeros(m)
     F = np.zeros(m)
     us = np.zeros(m)
-    cs = np.zeros((15, m))
+    cs = np.zeros((8, m))
     j0 = np.zeros(m)
     j1 = np.zeros(m)
     vs = np.zeros(m)

@@ -78,7 +78,13 @@ def static_equilibrium(chain: Chain) -> np.ndarray:
 def equilibrium_from_loads(load: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
     """:func:`static_equilibrium` from loads (N) and Hertz prefactors (N/m^1.5), shape
     (..., n); leading axes are independent chains."""
-    delta = (contact_forces_from_loads(load) / stiffness) ** (2.0 / 3.0)
+    return equilibrium_from_forces(contact_forces_from_loads(load), stiffness)
+
+
+def equilibrium_from_forces(force: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
+    """:func:`static_equilibrium` from the static contact forces (N, from
+    :func:`contact_forces_from_loads`) and Hertz prefactors (N/m^1.5), shape (..., n)."""
+    delta = (force / stiffness) ** (2.0 / 3.0)
     delta[..., 0] = 0.0
     # u_k = sum_{j >= k} delta_j, summed from the wall up.
     return np.cumsum(delta[..., ::-1], axis=-1)[..., ::-1]

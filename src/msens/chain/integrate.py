@@ -21,9 +21,10 @@ from scipy.special import beta
 
 from msens.chain import kernel
 from msens.chain.equilibrium import (
+    contact_forces_from_loads,
+    equilibrium_from_forces,
     equilibrium_from_loads,
     static_contact_forces,
-    static_equilibrium,
 )
 from msens.chain.model import Chain, DampingLaw
 
@@ -127,20 +128,26 @@ def stable_step(chain: Chain, striker_velocity: float) -> float:
     -------
     float
     """
+    return _stable_step(chain, striker_velocity, static_contact_forces(chain))
+
+
+def _stable_step(chain: Chain, striker_velocity: float, f0: np.ndarray) -> float:
+    # stable_step with the static contact forces f0 (N) given.
     mu = _reduced_masses(chain)
     times = []
     v = abs(float(striker_velocity))
     if v > 0.0:
         t_c = HERTZ_TIME_CONSTANT * (np.min(mu) ** 2 / (np.max(chain.stiffness) ** 2 * v)) ** 0.2
         times.append(t_c / STEPS_PER_CONTACT_TIME[chain.damping_law])
-    f0 = static_contact_forces(chain)
-    k_lin = 1.5 * chain.stiffness ** (2.0 / 3.0) * f0 ** (1.0 / 3.0)  # dF/d(delta), N/m
-    k_pad = np.concatenate([[0.0], k_lin])
-    omega2 = 2.0 * np.max((k_pad[:-1] + k_pad[1:]) / chain.mass)
+    k_lin = 1.5 * np.cbrt(chain.stiffness**2 * f0)  # dF/d(delta), N/m
+    k_sum = k_lin.copy()  # stiffness around particle i: contacts i - 1 and i
+    k_sum[1:] += k_lin[:-1]
+    omega2 = 2.0 * np.max(k_sum / chain.mass)
     if omega2 > 0.0:
         times.append(2.0 * np.pi / np.sqrt(omega2) / STEPS_PER_LINEAR_PERIOD)
-    if chain.damping_law is not DampingLaw.HERTZ_KUWABARA_KONO and np.any(chain.damping > 0):
-        times.append(0.5 * np.min(mu[chain.damping > 0] / chain.damping[chain.damping > 0]))
+    damped = chain.damping > 0
+    if chain.damping_law is not DampingLaw.HERTZ_KUWABARA_KONO and damped.any():
+        times.append(0.5 * np.min(mu[damped] / chain.damping[damped]))
     if not times:
         raise ValueError("no time scale: zero striker velocity and no static compression")
     return float(min(times))
@@ -150,13 +157,28 @@ def _check_times(t_out: ArrayLike) -> np.ndarray:
     t = np.ascontiguousarray(t_out, dtype=float)
     if t.ndim != 1 or t.size == 0:
         raise ValueError(f"t_out must be a non-empty 1-D array, got shape {t.shape}")
-    if not np.all(np.isfinite(t)) or t[0] < 0.0 or np.any(np.diff(t) < 0.0):
+    if not _times_ok(t):
         raise ValueError("t_out must be finite, non-decreasing and start at t >= 0 (the impact)")
     return t
 
 
-def _initial_state(chain: Chain, striker_velocity: float) -> tuple[np.ndarray, np.ndarray]:
-    u0 = static_equilibrium(chain)
+@numba.njit(cache=True)
+def _times_ok(t: np.ndarray) -> bool:
+    # Finite, non-decreasing, from t >= 0: one pass (the numpy form makes three temporaries).
+    prev = 0.0
+    for x in t:
+        if not (prev <= x < np.inf):  # also False for NaN
+            return False
+        prev = x
+    return True
+
+
+def _initial_state(chain: Chain, striker_velocity: float, f0: np.ndarray | None = None,
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    # Static equilibrium (from the static contact forces f0, N, if given) and the impact.
+    if f0 is None:
+        f0 = static_contact_forces(chain)
+    u0 = equilibrium_from_forces(f0, chain.stiffness)
     v0 = np.zeros(chain.n_particles)
     v0[0] = float(striker_velocity)
     return u0, v0
@@ -190,8 +212,10 @@ def simulate(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
     ChainResult
     """
     t = _check_times(t_out)
-    dt = stable_step(chain, striker_velocity) if dt is None else _check_dt(dt)
-    u0, v0 = _initial_state(chain, striker_velocity)
+    load = chain.load()
+    f0 = contact_forces_from_loads(load)  # shared by the default step and the equilibrium
+    dt = _stable_step(chain, striker_velocity, f0) if dt is None else _check_dt(dt)
+    u0, v0 = _initial_state(chain, striker_velocity, f0)
     n = chain.n_particles
     # One block for all outputs: separate large arrays each page-fault afresh (glibc mmaps
     # them), which cost as much as the integration itself for 10^4 samples. Rows have the
@@ -200,7 +224,7 @@ def simulate(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
     dummy = np.empty((1, n))
     out = [block[0], block[1], block[2] if states else dummy, block[3] if states else dummy]
     steps = kernel.integrate(u0, v0, chain.mass, chain.stiffness, chain.damping,
-                             _LAW_CODE[chain.damping_law], chain.load(), t, dt,
+                             _LAW_CODE[chain.damping_law], load, t, dt,
                              GRADE_LEVELS[chain.damping_law], _rate_tol(striker_velocity), states,
                              *out)
     return ChainResult(t=t, force=block[0, :, :n], approach=block[1, :, :n],

@@ -11,21 +11,20 @@ N_STAGES = 12
 
 
 @nb.njit(cache=True, fastmath=FASTMATH)
-def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
+def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
     """One DOP853 step of size ``h`` (s) from (u, v); ``a0`` = acceleration at (u, v).
 
     Padded layout of :func:`msens.chain.kernel.contact_forces`: ``u``, ``v``, ``a0``, ``tu``,
-    ``tv``, ``Fp``, ``u1``, ``v1`` have shape (p + 1,) and ``cA``, ``cg``, ``load``,
+    ``tv``, ``u1``, ``v1`` have shape (p + 1,) and ``cA``, ``cg``, ``load``,
     ``inv_m`` shape (p,), zero past the n particles. ``hkk`` selects the Kuwabara-Kono
     force law (else the linear dashpot). ``kv`` (N_STAGES, p + 1) receives the stage
-    accelerations, ``tu``/``tv`` and ``Fp`` are scratch; the result goes to (u1, v1).
+    accelerations, ``tu``/``tv`` are scratch; the result goes to (u1, v1).
 
     Second-order form (u' = v): stage s has displacement u + c_s h v + h^2 sum_l (AA)_sl kv_l
     and velocity v + h sum_l A_sl kv_l, the same method as on the first-order system.
     """
     m = cA.shape[0]
     hh = h * h
-    Fp[0] = 0.0
     for i in range(m):
         kv[0, i] = a0[i]
     # stage 1
@@ -34,12 +33,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
     for i in range(m):
         tu[i] = (u[i] + ch * v[i])
         tv[i] = (v[i] + cv0 * kv[0, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[1, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[1, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # stage 2
     ch = h * 0.0789002279381516
     cu0 = hh * 0.003112622984346139
@@ -48,12 +48,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
     for i in range(m):
         tu[i] = (u[i] + ch * v[i] + cu0 * kv[0, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv1 * kv[1, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[2, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[2, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # stage 3
     ch = h * 0.1183503419072274
     cu0 = hh * 0.0017508504286947032
@@ -63,12 +64,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
     for i in range(m):
         tu[i] = (u[i] + ch * v[i] + cu0 * kv[0, i] + cu1 * kv[1, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv2 * kv[2, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[3, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[3, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # stage 4
     ch = h * 0.2816496580927726
     cu0 = hh * 0.009915816237971966
@@ -80,12 +82,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
     for i in range(m):
         tu[i] = (u[i] + ch * v[i] + cu0 * kv[0, i] + cu1 * kv[1, i] + cu2 * kv[2, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv2 * kv[2, i] + cv3 * kv[3, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[4, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[4, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # stage 5
     ch = h * 0.3333333333333333
     cu0 = hh * 0.03533793130488635
@@ -97,12 +100,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
     for i in range(m):
         tu[i] = (u[i] + ch * v[i] + cu0 * kv[0, i] + cu2 * kv[2, i] + cu3 * kv[3, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[5, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[5, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # stage 6
     ch = h * 0.25
     cu0 = hh * 0.018920483189113914
@@ -117,12 +121,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
         tu[i] = (u[i] + ch * v[i] + cu0 * kv[0, i] + cu2 * kv[2, i] + cu3 * kv[3, i]
                   + cu4 * kv[4, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[6, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[6, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # stage 7
     ch = h * 0.30769230769230765
     cu0 = hh * 0.03067021189623757
@@ -140,12 +145,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
                   + cu4 * kv[4, i] + cu5 * kv[5, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i]
                   + cv6 * kv[6, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[7, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[7, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # stage 8
     ch = h * 0.6512820512820503
     cu0 = hh * -0.15229089727622022
@@ -165,12 +171,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
                   + cu4 * kv[4, i] + cu5 * kv[5, i] + cu6 * kv[6, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i]
                   + cv6 * kv[6, i] + cv7 * kv[7, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[8, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[8, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # stage 9
     ch = h * 0.5999999999999992
     cu0 = hh * -0.11020716722377505
@@ -192,12 +199,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
                   + cu4 * kv[4, i] + cu5 * kv[5, i] + cu6 * kv[6, i] + cu7 * kv[7, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i]
                   + cv6 * kv[6, i] + cv7 * kv[7, i] + cv8 * kv[8, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[9, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[9, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # stage 10
     ch = h * 0.8571428571428581
     cu0 = hh * 0.37218949950714336
@@ -222,12 +230,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
                   + cu8 * kv[8, i])
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i]
                   + cv6 * kv[6, i] + cv7 * kv[7, i] + cv8 * kv[8, i] + cv9 * kv[9, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[10, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[10, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # stage 11
     ch = h * 1.0000000000000002
     cu0 = hh * -0.7650750098382328
@@ -255,12 +264,13 @@ def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, Fp, u1, v1):
         tv[i] = (v[i] + cv0 * kv[0, i] + cv3 * kv[3, i] + cv4 * kv[4, i] + cv5 * kv[5, i]
                   + cv6 * kv[6, i] + cv7 * kv[7, i] + cv8 * kv[8, i] + cv9 * kv[9, i]
                   + cv10 * kv[10, i])
+    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
-        Fp[k + 1] = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-    for i in range(m):
-        kv[11, i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+        f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
+        kv[11, k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     # solution
     bu0 = hh * 0.05429373411656877
     bu3 = hh * 8.326672684688674e-17

@@ -134,38 +134,42 @@ def contact_forces(u, v, cA, cg, law, Fp):
 
 
 @nb.njit(cache=True, fastmath=_FM)
-def accelerations(u, v, cA, cg, law, load, inv_m, Fp, out):
+def accelerations(u, v, cA, cg, law, load, inv_m, out):
     """Accelerations (m/s^2) into ``out`` (p + 1,) on the padded layout (zero past n).
 
-    ``load`` and ``inv_m`` are padded with zeros to (p,).
-
-    ``Fp`` receives the shifted contact forces (:func:`contact_forces`), which makes the
-    particle balance one branch-free loop.
+    ``load`` and ``inv_m`` are padded with zeros to (p,). Forces and the particle balance
+    in one branch-free pass, as in the generated Runge-Kutta step: the force of the contact
+    above particle k is carried over from the previous iteration.
     """
     n = cA.shape[0]
-    contact_forces(u, v, cA, cg, law, Fp)
-    for i in range(n):
-        out[i] = (load[i] + Fp[i] - Fp[i + 1]) * inv_m[i]
+    hkk = law == LAW_HKK
+    f_prev = 0.0
+    for k in range(n):
+        dp = max(u[k] - u[k + 1], 0.0)
+        w = np.sqrt(dp)
+        f = cA[k] * dp * w + cg[k] * (v[k] - v[k + 1]) * (w if hkk else 1.0)
+        out[k] = (load[k] + f_prev - f) * inv_m[k]
+        f_prev = f
     for i in range(n, u.shape[0]):
         out[i] = 0.0
 
 
 @nb.njit(cache=True, fastmath=_FM)
-def jerks(u, v, a, cA, cg, inv_m, dFp, out):
+def jerks(u, v, a, cA, cg, inv_m, out):
     """Time derivatives of the accelerations (m/s^3) into ``out`` (p + 1,), linear-dashpot laws.
 
     Differentiates Eq. 6 along the motion: dF/dt = (3/2) A sqrt(delta) d(delta)/dt
     + gamma d^2(delta)/dt^2 with the relative acceleration from ``a``. Padded layout as in
-    :func:`accelerations`; ``dFp`` (p + 1,) is scratch. (Not for the Kuwabara-Kono law, whose
-    dF/dt is unbounded where a contact opens or closes.)
+    :func:`accelerations` (one pass). (Not for the Kuwabara-Kono law, whose dF/dt is
+    unbounded where a contact opens or closes.)
     """
     n = cA.shape[0]
-    dFp[0] = 0.0
+    d_prev = 0.0
     for k in range(n):
         dp = max(u[k] - u[k + 1], 0.0)
-        dFp[k + 1] = 1.5 * cA[k] * np.sqrt(dp) * (v[k] - v[k + 1]) + cg[k] * (a[k] - a[k + 1])
-    for i in range(n):
-        out[i] = (dFp[i] - dFp[i + 1]) * inv_m[i]
+        d = 1.5 * cA[k] * np.sqrt(dp) * (v[k] - v[k + 1]) + cg[k] * (a[k] - a[k + 1])
+        out[k] = (d_prev - d) * inv_m[k]
+        d_prev = d
     for i in range(n, u.shape[0]):
         out[i] = 0.0
 
@@ -552,9 +556,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         cg[k] = damp[k] * gam[k]
     nt = t_out.shape[0]
     t_end = t_out[nt - 1]
-    accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
+    accelerations(u, v, cA, cg, law, load_p, inv_m, a0)
     if septic:
-        jerks(u, v, a0, cA, cg, inv_m, F, j0)
+        jerks(u, v, a0, cA, cg, inv_m, j0)
     # The jerks are only formed for steps with samples: j0 holds those at the step's start
     # when j0_ok.
     j0_ok = True
@@ -612,7 +616,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 toggles_here += 1
                 _toggle(1, k_pred, closed, damp, A, gam, cA, cg)
                 _stale(fresh, k_pred)
-                accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
+                accelerations(u, v, cA, cg, law, load_p, inv_m, a0)
                 j0_ok = False
                 continue
         if t + h > t_end - 0.01 * dt:
@@ -620,10 +624,10 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             h = t_end - t
         if h <= 0.0:
             h = dt  # only rounding left: finish the last samples with one more step
-        rk_step(u, v, a0, h, cA, cg, hkk, load_p, inv_m, kv, tu, tv, F, u1, v1)
+        rk_step(u, v, a0, h, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
         steps += 1
         if loading:
-            accelerations(u1, v1, cA, cg, law, load_p, inv_m, F, a1)
+            accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
         # Find the earliest violated contact state: kind 0 = gap (open/closed), kind 1 = the
         # sign of the approach rate (dashpot on/off, loading law only).
         kmin = -1
@@ -671,14 +675,14 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 if _toggle(kind, kmin, closed, damp, A, gam, cA, cg):
                     grade = grade_levels + 1
                 _stale(fresh, kmin)
-                accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
+                accelerations(u, v, cA, cg, law, load_p, inv_m, a0)
                 j0_ok = False
                 continue
             if th_min > _THETA_NOW:
                 # Cut the step back to the crossing; refine by Newton on the event function.
                 hc = th_min * h
                 for it in range(_NEWTON_MAX + 1):
-                    rk_step(u, v, a0, hc, cA, cg, hkk, load_p, inv_m, kv, tu, tv, F, u1, v1)
+                    rk_step(u, v, a0, hc, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
                     steps += 1
                     if it == _NEWTON_MAX or kind == 1:
                         # A rate switch is only a kink of the force: the cubic estimate of its
@@ -688,7 +692,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                         g = _gap(u1, kmin)
                         r = _gap(v1, kmin)
                     else:
-                        accelerations(u1, v1, cA, cg, law, load_p, inv_m, F, a1)
+                        accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
                         g = _gap(v1, kmin)
                         r = _gap(a1, kmin)
                     if abs(g) <= _GAP_TOL * h * abs(r) or r == 0.0:
@@ -700,7 +704,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 # (u1, v1) is the state at t + hc.
                 h = hc
         if not (loading and kmin < 0):  # else a1 is already that of (u1, v1)
-            accelerations(u1, v1, cA, cg, law, load_p, inv_m, F, a1)
+            accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
         if k_pred >= 0 and kmin < 0:
             # The predicted switch is taken at the step's end if the rate's zero lies within
             # _PRED_TOL steps of it (either side); otherwise the prediction fell short.
@@ -720,8 +724,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         j1_ok = False
         if septic and j < nt and t_out[j] <= t + h:
             if not j0_ok:
-                jerks(u, v, a0, cA, cg, inv_m, F, j0)
-            jerks(u1, v1, a1, cA, cg, inv_m, F, j1)
+                jerks(u, v, a0, cA, cg, inv_m, j0)
+            jerks(u1, v1, a1, cA, cg, inv_m, j1)
             j1_ok = True
         j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, j0, u1, v1, a1, j1, cA, cg, law,
                     septic, store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs)
@@ -735,12 +739,12 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             if _toggle(kind, kmin, closed, damp, A, gam, cA, cg):
                 grade = grade_levels + 1
             _stale(fresh, kmin)
-            accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
+            accelerations(u, v, cA, cg, law, load_p, inv_m, a0)
             j0_ok = False
         elif k_pred >= 0:
             _toggle(1, k_pred, closed, damp, A, gam, cA, cg)
             _stale(fresh, k_pred)
-            accelerations(u, v, cA, cg, law, load_p, inv_m, F, a0)
+            accelerations(u, v, cA, cg, law, load_p, inv_m, a0)
             j0_ok = False
         else:
             a0, a1 = a1, a0

@@ -133,24 +133,41 @@ def stable_step(chain: Chain, striker_velocity: float) -> float:
 
 def _stable_step(chain: Chain, striker_velocity: float, f0: np.ndarray) -> float:
     # stable_step with the static contact forces f0 (N) given.
-    mu = _reduced_masses(chain)
-    times = []
-    v = abs(float(striker_velocity))
-    if v > 0.0:
-        t_c = HERTZ_TIME_CONSTANT * (np.min(mu) ** 2 / (np.max(chain.stiffness) ** 2 * v)) ** 0.2
-        times.append(t_c / STEPS_PER_CONTACT_TIME[chain.damping_law])
-    k_lin = 1.5 * np.cbrt(chain.stiffness**2 * f0)  # dF/d(delta), N/m
-    k_sum = k_lin.copy()  # stiffness around particle i: contacts i - 1 and i
-    k_sum[1:] += k_lin[:-1]
-    omega2 = 2.0 * np.max(k_sum / chain.mass)
-    if omega2 > 0.0:
-        times.append(2.0 * np.pi / np.sqrt(omega2) / STEPS_PER_LINEAR_PERIOD)
-    damped = chain.damping > 0
-    if chain.damping_law is not DampingLaw.HERTZ_KUWABARA_KONO and damped.any():
-        times.append(0.5 * np.min(mu[damped] / chain.damping[damped]))
-    if not times:
+    dt = _step_limit(chain.mass, chain.stiffness, chain.damping, f0,
+                     abs(float(striker_velocity)),
+                     float(STEPS_PER_CONTACT_TIME[chain.damping_law]),
+                     chain.damping_law is not DampingLaw.HERTZ_KUWABARA_KONO)
+    if not np.isfinite(dt):
         raise ValueError("no time scale: zero striker velocity and no static compression")
-    return float(min(times))
+    return dt
+
+
+@numba.njit(cache=True)
+def _step_limit(mass, stiffness, damping, f0, v, steps_per_contact_time, dashpot_time):
+    # The three limits of stable_step in one compiled pass (~1 us; the numpy form took ~20 us
+    # of small-array calls on every simulate). inf when none applies.
+    n = mass.shape[0]
+    mu_min = np.inf
+    omega2 = 0.0
+    t_damp = np.inf
+    for k in range(n):
+        # reduced mass of contact k; the wall (last contact) is an infinite mass
+        mu = mass[k] * mass[k + 1] / (mass[k] + mass[k + 1]) if k < n - 1 else mass[k]
+        mu_min = min(mu_min, mu)
+        # linearised stiffness around particle k: contacts k - 1 and k, dF/d(delta) in N/m
+        k_sum = 1.5 * np.cbrt(stiffness[k] ** 2 * f0[k])
+        if k > 0:
+            k_sum += 1.5 * np.cbrt(stiffness[k - 1] ** 2 * f0[k - 1])
+        omega2 = max(omega2, 2.0 * k_sum / mass[k])
+        if dashpot_time and damping[k] > 0.0:
+            t_damp = min(t_damp, 0.5 * mu / damping[k])
+    dt = t_damp
+    if v > 0.0:
+        t_c = HERTZ_TIME_CONSTANT * (mu_min**2 / (np.max(stiffness) ** 2 * v)) ** 0.2
+        dt = min(dt, t_c / steps_per_contact_time)
+    if omega2 > 0.0:
+        dt = min(dt, 2.0 * np.pi / np.sqrt(omega2) / STEPS_PER_LINEAR_PERIOD)
+    return dt
 
 
 def _check_times(t_out: ArrayLike) -> np.ndarray:

@@ -417,20 +417,10 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
             # coefficients are loaded once (loads, not arithmetic, bound this loop: 25 %
             # faster than separate sums for the gap and its rate).
             g = cs[7, k]
-            d = g
-            g = g * x + cs[6, k]
-            d = d * x + g
-            g = g * x + cs[5, k]
-            d = d * x + g
-            g = g * x + cs[4, k]
-            d = d * x + g
-            g = g * x + cs[3, k]
-            d = d * x + g
-            g = g * x + cs[2, k]
-            d = d * x + g
-            g = g * x + cs[1, k]
-            d = d * x + g
-            g = g * x + cs[0, k]
+            d = 0.0
+            for q in range(6, -1, -1):
+                d = d * x + g
+                g = g * x + cs[q, k]
             out_d[j, k] = max(g, 0.0)
             out_F[j, k] = _force(g, d * inv_h, cA[k], cg[k], hkk)
         j += 1

@@ -113,10 +113,10 @@ def stable_step(chain: Chain, striker_velocity: float) -> float:
     """Default nominal step of the fixed-step scheme, s.
 
     The smallest of: the Hertz collision time of the stiffest contact with the lightest
-    reduced mass at the striker speed over ``STEPS_PER_CONTACT_TIME``; the period of the
-    highest linearised frequency of the statically compressed chain (Gershgorin bound)
-    over ``STEPS_PER_LINEAR_PERIOD``; and half the fastest dashpot time mu/gamma (far
-    inside the real stability interval of DOP853, about [-6, 0]).
+    reduced mass at the striker speed over ``STEPS_PER_CONTACT_TIME`` (per damping law);
+    the period of the highest linearised frequency of the statically compressed chain
+    (Gershgorin bound) over ``STEPS_PER_LINEAR_PERIOD``; and half the fastest dashpot time
+    mu/gamma (far inside the real stability interval of DOP853, about [-6, 0]).
 
     Parameters
     ----------
@@ -133,7 +133,7 @@ def stable_step(chain: Chain, striker_velocity: float) -> float:
 
 def _stable_step(chain: Chain, striker_velocity: float, f0: np.ndarray) -> float:
     # stable_step with the static contact forces f0 (N) given.
-    dt = _step_limit(chain.mass, chain.stiffness, chain.damping, f0,
+    dt = _step_limit(chain.mass, _reduced_masses(chain), chain.stiffness, chain.damping, f0,
                      abs(float(striker_velocity)),
                      float(STEPS_PER_CONTACT_TIME[chain.damping_law]),
                      chain.damping_law is not DampingLaw.HERTZ_KUWABARA_KONO)
@@ -143,27 +143,24 @@ def _stable_step(chain: Chain, striker_velocity: float, f0: np.ndarray) -> float
 
 
 @numba.njit(cache=True)
-def _step_limit(mass, stiffness, damping, f0, v, steps_per_contact_time, dashpot_time):
-    # The three limits of stable_step in one compiled pass (~1 us; the numpy form took ~20 us
-    # of small-array calls on every simulate). inf when none applies.
+def _step_limit(mass, mu, stiffness, damping, f0, v, steps_per_contact_time, dashpot_time):
+    # The three limits of stable_step in one compiled pass (the numpy form took ~20 us of
+    # small-array calls on every simulate); mu = reduced masses of the contacts. inf when
+    # none applies.
     n = mass.shape[0]
-    mu_min = np.inf
     omega2 = 0.0
     t_damp = np.inf
     for k in range(n):
-        # reduced mass of contact k; the wall (last contact) is an infinite mass
-        mu = mass[k] * mass[k + 1] / (mass[k] + mass[k + 1]) if k < n - 1 else mass[k]
-        mu_min = min(mu_min, mu)
         # linearised stiffness around particle k: contacts k - 1 and k, dF/d(delta) in N/m
         k_sum = 1.5 * np.cbrt(stiffness[k] ** 2 * f0[k])
         if k > 0:
             k_sum += 1.5 * np.cbrt(stiffness[k - 1] ** 2 * f0[k - 1])
         omega2 = max(omega2, 2.0 * k_sum / mass[k])
         if dashpot_time and damping[k] > 0.0:
-            t_damp = min(t_damp, 0.5 * mu / damping[k])
+            t_damp = min(t_damp, 0.5 * mu[k] / damping[k])
     dt = t_damp
     if v > 0.0:
-        t_c = HERTZ_TIME_CONSTANT * (mu_min**2 / (np.max(stiffness) ** 2 * v)) ** 0.2
+        t_c = HERTZ_TIME_CONSTANT * (np.min(mu) ** 2 / (np.max(stiffness) ** 2 * v)) ** 0.2
         dt = min(dt, t_c / steps_per_contact_time)
     if omega2 > 0.0:
         dt = min(dt, 2.0 * np.pi / np.sqrt(omega2) / STEPS_PER_LINEAR_PERIOD)

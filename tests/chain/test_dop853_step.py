@@ -45,8 +45,8 @@ def test_step_matches_scipy_dop853_step(law):
     h = 1.5e-6
     kv = np.zeros((_dop853_step.N_STAGES, p + 1))
     u1, v1 = pad.copy(), pad.copy()
-    _dop853_step.rk_step(u, v, a0, h, cA, cg, law == kernel.LAW_HKK, load_p, inv_m, kv,
-                         pad.copy(), pad.copy(), u1, v1)
+    _dop853_step.rk_step(u, v, a0, h, _dop853_step.STEP_REGULAR, cA, cg, law == kernel.LAW_HKK,
+                         load_p, inv_m, kv, pad.copy(), pad.copy(), u1, v1)
 
     def rhs(_t, y):
         uu, vv = pad.copy(), pad.copy()
@@ -89,7 +89,8 @@ def test_local_error_is_ninth_order():
         a0 = np.zeros(m)
         kernel.accelerations(uu, vv, cA, cg, kernel.LAW_LINEAR, load, inv_m, a0)
         u1, v1 = np.zeros(m), np.zeros(m)
-        fn(uu, vv, a0, h, cA, cg, False, load, inv_m, kv, np.zeros(m), np.zeros(m), u1, v1)
+        fn(uu, vv, a0, h, _dop853_step.STEP_REGULAR, cA, cg, False, load, inv_m, kv, np.zeros(m),
+           np.zeros(m), u1, v1)
         return u1, v1
 
     def fine(h):

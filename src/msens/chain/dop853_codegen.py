@@ -9,6 +9,23 @@ of a step (1.6 -> 0.8 us for 30 particles, ``benchmarks/chain_speed.py``). The n
 SciPy's DOP853 coefficients (see :mod:`msens.chain.kernel`), printed with ``repr`` so that
 they round-trip exactly.
 
+The same step serves three time variables (``mode``), with one coefficient table each:
+
+- 0, ``STEP_REGULAR``: the time itself;
+- 1, ``STEP_SQRT_START``: s with t = t_a + s^2, for a step that starts where a contact closes;
+- 2, ``STEP_SQRT_END``: s with t = t_b - s^2, for a step that ends where a contact opens.
+
+Why: the Hertz force of a contact that has just closed grows as (t - t_0)^{3/2}, so the
+solution has a (t - t_0)^{7/2} term that caps the order of any Runge-Kutta step starting
+(or, when it opens, ending) at t_0. In s = sqrt(t - t_0) every term of the solution's
+expansion (powers of (t - t_0)^{1/2}) is a power of s: the step in s keeps DOP853's order in s.
+The substitution only rescales the stage derivatives by dt/ds = 2 s, which is a per-stage
+factor w_l (2 c_l, or 2 (1 - c_l) for the step ending at the singularity); with
+W = A diag(w) the second-order form below keeps its shape: stage displacements
+u + h (W 1)_s v + h^2 (W W)_s. kv, velocities v + h W_s. kv, solution weights b diag(w)
+(their sum is 1 in all three modes, so the solution keeps u + h v + ...). The nonzero
+pattern of W W is contained in that of A A, so the regular step loses nothing.
+
 Regenerate after changing this file: ``python -m msens.chain.dop853_codegen`` (a test checks
 that the committed module matches).
 """
@@ -39,13 +56,22 @@ import numpy as np
 
 FASTMATH = {fastmath}
 N_STAGES = {n_stages}
+STEP_REGULAR = 0
+STEP_SQRT_START = 1
+STEP_SQRT_END = 2
+
+# Stage and solution coefficients of the three modes (rows), in the order they are read.
+_COEF = np.array([
+{table}])
 
 
 @nb.njit(cache=True, fastmath=FASTMATH)
-def rk_step(u, v, a0, h, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
+def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
     """One DOP853 step of size ``h`` (s) from (u, v); ``a0`` = acceleration at (u, v).
 
-    Padded layout of :func:`msens.chain.kernel.contact_forces`: ``u``, ``v``, ``a0``, ``tu``,
+    ``mode`` selects the time variable of the step (see :mod:`msens.chain.dop853_codegen`):
+    ``STEP_REGULAR``, ``STEP_SQRT_START`` (a contact closed at the step's start) or
+    ``STEP_SQRT_END`` (a contact opens at its end). Padded layout of :func:`msens.chain.kernel.contact_forces`: ``u``, ``v``, ``a0``, ``tu``,
     ``tv``, ``u1``, ``v1`` have shape (p + 1,) and ``cA``, ``cg``, ``load``,
     ``inv_m`` shape (p,), zero past the n particles. ``hkk`` selects the Kuwabara-Kono
     force law (else the linear dashpot). ``kv`` (N_STAGES, p + 1) receives the stage
@@ -73,14 +99,41 @@ _FORCES = '''    f_prev = 0.0
 '''
 
 
-def _weighted_sum(weights: np.ndarray, scale: str, name: str) -> tuple[list[str], list[str]]:
-    """Lines defining the scaled nonzero weights, and the terms of the sum over stages."""
+def _weighted_sum(weights: np.ndarray, scale: str, name: str, table: list[list[float]],
+                  ) -> tuple[list[str], list[str]]:
+    """Lines loading the scaled weights, nonzero in any mode (rows of ``weights``), and the
+    terms of the sum over stages; the weights are appended to ``table``'s rows."""
     lines, terms = [], []
-    for j, w in enumerate(weights):
-        if w != 0.0:
-            lines.append(f"    {name}{j} = {scale} * {float(w)!r}")
-            terms.append(f"{name}{j} * kv[{j}, i]")
+    for j in np.flatnonzero(np.any(weights != 0.0, axis=0)):
+        lines.append(f"    {name}{j} = {scale} * _COEF[mode, {len(table[0])}]")
+        terms.append(f"{name}{j} * kv[{j}, i]")
+        for row, w in zip(table, weights[:, j], strict=True):
+            row.append(float(w))
     return lines, terms
+
+
+def _tableaus() -> dict[str, np.ndarray]:
+    """DOP853 in the second-order form for the three time variables (leading axis: mode).
+
+    ``ch`` (3, s): displacement weights of v per stage; ``au`` (3, s, s) and ``av`` of the
+    stage accelerations in the stage displacements and velocities; ``bu``, ``bv`` (3, s) in
+    the solution.
+    """
+    s_count = _dop.N_STAGES
+    a = np.asarray(_dop.A[:s_count, :s_count], dtype=float)
+    b = np.asarray(_dop.B, dtype=float)
+    c = a.sum(axis=1)
+    out: dict[str, list] = {"ch": [], "au": [], "av": [], "bu": [], "bv": []}
+    for w in (None, 2.0 * c, 2.0 * (1.0 - c)):
+        # Regular mode unscaled, so that its numbers are exactly those of the classic form.
+        aw = a if w is None else a * w
+        bw = b if w is None else b * w
+        out["ch"].append(c if w is None else aw.sum(axis=1))
+        out["au"].append(aw @ aw)
+        out["av"].append(aw)
+        out["bu"].append(bw @ aw)
+        out["bv"].append(bw)
+    return {k: np.array(x) for k, x in out.items()}
 
 
 def _assign(target: str, first: str, terms: list[str]) -> str:
@@ -101,26 +154,29 @@ def step_source() -> str:
     str
     """
     s_count = _dop.N_STAGES
-    a = np.asarray(_dop.A[:s_count, :s_count], dtype=float)
-    b = np.asarray(_dop.B, dtype=float)
-    c = a.sum(axis=1)
-    aa, ba = a @ a, b @ a
+    tab = _tableaus()
+    table: list[list[float]] = [[], [], []]
     flags = "{" + ", ".join(f'"{f}"' for f in FASTMATH) + "}"
-    out = [_HEADER.format(fastmath=flags, n_stages=s_count)]
+    body = []
     for s in range(1, s_count):
-        lu, su = _weighted_sum(aa[s, :s], "hh", "cu")
-        lv, sv = _weighted_sum(a[s, :s], "h", "cv")
-        out.append(f"    # stage {s}\n    ch = h * {float(c[s])!r}\n")
-        out.append("".join(x + "\n" for x in lu + lv))
-        out.append("    for i in range(m):\n"
-                   + _assign("tu[i]", "u[i] + ch * v[i]", su) + _assign("tv[i]", "v[i]", sv))
-        out.append(_FORCES.format(s=s))
-    lu, su = _weighted_sum(ba, "hh", "bu")
-    lv, sv = _weighted_sum(b, "h", "bv")
-    out.append("    # solution\n" + "".join(x + "\n" for x in lu + lv))
-    out.append("    for i in range(m):\n"
-               + _assign("u1[i]", "u[i] + h * v[i]", su) + _assign("v1[i]", "v[i]", sv))
-    return "".join(out)
+        body.append(f"    # stage {s}\n    ch = h * _COEF[mode, {len(table[0])}]\n")
+        for row, x in zip(table, tab["ch"][:, s], strict=True):
+            row.append(float(x))
+        lu, su = _weighted_sum(tab["au"][:, s, :s], "hh", "cu", table)
+        lv, sv = _weighted_sum(tab["av"][:, s, :s], "h", "cv", table)
+        body.append("".join(x + "\n" for x in lu + lv))
+        body.append("    for i in range(m):\n"
+                    + _assign("tu[i]", "u[i] + ch * v[i]", su) + _assign("tv[i]", "v[i]", sv))
+        body.append(_FORCES.format(s=s))
+    lu, su = _weighted_sum(tab["bu"], "hh", "bu", table)
+    lv, sv = _weighted_sum(tab["bv"], "h", "bv", table)
+    body.append("    # solution\n" + "".join(x + "\n" for x in lu + lv))
+    body.append("    for i in range(m):\n"
+                + _assign("u1[i]", "u[i] + h * v[i]", su) + _assign("v1[i]", "v[i]", sv))
+    rows = "".join("    [" + ",\n     ".join(", ".join(repr(x) for x in row[i:i + 3])
+                                           for i in range(0, len(row), 3)) + "],\n"
+                   for row in table)
+    return _HEADER.format(fastmath=flags, n_stages=s_count, table=rows) + "".join(body)
 
 
 def write(path: Path = TARGET) -> None:

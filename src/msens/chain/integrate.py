@@ -50,7 +50,7 @@ HERTZ_TIME_CONSTANT = 2.0 * 1.25**0.4 * 0.4 * float(beta(0.4, 0.5))
 #: cannot follow; the error of the first step shrinks like 2^{-2.5 K} (2^{-1.5 K}). K = 3 would
 #: save 4-5 % of the steps on the paper chain at about the same waveform error there, but
 #: the single Hertz collision's peak force then errs by 4e-8 instead of < 1e-8.
-GRADE_LEVELS = {DampingLaw.LINEAR: 4, DampingLaw.LINEAR_LOADING: 4,
+GRADE_LEVELS = {DampingLaw.LINEAR: 2, DampingLaw.LINEAR_LOADING: 2,
                 DampingLaw.HERTZ_KUWABARA_KONO: 10}
 #: Runs per work item of :func:`simulate_batch`'s parallel loop.
 BATCH_CHUNK = 4

@@ -76,7 +76,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from msens.chain._dop853_step import FASTMATH, N_STAGES, rk_step
+from msens.chain._dop853_step import (
+    FASTMATH, N_STAGES, STEP_REGULAR, STEP_SQRT_END, STEP_SQRT_START, rk_step)
 
 #: Order of the Runge-Kutta formula.
 RK_ORDER = 8
@@ -93,6 +94,10 @@ _NEWTON_MAX = 4
 # A predicted dashpot switch is accepted at the end of a step when the rate's zero lies
 # within this fraction of the step from it.
 _PRED_TOL = 1e-3
+_CLOSE_FRAC = 0.5
+_CLOSE_MAX = 8
+# Longest step taken in sqrt(t0 - t) to an opening, in nominal steps.
+_END_FRAC = 0.25
 # Steps with at most this many output samples evaluate the interpolant from its weights;
 # more amortise forming its monomial coefficients.
 _FEW_SAMPLES = 3
@@ -431,6 +436,119 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
     return j
 
 
+@nb.njit(cache=True, inline="always")
+def _sqrt_coefficients(septic, hs, p0, r0, q0, s0, dp, r1, q1, s1):
+    """Monomial coefficients c0..c10 of the interpolant of a step taken in x = sqrt((t -
+    t_ref) / hs), t_ref its singular end (x = 0), hs = +-h.
+
+    In x the solution is P(t_ref + hs x^2) + (singular terms): the even coefficients are the
+    Taylor coefficients of the regular part P at t_ref (value p0, rate r0, acceleration q0,
+    jerk s0: c2 = hs r0, c4 = hs^2 q0 / 2, c6 = hs^3 s0 / 6), c1 = 0, and the highest ones
+    match the value p0 + dp, rate r1, acceleration q1 (and jerk s1) at x = 1.
+
+    - ``septic`` (linear-dashpot laws, jerks known): the singular terms start at x^7, the
+      Hertz (t - t_ref)^{7/2}; c7..c10 from the four end data. Exact for the regular part
+      to (t - t_ref)^5 and the singular terms (t - t_ref)^{7/2}, (t - t_ref)^{9/2}.
+    - else (Kuwabara-Kono: its jerk is unbounded at t_ref and the singular terms start at
+      x^5): c5..c7 from value, rate and acceleration at x = 1.
+    """
+    hh = hs * hs
+    c2 = hs * r0
+    c4 = 0.5 * hh * q0
+    # Value and first (three) x-derivatives at x = 1 left for the highest coefficients;
+    # their inverse systems in exact rationals.
+    if septic:
+        c6 = hh * hs * s0 / 6.0
+        e0 = dp - c2 - c4 - c6
+        e1 = 2.0 * hs * r1 - 2.0 * c2 - 4.0 * c4 - 6.0 * c6
+        e2 = 2.0 * hs * r1 + 4.0 * hh * q1 - 2.0 * c2 - 12.0 * c4 - 30.0 * c6
+        e3 = 12.0 * hh * q1 + 8.0 * hh * hs * s1 - 24.0 * c4 - 120.0 * c6
+        return (p0, c2, 0.0, c4, 0.0, c6,
+                120.0 * e0 - 36.0 * e1 + 4.0 * e2 - e3 / 6.0,
+                -315.0 * e0 + 99.0 * e1 - 11.5 * e2 + 0.5 * e3,
+                280.0 * e0 - 91.0 * e1 + 11.0 * e2 - 0.5 * e3,
+                -84.0 * e0 + 28.0 * e1 - 3.5 * e2 + e3 / 6.0)
+    e0 = dp - c2 - c4
+    e1 = 2.0 * hs * r1 - 2.0 * c2 - 4.0 * c4
+    e2 = 2.0 * hs * r1 + 4.0 * hh * q1 - 2.0 * c2 - 12.0 * c4
+    return (p0, c2, 0.0, c4, 21.0 * e0 - 6.0 * e1 + 0.5 * e2, -35.0 * e0 + 11.0 * e1 - e2,
+            15.0 * e0 - 5.0 * e1 + 0.5 * e2, 0.0, 0.0, 0.0)
+
+
+@nb.njit(cache=True, fastmath=_FM)
+def _sample_sqrt(t_out, j, t0, h, mode, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
+                 store_uv, out_F, out_d, out_u, out_v, us, vs, Fp, cs):
+    """:func:`_sample` for a step taken in a square-root time variable (``mode``).
+
+    The interpolant is the Hermite polynomial in x = sqrt((t - t_ref) / hs): t_ref = t0, hs = h
+    for ``STEP_SQRT_START`` (a contact closed at t0), t_ref = t0 + h, hs = -h for
+    ``STEP_SQRT_END`` (one opens at t0 + h). In x the solution is smooth (see
+    :mod:`msens.chain.dop853_codegen`), in t it is not. Rates are d/dx over dt/dx = 2 hs x,
+    taken from the polynomial with its x^1 term zero (no division by x). ``cs`` (8, p + 1)
+    receives the coefficients (c0, c2..c7, per contact or, with ``store_uv``, per particle).
+    """
+    m = cA.shape[0]
+    nt = t_out.shape[0]
+    hkk = law == LAW_HKK
+    if mode == STEP_SQRT_START:
+        t_ref, hs = t0, h
+        ur, vr, ar, jr, uo, vo, ao, jo = u0, v0, a0, j0, u1, v1, a1, j1
+    else:
+        t_ref, hs = t0 + h, -h
+        ur, vr, ar, jr, uo, vo, ao, jo = u1, v1, a1, j1, u0, v0, a0, j0
+    # Per particle (states wanted) or directly per contact gap (linear in the end data).
+    cols = m + 1 if store_uv else m
+    for k in range(cols):
+        if store_uv:
+            coef = _sqrt_coefficients(septic, hs, ur[k], vr[k], ar[k], jr[k], uo[k] - ur[k],
+                                      vo[k], ao[k], jo[k])
+        else:
+            g0 = ur[k] - ur[k + 1]
+            coef = _sqrt_coefficients(septic, hs, g0, vr[k] - vr[k + 1], ar[k] - ar[k + 1],
+                                      jr[k] - jr[k + 1], (uo[k] - uo[k + 1]) - g0,
+                                      vo[k] - vo[k + 1], ao[k] - ao[k + 1], jo[k] - jo[k + 1])
+        cs[0, k] = coef[0]
+        for q in range(1, 10):
+            cs[q, k] = coef[q]
+    inv_2hs = 0.5 / hs
+    while j < nt and t_out[j] <= t0 + h:
+        x = np.sqrt(max((t_out[j] - t_ref) / hs, 0.0))
+        for k in range(cols):
+            # value c0 + x^2 (c2 + c3 x + ... + c10 x^8) (cs[q] = c_{q+1}, c1 = 0); rate =
+            # (d/dx) / (dt/dx = 2 hs x) = (2 c2 + 3 c3 x + ... + 10 c10 x^8) / (2 hs)
+            g = cs[9, k]
+            d = 10.0 * cs[9, k]
+            for q in range(8, 0, -1):
+                g = g * x + cs[q, k]
+                d = d * x + (q + 1) * cs[q, k]
+            g = cs[0, k] + x * x * g
+            r = d * inv_2hs
+            if store_uv:
+                us[k] = g
+                vs[k] = r
+            else:
+                out_d[j, k] = max(g, 0.0)
+                out_F[j, k] = _force(g, r, cA[k], cg[k], hkk)
+        if store_uv:
+            j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp)
+        else:
+            j += 1
+    return j
+
+
+@nb.njit(cache=True, inline="always")
+def _closing_grade(r, q, levels):
+    """Grading depth after a contact closed at approach rate r and relative acceleration q
+    (both times powers of the nominal step: r dt, q dt^2): at least ``levels``, deeper while
+    the first step dt 2^-g exceeds _CLOSE_FRAC of the time 2 |r| / |q| over which the rate
+    changes by itself (a slow, grazing closing: there the expansion in sqrt(t - t0)
+    converges only over that time)."""
+    g = levels
+    while g < _CLOSE_MAX and _CLOSE_FRAC * 2.0 * abs(r) < abs(q) * 0.5**g:
+        g += 1
+    return g
+
+
 @nb.njit(cache=True)
 def _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp):
     # Forces and approaches (and with store_uv the states) of row j from (us, vs).
@@ -509,7 +627,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     tv = np.zeros(m)
     F = np.zeros(m)
     us = np.zeros(m)
-    cs = np.zeros((8, m))
+    cs = np.zeros((10, m))
     j0 = np.zeros(m)
     j1 = np.zeros(m)
     vs = np.zeros(m)
@@ -554,27 +672,67 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     t = 0.0
     steps = 0
     toggles_here = 0
-    h_floor = dt / 2.0**grade_levels
-    # Steps left in a geometric grading after a contact closed (sizes dt 2^-min(grade, K)).
+    # Steps left in a geometric grading after a contact closed (sizes dt 2^-grade), and
+    # whether the next step starts where a contact closed (then taken in sqrt(t - t0)).
     grade = 0
+    sqrt_start = False
     for k in range(n):
         if closed[k] > 0.0 and _gap(u, k) == 0.0:
-            grade = grade_levels + 1
+            grade = grade_levels
+            sqrt_start = True
     while j < nt:
+        if steps > 200000:
+            print("STUCK", t, grade, toggles_here)
+            if steps > 200010:
+                break
         h = dt
         if grade > 0:
-            h = dt / 2.0 ** min(grade, grade_levels)
-        else:
-            # Approach a closed contact that is about to open in halving steps: half the
-            # least time to opening (gap / opening rate) above 2 h_floor, if below 2 dt.
-            # Branch-free, so that the scan over contacts vectorises.
-            tau_min = 2.0 * dt
-            for k in range(n):
-                r = v[k] - v[k + 1]
-                tau = (u[k] - u[k + 1]) / max(-r, 1e-300)
-                tau = tau if (closed[k] > 0.0 and r < 0.0 and tau > 2.0 * h_floor) else 2.0 * dt
-                tau_min = min(tau_min, tau)
-            if tau_min < 2.0 * dt:
+            h = dt / 2.0**grade
+        mode = STEP_SQRT_START if sqrt_start else STEP_REGULAR
+        # A closed contact about to open: the least time to opening, tau, from the gap's
+        # Taylor polynomial to second order (its smallest positive root; branch-free, so that
+        # the scan vectorises). Opening within the step: the step ends there, taken in
+        # sqrt(t0 - t) (the Newton refinement of its length follows the step); within two
+        # steps: half-way first.
+        tau_min = 2.0 * h
+        for k in range(n):
+            g = u[k] - u[k + 1]
+            r = v[k] - v[k + 1]
+            q = a0[k] - a0[k + 1]
+            disc = r * r - 2.0 * q * g
+            tau = 2.0 * g / max(np.sqrt(max(disc, 0.0)) - r, 1e-300)
+            tau = tau if (closed[k] > 0.0 and r < 0.0 and disc >= 0.0) else 2.0 * h
+            tau_min = min(tau_min, tau)
+        k_open = -1
+        h_end = _END_FRAC * dt
+        if tau_min < 2.0 * h:
+            if not sqrt_start and tau_min > min(h, 1.5 * h_end):
+                # Approach in halving steps (each as long as the distance left at its end).
+                h = 0.5 * tau_min
+            elif not sqrt_start:
+                # Which contact (a scalar pass, as rare as openings).
+                h_open = 2.0 * h
+                for k in range(n):
+                    r = _gap(v, k)
+                    g = _gap(u, k)
+                    disc = r * r - 2.0 * _gap(a0, k) * g
+                    if closed[k] > 0.0 and r < 0.0 and disc >= 0.0:
+                        tau = 2.0 * g / (np.sqrt(disc) - r)
+                        if tau < h_open:
+                            h_open = tau
+                            k_open = k
+                if k_open >= 0:
+                    h = h_open
+                    mode = STEP_SQRT_END
+                if k_open >= 0 and h <= _THETA_NOW * dt and toggles_here < 4 * n:
+                    # Opening now.
+                    toggles_here += 1
+                    _toggle(0, k_open, closed, damp, A, gam, cA, cg)
+                    _stale(fresh, k_open)
+                    accelerations(u, v, cA, cg, law, load_p, inv_m, a0)
+                    j0_ok = False
+                    continue
+            else:
                 h = 0.5 * tau_min
         # Loading law: end the step where a dashpot is predicted to switch (the zero of the
         # approach rate, extrapolated from the previous step's cubic), instead of stepping
@@ -595,6 +753,10 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                             h_max = (th - 1.0) * h_prev
                             h = h_max
                             k_pred = k
+            if k_pred >= 0 and mode == STEP_SQRT_END:
+                # The step now ends before the opening.
+                mode = STEP_REGULAR
+                k_open = -1
             if k_pred >= 0 and h <= _PRED_TOL * dt and toggles_here < 4 * n:
                 # The switch is due now.
                 toggles_here += 1
@@ -606,10 +768,37 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         if t + h > t_end - 0.01 * dt:
             # Stretch the last step by at most 1% rather than leave a sliver.
             h = t_end - t
+            if mode == STEP_SQRT_END:
+                mode = STEP_REGULAR
+                k_open = -1
         if h <= 0.0:
             h = dt  # only rounding left: finish the last samples with one more step
-        rk_step(u, v, a0, h, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
+        rk_step(u, v, a0, h, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
         steps += 1
+        if k_open >= 0:
+            # Newton on the step length until contact k_open's gap vanishes at the step's end.
+            h_first = h
+            ok = False
+            for it in range(_NEWTON_MAX + 1):
+                g = _gap(u1, k_open)
+                r = _gap(v1, k_open)
+                if abs(g) <= _GAP_TOL * h * abs(r):
+                    ok = True
+                    break
+                hn = h - g / r if r < 0.0 else -1.0
+                if it == _NEWTON_MAX or not 0.0 < hn <= 2.0 * h_first:
+                    break
+                h = hn
+                rk_step(u, v, a0, h, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
+                steps += 1
+            if not ok:
+                # The contact does not open as estimated (it grazes): a regular step of the
+                # estimated length; an opening in it is found as a violated state below.
+                mode = STEP_REGULAR
+                k_open = -1
+                h = h_first
+                rk_step(u, v, a0, h, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
+                steps += 1
         if loading:
             accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
         # Find the earliest violated contact state: kind 0 = gap (open/closed), kind 1 = the
@@ -626,6 +815,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             y = damp[k] * (r1 < -rate_tol) + (closed[k] - damp[k]) * (r1 > rate_tol)
             bad = max(bad, x + (loading and gam[k] > 0.0) * y)
         for k in range(n if bad > 0.0 else 0):
+            if k == k_open:
+                continue  # opens at the step's end (below)
             g1 = _gap(u1, k)
             if (closed[k] > 0.0 and g1 < 0.0) or (closed[k] == 0.0 and g1 > 0.0):
                 th = _first_violation(_gap(u, k), h * _gap(v, k), g1,
@@ -657,16 +848,39 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 # The contact changes state now: toggle and redo the step.
                 toggles_here += 1
                 if _toggle(kind, kmin, closed, damp, A, gam, cA, cg):
-                    grade = grade_levels + 1
+                    sqrt_start = True
                 _stale(fresh, kmin)
                 accelerations(u, v, cA, cg, law, load_p, inv_m, a0)
+                if sqrt_start:
+                    grade = _closing_grade(_gap(v, kmin) * dt, _gap(a0, kmin) * dt * dt,
+                                           grade_levels)
                 j0_ok = False
                 continue
             if th_min > _THETA_NOW:
                 # Cut the step back to the crossing; refine by Newton on the event function.
+                # The cut step ends where contact kmin opens (in sqrt(t0 - t), unless it
+                # starts at a closing) or switches otherwise (regular).
+                k_open = -1
+                opening = kind == 0 and closed[kmin] > 0.0
+                if mode != STEP_SQRT_START:
+                    mode = STEP_SQRT_END if opening else STEP_REGULAR
+                    k_open = kmin if opening else -1
                 hc = th_min * h
-                for it in range(_NEWTON_MAX + 1):
-                    rk_step(u, v, a0, hc, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
+                if mode == STEP_SQRT_END and hc > 1.5 * h_end:
+                    # An opening that the estimate missed, far in the step: end this step
+                    # h_end before it instead (regular); the next one ends at it.
+                    mode = STEP_REGULAR
+                    hc -= h_end
+                    kmin = -1
+                    k_open = -1
+                    rk_step(u, v, a0, hc, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1,
+                            v1)
+                    steps += 1
+                    if loading:
+                        accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
+                for it in range(_NEWTON_MAX + 1 if kmin >= 0 else 0):
+                    rk_step(u, v, a0, hc, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1,
+                            v1)
                     steps += 1
                     if it == _NEWTON_MAX or kind == 1:
                         # A rate switch is only a kink of the force: the cubic estimate of its
@@ -711,9 +925,14 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 jerks(u, v, a0, cA, cg, inv_m, j0)
             jerks(u1, v1, a1, cA, cg, inv_m, j1)
             j1_ok = True
-        j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, j0, u1, v1, a1, j1, cA, cg, law,
-                    septic, store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs)
+        if mode == STEP_REGULAR or h < 1e-3 * dt:
+            j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, j0, u1, v1, a1, j1, cA, cg, law,
+                        septic, store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs)
+        elif j < nt and t_out[j] <= t + h:
+            j = _sample_sqrt(t_out, j, t, h, mode, u, v, a0, j0, u1, v1, a1, j1, cA, cg, law,
+                             septic, store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs)
         t += h
+        sqrt_start = False
         u, u1 = u1, u
         v, v1 = v1, v
         toggles_here = 0
@@ -721,8 +940,16 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             grade -= 1
         if kmin >= 0 and th_min > _THETA_NOW:
             if _toggle(kind, kmin, closed, damp, A, gam, cA, cg):
-                grade = grade_levels + 1
+                sqrt_start = True
             _stale(fresh, kmin)
+            accelerations(u, v, cA, cg, law, load_p, inv_m, a0)
+            if sqrt_start:
+                grade = _closing_grade(_gap(v, kmin) * dt, _gap(a0, kmin) * dt * dt,
+                                       grade_levels)
+            j0_ok = False
+        elif k_open >= 0:
+            _toggle(0, k_open, closed, damp, A, gam, cA, cg)
+            _stale(fresh, k_open)
             accelerations(u, v, cA, cg, law, load_p, inv_m, a0)
             j0_ok = False
         elif k_pred >= 0:

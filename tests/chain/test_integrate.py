@@ -116,6 +116,68 @@ def test_hermite_interpolant_reproduces_polynomials(septic, degree):
         assert rate == pytest.approx(d[1](x) / h, abs=1e-11)
 
 
+@pytest.mark.parametrize("septic", [True, False])
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_sqrt_interpolant_reproduces_its_function_class(septic, sign):
+    """The interpolant of a step in x = sqrt(|t - t_ref|) is exact, value and rate, for
+    P(t - t_ref) + a |t - t_ref|^{7/2} + b |t - t_ref|^{9/2} with P quintic (linear-dashpot
+    laws, ``septic``), and for P cubic plus |t - t_ref|^{5/2} and ^{7/2} terms (no jerks,
+    Kuwabara-Kono). sign +1: the singular end is the step's start, -1: its end."""
+    rng = np.random.default_rng(3)
+    h = 0.7
+    hs = sign * h
+    P = np.polynomial.Polynomial(rng.normal(size=6 if septic else 4))
+    powers = (3.5, 4.5) if septic else (2.5, 3.5)
+    amp = rng.normal(size=len(powers))
+
+    def f(tau, q):  # q-th derivative in t of the test function at t = t_ref + tau
+        out = P.deriv(q)(tau)
+        for a, e in zip(amp, powers, strict=True):
+            fall = np.prod([e - i for i in range(q)])
+            out += a * fall * np.abs(tau) ** (e - q) * np.sign(tau) ** q
+        return out
+
+    nq = 4 if septic else 3  # the Kuwabara-Kono jerk is unbounded at t_ref
+    ref = [f(0.0, q) for q in range(nq)] + [0.0] * (4 - nq)
+    other = [f(hs, q) for q in range(nq)] + [0.0] * (4 - nq)
+    c = kernel._sqrt_coefficients(septic, hs, ref[0], ref[1], ref[2], ref[3],
+                                  other[0] - ref[0], other[1], other[2], other[3])
+    full = np.zeros(11)
+    full[0], full[2:] = c[0], c[1:]
+    poly = np.polynomial.Polynomial(full)  # in x, c1 = 0
+    for x in (0.05, 0.3, 0.7, 0.95):
+        assert poly(x) == pytest.approx(f(hs * x * x, 0), abs=1e-12)
+        assert poly.deriv()(x) / (2.0 * hs * x) == pytest.approx(f(hs * x * x, 1), abs=1e-11)
+
+
+@pytest.mark.parametrize("law", [kernel.LAW_LINEAR, kernel.LAW_HKK])
+@pytest.mark.parametrize("k", [0, 5, 10])
+def test_local_update_after_a_switch_equals_the_full_pass(law, k):
+    """After contact k switches, the integrator updates only the accelerations (and jerks)
+    next to it; they must equal a full recomputation (to rounding: the full pass is
+    vectorised with fastmath, which may contract to fused multiply-adds)."""
+    rng = np.random.default_rng(k)
+    n = 11  # contact 10 is the wall's
+    p = kernel.padded_length(n)
+    u, v = np.zeros(p + 1), np.zeros(p + 1)
+    u[:n], v[:n] = rng.normal(scale=1e-6, size=n), rng.normal(scale=0.1, size=n)
+    cA, cg = np.zeros(p), np.zeros(p)
+    cA[:n], cg[:n] = rng.uniform(5e9, 1e10, n), rng.uniform(0.0, 5.0, n)
+    load, inv_m = np.zeros(p), np.zeros(p)
+    load[:n], inv_m[:n] = rng.normal(size=n), 1.0 / rng.uniform(1e-4, 1e-3, n)
+    a, jk = np.empty(p + 1), np.empty(p + 1)
+    kernel.accelerations(u, v, cA, cg, law, load, inv_m, a)
+    kernel.jerks(u, v, a, cA, cg, inv_m, jk)
+    cA[k], cg[k] = 0.0, 0.0  # the contact opens
+    kernel._update_near(k, u, v, a, jk, law != kernel.LAW_HKK, cA, cg, law, load, inv_m)
+    a_full, j_full = np.empty(p + 1), np.empty(p + 1)
+    kernel.accelerations(u, v, cA, cg, law, load, inv_m, a_full)
+    np.testing.assert_allclose(a, a_full, rtol=0, atol=1e-14 * np.abs(a_full).max())
+    if law != kernel.LAW_HKK:
+        kernel.jerks(u, v, a_full, cA, cg, inv_m, j_full)
+        np.testing.assert_allclose(jk, j_full, rtol=0, atol=1e-14 * np.abs(j_full).max())
+
+
 def test_paper_chain_converges_fast_through_contact_switches():
     """With switches located and the steps graded next to them, the damped paper chain
     converges at high order in the practical range (measured slope 4.2 over dt = 4, 3, 2 us,

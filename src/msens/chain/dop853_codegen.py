@@ -71,14 +71,16 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
 
     ``mode`` selects the time variable of the step (see :mod:`msens.chain.dop853_codegen`):
     ``STEP_REGULAR``, ``STEP_SQRT_START`` (a contact closed at the step's start) or
-    ``STEP_SQRT_END`` (a contact opens at its end). Padded layout of :func:`msens.chain.kernel.contact_forces`: ``u``, ``v``, ``a0``, ``tu``,
-    ``tv``, ``u1``, ``v1`` have shape (p + 1,) and ``cA``, ``cg``, ``load``,
-    ``inv_m`` shape (p,), zero past the n particles. ``hkk`` selects the Kuwabara-Kono
-    force law (else the linear dashpot). ``kv`` (N_STAGES, p + 1) receives the stage
-    accelerations, ``tu``/``tv`` are scratch; the result goes to (u1, v1).
+    ``STEP_SQRT_END`` (a contact opens at its end). Padded layout of
+    :func:`msens.chain.kernel.contact_forces`: ``u``, ``v``, ``a0``, ``tu``, ``tv``, ``u1``,
+    ``v1`` have shape (p + 1,) and ``cA``, ``cg``, ``load``, ``inv_m`` shape (p,), zero past
+    the n particles. ``hkk`` selects the Kuwabara-Kono force law (else the linear dashpot).
+    ``kv`` (N_STAGES, p + 1) receives the stage accelerations, ``tu``/``tv`` are scratch;
+    the result goes to (u1, v1).
 
-    Second-order form (u' = v): stage s has displacement u + c_s h v + h^2 sum_l (AA)_sl kv_l
-    and velocity v + h sum_l A_sl kv_l, the same method as on the first-order system.
+    Second-order form (u' = v): stage s has displacement u + ch_s h v + h^2 sum_l AU_sl kv_l
+    and velocity v + h sum_l AV_sl kv_l (regular mode: ch = c, AU = A A, AV = A), the same
+    method as on the first-order system.
     """
     m = cA.shape[0]
     hh = h * h

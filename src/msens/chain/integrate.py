@@ -31,10 +31,9 @@ from msens.chain.model import Chain, DampingLaw
 #: Default steps per Hertz collision time of the stiffest, lightest contact at the impact
 #: speed, per damping law. Measured on the paper chain against a converged reference (t_c =
 #: 15.6 us, 1 ms, 10 MHz samples), as peak-force / whole-waveform errors relative to the peak:
-#: LINEAR 1.0e-8 / 4.3e-8, 3.9e-8 / 1.3e-7, 1.6e-7 / 1.4e-6 at 8 / 5 / 4 steps; LINEAR_LOADING
-#: 9.3e-9 / 4.4e-8, 3.6e-8 / 2.3e-7, 2.0e-7 / 1.4e-6. Five keeps the waveform error four times
-#: below 1e-6 (septic dense output; with the quintic it needed eight for 4.5e-7 / 4.5e-7).
-#: HERTZ_KUWABARA_KONO (quintic output) 1.2e-7 / 1.9e-7 / 6.3e-7 peak error at 10 / 8 / 7.
+#: LINEAR 4.8e-9 / 2.6e-8, 4.9e-8 / 1.6e-7, 2.4e-7 / 9.7e-7 at 8 / 5 / 4 steps;
+#: LINEAR_LOADING 4.6e-9 / 3.9e-8, 3.5e-8 / 1.9e-7, 1.7e-7 / 1.1e-6. Five keeps the waveform
+#: error five times below 1e-6. HERTZ_KUWABARA_KONO (quintic output) 3.2e-7 / 2.3e-7 at 8.
 STEPS_PER_CONTACT_TIME = {DampingLaw.LINEAR: 5, DampingLaw.LINEAR_LOADING: 5,
                           DampingLaw.HERTZ_KUWABARA_KONO: 8}
 #: Steps per period of the highest linearised (precompressed) chain frequency.
@@ -45,13 +44,16 @@ STEPS_PER_LINEAR_PERIOD = 10
 #: Lifshitz, *Theory of Elasticity*, §9; equals Johnson's 2.87 (mu^2/(R* E*^2 v))^{1/5}).
 HERTZ_TIME_CONSTANT = 2.0 * 1.25**0.4 * 0.4 * float(beta(0.4, 0.5))
 
-#: Depth K of the geometric step grading after a contact closes (first step dt / 2^K). The
-#: force grows like t^{3/2} after closing (t^{1/2} for Kuwabara-Kono), which a Runge-Kutta step
-#: cannot follow; the error of the first step shrinks like 2^{-2.5 K} (2^{-1.5 K}). K = 3 would
-#: save 4-5 % of the steps on the paper chain at about the same waveform error there, but
-#: the single Hertz collision's peak force then errs by 4e-8 instead of < 1e-8.
+#: Depth K of the step grading after a contact closes: the first step, taken in sqrt(t - t0)
+#: (see :mod:`msens.chain.kernel`), is dt / 2^K, the next ones double up to dt. On the paper
+#: chain (LINEAR) K = 2, 3, 4 take 403, 411, 419 steps per ms at peak-force errors 4.9e-8,
+#: 4.5e-8, 4.4e-8 (waveform 1.6e-7, 2.5e-7, 2.6e-7): the steps in sqrt(t - t0) carry the
+#: closing's singularity (with regular steps K = 4 was needed: 2.9e-5 peak error at K = 0).
+#: HERTZ_KUWABARA_KONO (quintic output): K = 4, as K = 2 and 3 miss the single Hertz
+#: collision's peak force by 8e-8 at t_c/10 (test_integrate.py; 1341 against 1946 steps per
+#: ms on the paper chain at K = 10 before, at the same errors).
 GRADE_LEVELS = {DampingLaw.LINEAR: 2, DampingLaw.LINEAR_LOADING: 2,
-                DampingLaw.HERTZ_KUWABARA_KONO: 10}
+                DampingLaw.HERTZ_KUWABARA_KONO: 4}
 #: Runs per work item of :func:`simulate_batch`'s parallel loop.
 BATCH_CHUNK = 4
 #: Approach rates below this fraction of the impact speed do not switch the loading-only

@@ -267,10 +267,12 @@ def test_bad_step_and_batch_raise():
 def test_random_chains_match_the_adaptive_reference(law, seed):
     """Seeded random chains (6-12 particles, masses 10-50 g, A 0.5-2e10 N/m^1.5, gamma 0-8,
     static forces 0-1 N, gravity, striker 0.1-1 m/s), 0.3 ms: the largest force error after
-    impact is below 1e-6 of the peak force (measured over seeds 0-5: 1.6e-8 to 1.0e-7 for the
-    linear-dashpot laws, 5.4e-8 to 3.1e-7 for Kuwabara-Kono) against SciPy's DOP853 at rtol
-    1e-12. Exercises the event handling (contact
-    and dashpot switches, predicted switches) away from the paper chain's parameters."""
+    impact against SciPy's DOP853 at rtol 1e-12 is below 3e-7 of the peak force for the
+    linear-dashpot laws (measured over seeds 0-5: 1.1e-8 to 1.1e-7) and 1e-6 for
+    Kuwabara-Kono (5.4e-8 to 3.1e-7). Exercises the event handling (contact and dashpot
+    switches, predicted switches) away from the paper chain's parameters; seed 5 has a
+    contact opening right after another closes (4.9e-7 when the steps after a closing were
+    graded by count instead of by the time since it)."""
     rng = np.random.default_rng(seed)
     n = int(rng.integers(6, 13))
     chain = Chain(mass=rng.uniform(0.01, 0.05, n), stiffness=rng.uniform(5e9, 2e10, n),
@@ -280,4 +282,5 @@ def test_random_chains_match_the_adaptive_reference(law, seed):
     t = np.linspace(0.0, 3e-4, 3001)
     ref = simulate_reference(chain, v, t, rtol=1e-12).force
     force = simulate(chain, v, t).force
-    assert np.max(np.abs(force[1:] - ref[1:])) <= 1e-6 * np.max(ref)
+    tol = 1e-6 if law is DampingLaw.HERTZ_KUWABARA_KONO else 3e-7
+    assert np.max(np.abs(force[1:] - ref[1:])) <= tol * np.max(ref)

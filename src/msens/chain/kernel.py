@@ -11,8 +11,14 @@ a *hybrid* system: each contact carries an open/closed state that is frozen duri
 and a step whose end violates a state (a closed contact with delta < 0 or an open one with
 delta > 0) is cut back to the crossing. The crossing time is located on the cubic Hermite
 interpolant of the gap (values and rates at both ends), then refined by Newton steps that
-re-run the RK step to the new end until the residual gap is below ``1e-7 h |d(gap)/dt|``;
-the contact is toggled there and the step sequence resumes with the nominal step.
+re-run the RK step to the new end until the residual gap is below ``1e-7 h |d(gap)/dt|``
+where the force jumps at the switch (a dashpot acting), ``1e-4 h |d(gap)/dt|`` where it is
+continuous (an error e in the time then moves the impulse by ~ A rate^{3/2} e^{5/2}); the
+contact is toggled there and the step sequence resumes with the nominal step. If another
+contact is found in a violated state at the end of the cut step (it switched and switched
+back within the uncut step, invisible at its end), the step is redone to there so that the
+earlier switch is found. A state that switched at a step's start within the tolerance of
+its time is not a violation while it leaves the wrong sign (no chatter).
 
 Even with exact switch times, F ~ (t - t_0)^{3/2} near a switch is not smooth: the solution
 has a (t - t_0)^{7/2} term ((t - t_0)^{5/2} for Kuwabara-Kono) that caps the order of a step
@@ -27,20 +33,23 @@ to within dt/4 and the last step, in s, ends at the estimate, its length refined
 until the gap at its end is below the tolerance above. (Before, the steps were graded
 geometrically down to dt/16 on both sides of every switch: on the paper chain 482 steps per
 ms against 403 now, 1495 against 1011 without damping, where contacts open and close ~170
-times per ms.) Dense output inside such a step is a polynomial in s (:func:`_sample_sqrt`).
+times per ms; 890 with the relaxed tolerance above.) Dense output inside such a step is a
+polynomial in s (:func:`_sample_sqrt`).
 
 With the loading-only dashpot (``LAW_LINEAR_LOADING``) the dashpot of a closed contact is a
 second state, switched where the approach rate changes sign (a kink of the force), located
 on the cubic Hermite interpolant of the rate (values and relative accelerations) without
 Newton refinement: an O(h^4) error in the time of a kink is harmless. Rates below
 ``rate_tol`` do not switch it, so the resting part of the chain does not chatter. Most of
-these switches are *predicted* instead: the cubic of the previous step, extrapolated, gives
-the rate's next zero, and the step is shortened (or stretched by at most 1 %) to end there;
-the switch is taken at the step's end when the zero lies within 1e-3 steps of it, else the
-step is cut back as above. On the paper chain (at the former default step t_c/8) this
-removes ~3/4 of the cut-back steps (1318 -> 984 steps per ms) at an unchanged peak-force
-error. Contacts without a dashpot (gamma = 0, e.g. the paper's wall) track no dashpot
-switches (-> 978 steps; 837 at t_c/5; 733 with the steps in s).
+these switches are *predicted* instead: the quintic Hermite polynomial through the rate and
+its first two derivatives at this and the previous step's start, extrapolated, gives the
+rate's next zero, and the step is shortened (or stretched by at most 1 %) to end there; the
+switch is taken at the step's end when the zero lies within 1e-3 steps of it, else the step
+is cut back as above. On the paper chain (at the former default step t_c/8) a cubic
+predictor removed ~3/4 of the cut-back steps (1318 -> 984 steps per ms) at an unchanged
+peak-force error. Contacts without a dashpot (gamma = 0, e.g. the paper's wall) track no
+dashpot switches (-> 978 steps; 837 at t_c/5; 733 with the steps in s; 664 with the quintic
+predictor, which also needs the jerks at every step, and the relaxed tolerance above).
 
 The Runge-Kutta method is the 12-stage 8th-order formula of Dormand & Prince (DOP853,
 Hairer, Norsett & Wanner, *Solving ODEs I*, 2nd ed., Springer 1993, §II.5), run at a fixed
@@ -103,12 +112,22 @@ LAW_LINEAR_LOADING = 2
 
 # A contact whose crossing falls within this fraction of a step from its start toggles at once.
 _THETA_NOW = 1e-9
-# Newton refinement of a crossing stops when |gap| < _GAP_TOL * h * |d(gap)/dt|.
+# Newton refinement of a crossing stops when |gap| < _GAP_TOL * h * |d(gap)/dt|, i.e. the
+# switch time errs by less than _GAP_TOL steps, where the force jumps there (by gamma * rate:
+# a dashpot acting at the switch). Where it is continuous (Kuwabara-Kono, no dashpot, or
+# the loading-only dashpot at an opening) _GAP_TOL_SMOOTH: an error e in the time changes the
+# impulse by ~ A rate^1.5 e^2.5 and the force near the switch by ~ A (rate e)^1.5, < 1e-7 of
+# the peak on the paper chain.
 _GAP_TOL = 1e-7
+_GAP_TOL_SMOOTH = 1e-4
 _NEWTON_MAX = 4
 # A predicted dashpot switch is accepted at the end of a step when the rate's zero lies
 # within this fraction of the step from it.
 _PRED_TOL = 1e-3
+# A state that switched at a step's start may have the wrong sign there by the tolerance of
+# its time (_GAP_TOL_SMOOTH, _PRED_TOL steps): not a violation if it leaves the wrong sign
+# within this many steps.
+_SWITCH_SLACK = 2e-3
 # A closing is grazing when its rate changes by itself (2 |rate| / |relative acceleration|)
 # within 1 / _CLOSE_FRAC first steps; its grading then deepens, to at most _CLOSE_MAX levels.
 _CLOSE_FRAC = 0.5
@@ -292,7 +311,11 @@ def _first_violation(g0, r0, g1, r1, closed):
     d0 = sgn * r0
     d1 = sgn * r1
     if p0 > 0.0:
-        return 0.0
+        if p0 > -_SWITCH_SLACK * d0:
+            return 0.0
+        # Moving into the allowed sign within _SWITCH_SLACK steps: the state switched here,
+        # within the tolerance of its time. (Toggling it back would chatter.)
+        p0 = 0.0
     # Bracket the first sign change on a coarse grid, then bisect.
     lo = 0.0
     hi = 1.0
@@ -324,22 +347,37 @@ def _first_violation(g0, r0, g1, r1, closed):
 
 
 @nb.njit(cache=True)
-def _extrapolated_zero(p0, d0, p1, d1, th0, th_max):
-    """Zero in (1, th_max) of the cubic Hermite through (p0, d0) at 0 and (p1, d1) at 1
-    (d = derivative times the step), by Newton from ``th0``; -1.0 if it does not converge
-    inside the interval (then no prediction is made)."""
-    th = th0
+def _rate_zero(r, q, s, rp, qp, sp, hp, tau_max):
+    """Time (s) to the first zero in (0, tau_max) of an approach rate, -1.0 if none found.
+
+    Extrapolates the quintic Hermite polynomial through the rate and its first two time
+    derivatives now (r, q, s) and one step ``hp`` earlier (rp, qp, sp), by Newton from the
+    linear estimate -r / q.
+    """
+    # Coefficients x_i = c_i H^i of the terms of degree 3, 4, 5 in tau (H = -hp) that the
+    # Taylor quadratic at tau = 0 needs to match the earlier data.
+    H = -hp
+    R0 = rp - (r + H * (q + 0.5 * s * H))
+    R1 = (qp - (q + s * H)) * H
+    R2 = (sp - s) * H * H
+    x5 = 0.5 * R2 - 3.0 * R1 + 6.0 * R0
+    x4 = R1 - 3.0 * R0 - 2.0 * x5
+    x3 = R0 - x4 - x5
+    c3 = x3 / H**3
+    c4 = x4 / H**4
+    c5 = x5 / H**5
+    tau = -r / q
     for _ in range(8):
-        f = _hermite3(p0, d0, p1, d1, th)
-        df = _hermite3_slope(p0, d0, p1, d1, th)
+        f = r + tau * (q + tau * (0.5 * s + tau * (c3 + tau * (c4 + tau * c5))))
+        df = q + tau * (s + tau * (3.0 * c3 + tau * (4.0 * c4 + tau * 5.0 * c5)))
         if df == 0.0:
             return -1.0
-        dth = f / df
-        th -= dth
-        if not (1.0 < th < th_max):
+        dtau = f / df
+        tau -= dtau
+        if not 0.0 < tau < tau_max:
             return -1.0
-        if abs(dth) < 1e-10:
-            return th
+        if abs(dtau) < 1e-10 * tau_max:
+            return tau
     return -1.0
 
 
@@ -611,6 +649,28 @@ def _update_near(k, u, v, a, jk, with_jerk, cA, cg, law, load, inv_m):
             jk[i] = (d_prev - d) * inv_m[i]
 
 
+@nb.njit(cache=True, fastmath=_FM)
+def _violated(u1, v1, closed, damp, gam, rate_tol, loading, skip):
+    """Whether any contact but ``skip`` is in a violated state at (u1, v1): a gap of the wrong
+    sign, or (``loading``) an approach rate of the wrong sign for its dashpot state
+    (branch-free, so that the pass vectorises)."""
+    bad = 0.0
+    for k in range(closed.shape[0]):
+        g1 = u1[k] - u1[k + 1]
+        r1 = v1[k] - v1[k + 1]
+        x = closed[k] * (g1 < 0.0) + (1.0 - closed[k]) * (g1 > 0.0)
+        y = damp[k] * (r1 < -rate_tol) + (closed[k] - damp[k]) * (r1 > rate_tol)
+        bad = max(bad, (x + (loading and gam[k] > 0.0) * y) * (k != skip))
+    return bad > 0.0
+
+
+@nb.njit(cache=True, inline="always")
+def _gap_tol(k, closed, damp, gam, hkk):
+    # Tolerance of the switch time of contact k's gap state, in steps (see _GAP_TOL).
+    smooth = hkk or gam[k] == 0.0 or (closed[k] > 0.0 and damp[k] == 0.0)
+    return _GAP_TOL_SMOOTH if smooth else _GAP_TOL
+
+
 @nb.njit(cache=True, inline="always")
 def _stale(fresh, k):
     # Contact k toggled: its rate and those of its neighbours have a kink at this time.
@@ -684,6 +744,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     # k or a neighbour toggled (the data then straddle a kink).
     r_prev = np.zeros(n)
     q_prev = np.zeros(n)
+    s_prev = np.zeros(n)
     fresh = np.zeros(n)
     h_prev = 0.0
     closed = np.zeros(n)
@@ -720,22 +781,29 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     t = 0.0
     steps = 0
     toggles_here = 0
-    # Steps left in a geometric grading after a contact closed (sizes dt 2^-grade), and
-    # whether the next step starts where a contact closed (then taken in sqrt(t - t0)).
-    grade = 0
+    # Redone steps at this time, and the length the next step may not exceed (0: no cap).
+    redo_here = 0
+    h_cap = 0.0
+    # Whether the next step starts where a contact closed (then taken in sqrt(t - t0), of
+    # length dt 2^-grade), and the time of the latest closing: the steps after it are at most
+    # as long as the time since plus dt 2^-grade (dt 2^-grade, 2 dt 2^-grade, 4 dt 2^-grade,
+    # ...) and twice the time since (should the first step have been cut short), so that
+    # its singularity stays at a distance.
+    grade = grade_levels
     sqrt_start = False
+    t_close = -np.inf
     for k in range(n):
         if closed[k] > 0.0 and _gap(u, k) == 0.0:
-            grade = grade_levels
             sqrt_start = True
+            t_close = 0.0
     while j < nt:
-        if steps > 200000:
-            print("STUCK", t, grade, toggles_here)
-            if steps > 200010:
-                break
         h = dt
-        if grade > 0:
+        if sqrt_start:
             h = dt / 2.0**grade
+        elif t - t_close < dt:
+            h = min(dt, 2.0 * (t - t_close), t - t_close + dt / 2.0**grade)
+        if h_cap > 0.0:
+            h = min(h, h_cap)
         mode = STEP_SQRT_START if sqrt_start else STEP_REGULAR
         # A closed contact about to open: the least time to opening, tau, from the gap's
         # Taylor polynomial to second order (its smallest positive root; branch-free, so that
@@ -783,9 +851,12 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             else:
                 h = 0.5 * tau_min
         # Loading law: end the step where a dashpot is predicted to switch (the zero of the
-        # approach rate, extrapolated from the previous step's cubic), instead of stepping
-        # past it and redoing the step to the crossing.
+        # approach rate, extrapolated from its quintic through this and the previous step's
+        # start), instead of stepping past it and redoing the step to the crossing.
         k_pred = -1
+        if loading and not j0_ok:
+            jerks(u, v, a0, cA, cg, inv_m, j0)
+            j0_ok = True
         if loading and h_prev > 0.0:
             h_max = h * (1.0 + _PRED_STRETCH)
             for k in range(n):
@@ -795,11 +866,11 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                     # Candidates: |rate| above the noise floor, closing in on zero within
                     # about two steps on a linear estimate.
                     if (r * q < 0.0 and abs(r) > rate_tol and abs(r) < 2.0 * h * abs(q)):
-                        th = _extrapolated_zero(r_prev[k], h_prev * q_prev[k], r, h_prev * q,
-                                                1.0 - r / (q * h_prev), 1.0 + 2.0 * h / h_prev)
-                        if th > 0.0 and (th - 1.0) * h_prev < h_max:
-                            h_max = (th - 1.0) * h_prev
-                            h = h_max
+                        tau = _rate_zero(r, q, _gap(j0, k), r_prev[k], q_prev[k], s_prev[k],
+                                         h_prev, 2.0 * h)
+                        if 0.0 < tau < h_max:
+                            h_max = tau
+                            h = tau
                             k_pred = k
             if k_pred >= 0 and mode == STEP_SQRT_END:
                 # The step now ends before the opening.
@@ -826,10 +897,11 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             # Newton on the step length until contact k_open's gap vanishes at the step's end.
             h_first = h
             ok = False
+            tol = _gap_tol(k_open, closed, damp, gam, hkk)
             for it in range(_NEWTON_MAX + 1):
                 g = _gap(u1, k_open)
                 r = _gap(v1, k_open)
-                if abs(g) <= _GAP_TOL * h * abs(r):
+                if abs(g) <= tol * h * abs(r):
                     ok = True
                     break
                 hn = h - g / r if r < 0.0 else -1.0
@@ -854,14 +926,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         kind = 0
         th_min = 2.0
         # Any violated state at all? (A branch-free pass; the detailed scan below is rare.)
-        bad = 0.0
-        for k in range(n):
-            g1 = u1[k] - u1[k + 1]
-            r1 = v1[k] - v1[k + 1]
-            x = closed[k] * (g1 < 0.0) + (1.0 - closed[k]) * (g1 > 0.0)
-            y = damp[k] * (r1 < -rate_tol) + (closed[k] - damp[k]) * (r1 > rate_tol)
-            bad = max(bad, x + (loading and gam[k] > 0.0) * y)
-        for k in range(n if bad > 0.0 else 0):
+        bad = _violated(u1, v1, closed, damp, gam, rate_tol, loading, -1)
+        for k in range(n if bad else 0):
             if k == k_open:
                 continue  # opens at the step's end (below)
             g1 = _gap(u1, k)
@@ -894,11 +960,12 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             if th_min <= _THETA_NOW and toggles_here < 4 * n:
                 # The contact changes state now: toggle and redo the step.
                 toggles_here += 1
-                if _toggle(kind, kmin, closed, damp, A, gam, cA, cg):
-                    sqrt_start = True
+                closing = _toggle(kind, kmin, closed, damp, A, gam, cA, cg)
                 _stale(fresh, kmin)
                 _update_near(kmin, u, v, a0, j0, j0_ok and septic, cA, cg, law, load_p, inv_m)
-                if sqrt_start:
+                if closing:
+                    sqrt_start = True
+                    t_close = t
                     grade = _closing_grade(_gap(v, kmin) * dt, _gap(a0, kmin) * dt * dt,
                                            grade_levels)
                 continue
@@ -924,6 +991,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                     steps += 1
                     if loading:
                         accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
+                tol = _gap_tol(kmin, closed, damp, gam, hkk) if kmin >= 0 else 0.0
                 for it in range(_NEWTON_MAX + 1 if kmin >= 0 else 0):
                     rk_step(u, v, a0, hc, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1,
                             v1)
@@ -932,14 +1000,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                         # A rate switch is only a kink of the force: the cubic estimate of its
                         # time (error O(h^4)) is ample, no Newton refinement.
                         break
-                    if kind == 0:
-                        g = _gap(u1, kmin)
-                        r = _gap(v1, kmin)
-                    else:
-                        accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
-                        g = _gap(v1, kmin)
-                        r = _gap(a1, kmin)
-                    if abs(g) <= _GAP_TOL * h * abs(r) or r == 0.0:
+                    g = _gap(u1, kmin)
+                    r = _gap(v1, kmin)
+                    if abs(g) <= tol * h * abs(r) or r == 0.0:
                         break
                     hn = hc - g / r
                     if hn <= 0.0 or hn > h:
@@ -947,6 +1010,14 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                     hc = hn
                 # (u1, v1) is the state at t + hc.
                 h = hc
+                if redo_here < 4 and _violated(u1, v1, closed, damp, gam, rate_tol, loading,
+                                               kmin):
+                    # Another contact switches before this one, its crossing hidden at the
+                    # uncut step's end (it switched there and back): redo the step to here,
+                    # which finds it.
+                    redo_here += 1
+                    h_cap = h
+                    continue
         if not (loading and kmin < 0):  # else a1 is already that of (u1, v1)
             accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
         if k_pred >= 0 and kmin < 0:
@@ -963,6 +1034,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             for k in range(n):
                 r_prev[k] = _gap(v, k)
                 q_prev[k] = _gap(a0, k)
+                s_prev[k] = _gap(j0, k)
                 fresh[k] = 1.0
             h_prev = h
         j1_ok = False
@@ -982,8 +1054,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         u, u1 = u1, u
         v, v1 = v1, v
         toggles_here = 0
-        if grade > 0:
-            grade -= 1
+        redo_here = 0
+        h_cap = 0.0
         a0, a1 = a1, a0
         j0, j1 = j1, j0
         j0_ok = j1_ok
@@ -1002,6 +1074,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             _stale(fresh, k_tog)
             _update_near(k_tog, u, v, a0, j0, j0_ok and septic, cA, cg, law, load_p, inv_m)
             if sqrt_start:
+                t_close = t
                 grade = _closing_grade(_gap(v, k_tog) * dt, _gap(a0, k_tog) * dt * dt,
                                        grade_levels)
     return steps

@@ -8,24 +8,29 @@ from msens.chain import kernel
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_rate_predictor_is_exact_for_quintic_rates(seed):
+@pytest.mark.parametrize("switch_now", [False, True])
+def test_rate_predictor_is_exact_for_quintic_rates(seed, switch_now):
     """The predicted zero of an approach rate comes from the quintic through the rate and
     its first two derivatives now and one step earlier: exact (to rounding) when the rate is
-    a quintic in time."""
+    a quintic in time, also when a switch nearby now adds jumps dq tau + ds tau^2 / 2 to it
+    (given the derivatives' left limits)."""
     rng = np.random.default_rng(seed)
     hp = rng.uniform(0.5e-6, 3e-6)  # s
     tau_star = rng.uniform(0.1, 1.8) * hp  # the zero, s after now
     # rate(tau) = c (tau - tau*) (1 + small higher terms), m/s, tau = time from now
     c = rng.choice([-1.0, 1.0]) * rng.uniform(1e3, 1e5)  # m/s^2
-    extra = np.polynomial.Polynomial(np.r_[1.0, rng.uniform(-0.2, 0.2, 4) / hp ** np.arange(1, 5)])
-    rate = np.polynomial.Polynomial([-c * tau_star, c]) * extra
-    d1, d2 = rate.deriv(1), rate.deriv(2)
-    tau = kernel._rate_zero(rate(0.0), d1(0.0), d2(0.0), rate(-hp), d1(-hp), d2(-hp), hp,
-                            2.0 * hp)
+    extra = np.polynomial.Polynomial(
+        np.r_[1.0, rng.uniform(-0.2, 0.2, 4) / hp ** np.arange(1, 5)])
+    after = np.polynomial.Polynomial([-c * tau_star, c]) * extra  # for tau >= 0
+    jumps = np.polynomial.Polynomial([0.0, *(rng.uniform(-0.3, 0.3, 2) * c / [1, hp])])
+    before = after - jumps if switch_now else after  # for tau <= 0
+    q, s = after.deriv(1)(0.0), after.deriv(2)(0.0)
+    ql, sl = before.deriv(1)(0.0), before.deriv(2)(0.0)
+    past = (before(-hp), before.deriv(1)(-hp), before.deriv(2)(-hp))
+    tau = kernel._rate_zero(after(0.0), q, s, ql, sl, *past, hp, 2.0 * hp)
     assert tau == pytest.approx(tau_star, rel=1e-9)
     # A zero beyond the horizon is not reported.
-    assert kernel._rate_zero(rate(0.0), d1(0.0), d2(0.0), rate(-hp), d1(-hp), d2(-hp), hp,
-                             0.5 * tau_star) == -1.0
+    assert kernel._rate_zero(after(0.0), q, s, ql, sl, *past, hp, 0.5 * tau_star) == -1.0
 
 
 def test_first_violation_of_a_gap():

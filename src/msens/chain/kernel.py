@@ -347,19 +347,20 @@ def _first_violation(g0, r0, g1, r1, closed):
 
 
 @nb.njit(cache=True)
-def _rate_zero(r, q, s, rp, qp, sp, hp, tau_max):
+def _rate_zero(r, q, s, ql, sl, rp, qp, sp, hp, tau_max):
     """Time (s) to the first zero in (0, tau_max) of an approach rate, -1.0 if none found.
 
     Extrapolates the quintic Hermite polynomial through the rate and its first two time
-    derivatives now (r, q, s) and one step ``hp`` earlier (rp, qp, sp), by Newton from the
-    linear estimate -r / q.
+    derivatives now (r and the left limits ql, sl) and one step ``hp`` earlier (rp, qp, sp),
+    plus the jumps (q - ql) tau + (s - sl) tau^2 / 2 of a switch nearby now; by Newton from
+    the linear estimate -r / q.
     """
     # Coefficients x_i = c_i H^i of the terms of degree 3, 4, 5 in tau (H = -hp) that the
     # Taylor quadratic at tau = 0 needs to match the earlier data.
     H = -hp
-    R0 = rp - (r + H * (q + 0.5 * s * H))
-    R1 = (qp - (q + s * H)) * H
-    R2 = (sp - s) * H * H
+    R0 = rp - (r + H * (ql + 0.5 * sl * H))
+    R1 = (qp - (ql + sl * H)) * H
+    R2 = (sp - sl) * H * H
     x5 = 0.5 * R2 - 3.0 * R1 + 6.0 * R0
     x4 = R1 - 3.0 * R0 - 2.0 * x5
     x3 = R0 - x4 - x5
@@ -671,11 +672,28 @@ def _gap_tol(k, closed, damp, gam, hkk):
     return _GAP_TOL_SMOOTH if smooth else _GAP_TOL
 
 
-@nb.njit(cache=True, inline="always")
-def _stale(fresh, k):
-    # Contact k toggled: its rate and those of its neighbours have a kink at this time.
-    for i in range(max(k - 1, 0), min(k + 2, fresh.shape[0])):
-        fresh[i] = 0.0
+@nb.njit(cache=True)
+def _switch(kind, k, t, u, v, a, jk, jk_ok, closed, damp, A, gam, cA, cg, law, load, inv_m,
+            t_left, q_left, s_left):
+    """Switch contact k's state at time t (``kind`` as in :func:`_toggle`) and update the
+    accelerations (and valid jerks) that change. With the loading law the relative
+    accelerations and jerks of the contacts around k just before the first switch at t are
+    kept (``q_left``, ``s_left``, ``t_left`` = t) for the switch predictor, and the jerks are
+    formed first if not valid. Returns (whether it closed, whether the jerks are valid)."""
+    if law == LAW_LINEAR_LOADING:
+        if not jk_ok:
+            jerks(u, v, a, cA, cg, inv_m, jk)
+            jk_ok = True
+        # A switch of contact k moves the accelerations of its two particles and the jerks of
+        # the four around it: the relative ones of contacts k - 2 .. k + 2.
+        for i in range(max(k - 2, 0), min(k + 3, t_left.shape[0])):
+            if t_left[i] != t:
+                t_left[i] = t
+                q_left[i] = a[i] - a[i + 1]
+                s_left[i] = jk[i] - jk[i + 1]
+    closing = _toggle(kind, k, closed, damp, A, gam, cA, cg)
+    _update_near(k, u, v, a, jk, jk_ok and law != LAW_HKK, cA, cg, law, load, inv_m)
+    return closing, jk_ok
 
 
 @nb.njit(cache=True)
@@ -739,13 +757,15 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     j0 = np.zeros(m)
     j1 = np.zeros(m)
     vs = np.zeros(m)
-    # Loading law: approach rates and relative accelerations at the start of the previous
-    # step (size h_prev), for predicting dashpot switches; fresh[k] = 0 right after contact
-    # k or a neighbour toggled (the data then straddle a kink).
+    # Loading law: approach rates and their first two derivatives at the start of the
+    # previous step (size h_prev), and left limits of the derivatives at the latest switch
+    # nearby (time t_left), for predicting dashpot switches.
     r_prev = np.zeros(n)
     q_prev = np.zeros(n)
     s_prev = np.zeros(n)
-    fresh = np.zeros(n)
+    t_left = np.full(n, -np.inf)
+    q_left = np.zeros(n)
+    s_left = np.zeros(n)
     h_prev = 0.0
     closed = np.zeros(n)
     damp = np.zeros(n)
@@ -843,10 +863,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 if k_open >= 0 and h <= _THETA_NOW * dt and toggles_here < 4 * n:
                     # Opening now.
                     toggles_here += 1
-                    _toggle(0, k_open, closed, damp, A, gam, cA, cg)
-                    _stale(fresh, k_open)
-                    _update_near(k_open, u, v, a0, j0, j0_ok and septic, cA, cg, law, load_p,
-                                 inv_m)
+                    _, j0_ok = _switch(0, k_open, t, u, v, a0, j0, j0_ok, closed, damp, A, gam,
+                                       cA, cg, law, load_p, inv_m, t_left, q_left, s_left)
                     continue
             else:
                 h = 0.5 * tau_min
@@ -860,14 +878,19 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         if loading and h_prev > 0.0:
             h_max = h * (1.0 + _PRED_STRETCH)
             for k in range(n):
-                if closed[k] > 0.0 and fresh[k] > 0.0 and gam[k] > 0.0:
+                if closed[k] > 0.0 and gam[k] > 0.0:
                     r = _gap(v, k)
                     q = _gap(a0, k)
-                    # Candidates: |rate| above the noise floor, closing in on zero within
-                    # about two steps on a linear estimate.
-                    if (r * q < 0.0 and abs(r) > rate_tol and abs(r) < 2.0 * h * abs(q)):
-                        tau = _rate_zero(r, q, _gap(j0, k), r_prev[k], q_prev[k], s_prev[k],
-                                         h_prev, 2.0 * h)
+                    # Candidates: |rate| above the noise floor and of the sign its dashpot
+                    # state allows (not one that just switched, within its tolerance),
+                    # closing in on zero within about two steps on a linear estimate.
+                    if (r * q < 0.0 and abs(r) > rate_tol and abs(r) < 2.0 * h * abs(q)
+                            and (r > 0.0) == (damp[k] > 0.0)):
+                        sk = _gap(j0, k)
+                        left = t_left[k] == t
+                        tau = _rate_zero(r, q, sk, q_left[k] if left else q,
+                                         s_left[k] if left else sk, r_prev[k], q_prev[k],
+                                         s_prev[k], h_prev, 2.0 * h)
                         if 0.0 < tau < h_max:
                             h_max = tau
                             h = tau
@@ -879,9 +902,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             if k_pred >= 0 and h <= _PRED_TOL * dt and toggles_here < 4 * n:
                 # The switch is due now.
                 toggles_here += 1
-                _toggle(1, k_pred, closed, damp, A, gam, cA, cg)
-                _stale(fresh, k_pred)
-                _update_near(k_pred, u, v, a0, j0, j0_ok and septic, cA, cg, law, load_p, inv_m)
+                _, j0_ok = _switch(1, k_pred, t, u, v, a0, j0, j0_ok, closed, damp, A, gam, cA,
+                                   cg, law, load_p, inv_m, t_left, q_left, s_left)
                 continue
         if t + h > t_end - 0.01 * dt:
             # Stretch the last step by at most 1% rather than leave a sliver.
@@ -960,9 +982,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             if th_min <= _THETA_NOW and toggles_here < 4 * n:
                 # The contact changes state now: toggle and redo the step.
                 toggles_here += 1
-                closing = _toggle(kind, kmin, closed, damp, A, gam, cA, cg)
-                _stale(fresh, kmin)
-                _update_near(kmin, u, v, a0, j0, j0_ok and septic, cA, cg, law, load_p, inv_m)
+                closing, j0_ok = _switch(kind, kmin, t, u, v, a0, j0, j0_ok, closed, damp, A,
+                                         gam, cA, cg, law, load_p, inv_m, t_left, q_left,
+                                         s_left)
                 if closing:
                     sqrt_start = True
                     t_close = t
@@ -1035,7 +1057,6 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 r_prev[k] = _gap(v, k)
                 q_prev[k] = _gap(a0, k)
                 s_prev[k] = _gap(j0, k)
-                fresh[k] = 1.0
             h_prev = h
         j1_ok = False
         if septic and j < nt and t_out[j] <= t + h:
@@ -1061,18 +1082,18 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         j0_ok = j1_ok
         # A contact switching at the step's end: which, and of which kind.
         k_tog = -1
+        kind_tog = 0
         if kmin >= 0 and th_min > _THETA_NOW:
             k_tog = kmin
-            sqrt_start = _toggle(kind, kmin, closed, damp, A, gam, cA, cg)
+            kind_tog = kind
         elif k_open >= 0:
             k_tog = k_open
-            _toggle(0, k_open, closed, damp, A, gam, cA, cg)
         elif k_pred >= 0:
             k_tog = k_pred
-            _toggle(1, k_pred, closed, damp, A, gam, cA, cg)
+            kind_tog = 1
         if k_tog >= 0:
-            _stale(fresh, k_tog)
-            _update_near(k_tog, u, v, a0, j0, j0_ok and septic, cA, cg, law, load_p, inv_m)
+            sqrt_start, j0_ok = _switch(kind_tog, k_tog, t, u, v, a0, j0, j0_ok, closed, damp, A,
+                                        gam, cA, cg, law, load_p, inv_m, t_left, q_left, s_left)
             if sqrt_start:
                 t_close = t
                 grade = _closing_grade(_gap(v, k_tog) * dt, _gap(a0, k_tog) * dt * dt,

@@ -32,7 +32,9 @@ def _parabolic_peak(t, f):
 def test_sphere_on_wall_is_the_exact_hertz_collision(law):
     """One undamped sphere hitting a half-space: delta_m = (5 m v^2 / (4A))^{2/5},
     contact time 2 (2/5) B(2/5, 1/2) delta_m / v, rebound at -v (Landau & Lifshitz §9).
-    Step t_c/10: peak force to 1e-8 (sampling), rebound speed to 1.7e-8."""
+    Step t_c/10: peak force to 1e-8 (sampling; measured 4.1e-9), rebound speed to 3e-8
+    (measured 2.1e-9, 2.4e-10 for Kuwabara-Kono; 1.7e-8 before the steps next to the
+    switches were taken in sqrt(t - t0))."""
     c = Chain(mass=[M], stiffness=[A_WALL], damping=[0.0], static_force=[0.0], gravity=0.0,
               damping_law=law)
     d_m = (5 * M * V**2 / (4 * A_WALL)) ** 0.4
@@ -43,7 +45,7 @@ def test_sphere_on_wall_is_the_exact_hertz_collision(law):
     t_peak, f_peak = _parabolic_peak(t, r.force[:, 0])
     assert f_peak == pytest.approx(A_WALL * d_m**1.5, rel=1e-8)
     assert t_peak == pytest.approx(t_c / 2, rel=1e-6)
-    assert r.velocity[-1, 0] == pytest.approx(-V, rel=3e-8)  # measured 1.7e-8
+    assert r.velocity[-1, 0] == pytest.approx(-V, rel=3e-8)
     closed = t[r.approach[:, 0] > 0]
     assert abs(closed[-1] - t_c) <= t[1] - t[0]
 
@@ -179,10 +181,10 @@ def test_local_update_after_a_switch_equals_the_full_pass(law, k):
 
 
 def test_paper_chain_converges_fast_through_contact_switches():
-    """With switches located and the steps graded next to them, the damped paper chain
-    converges at high order in the practical range (measured slope 4.2 over dt = 4, 3, 2 us,
-    final-velocity errors 4e-8 -> 1e-9 of the impact speed). Asymptotically the switches cap
-    the order at 2.5 (F ~ t^{3/2}), at errors ~1e-10."""
+    """With switches located and the steps next to them taken in sqrt(t - t0), the damped
+    paper chain converges at high order in the practical range (measured slope 5.05 over
+    dt = 4, 3, 2 us, final-velocity errors 3.1e-8 -> 8.7e-10 of the impact speed; 4.2 with
+    regular steps graded down to dt/16 next to the switches)."""
     c = paper_chain()
     v = striker_velocity()
     t = np.array([0.0, 3e-4])
@@ -191,8 +193,8 @@ def test_paper_chain_converges_fast_through_contact_switches():
     errs = [np.max(np.abs(simulate(c, v, t, dt=dt, states=True).velocity[-1] - fine)) / v
             for dt in dts]
     slope = np.polyfit(np.log(dts), np.log(errs), 1)[0]
-    assert slope >= 3.8, (slope, errs)
-    assert errs[-1] < 3e-9
+    assert slope >= 4.5, (slope, errs)
+    assert errs[-1] < 2e-9
 
 
 @pytest.mark.parametrize("law", list(DampingLaw))

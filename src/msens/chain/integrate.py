@@ -31,9 +31,10 @@ from msens.chain.model import Chain, DampingLaw
 #: Default steps per Hertz collision time of the stiffest, lightest contact at the impact
 #: speed, per damping law. Measured on the paper chain against a converged reference (t_c =
 #: 15.6 us, 1 ms, 10 MHz samples), as peak-force / whole-waveform errors relative to the peak:
-#: LINEAR 4.8e-9 / 2.6e-8, 4.9e-8 / 1.6e-7, 2.4e-7 / 9.7e-7 at 8 / 5 / 4 steps;
-#: LINEAR_LOADING 4.6e-9 / 3.9e-8, 3.5e-8 / 1.9e-7, 1.7e-7 / 1.1e-6. Five keeps the waveform
-#: error five times below 1e-6. HERTZ_KUWABARA_KONO (quintic output) 3.2e-7 / 2.3e-7 at 8.
+#: LINEAR 4.8e-9 / 2.6e-8, 4.9e-8 / 1.6e-7, 2.4e-7 / 9.7e-7 at 8 / 5 / 4 steps (598, 403,
+#: 342 steps per ms); LINEAR_LOADING 4.6e-9 / 3.6e-8, 3.5e-8 / 1.9e-7, 1.7e-7 / 1.1e-6 (816,
+#: 652, 601). Five keeps the waveform error five times below 1e-6. HERTZ_KUWABARA_KONO
+#: (quintic output) 3.2e-7 / 2.2e-7 at 8 (1242).
 STEPS_PER_CONTACT_TIME = {DampingLaw.LINEAR: 5, DampingLaw.LINEAR_LOADING: 5,
                           DampingLaw.HERTZ_KUWABARA_KONO: 8}
 #: Steps per period of the highest linearised (precompressed) chain frequency.
@@ -45,12 +46,13 @@ STEPS_PER_LINEAR_PERIOD = 10
 HERTZ_TIME_CONSTANT = 2.0 * 1.25**0.4 * 0.4 * float(beta(0.4, 0.5))
 
 #: Depth K of the step grading after a contact closes: the first step, taken in sqrt(t - t0)
-#: (see :mod:`msens.chain.kernel`), is dt / 2^K, the next ones double up to dt. On the paper
+#: (see :mod:`msens.chain.kernel`), is dt / 2^K, the next ones double up to dt (each at most
+#: twice the time since the closing, should the first have been cut short). On the paper
 #: chain (LINEAR) K = 2, 3, 4 take 403, 411, 419 steps per ms at peak-force errors 4.9e-8,
 #: 4.5e-8, 4.4e-8 (waveform 1.6e-7, 2.5e-7, 2.6e-7): the steps in sqrt(t - t0) carry the
 #: closing's singularity (with regular steps K = 4 was needed: 2.9e-5 peak error at K = 0).
 #: HERTZ_KUWABARA_KONO (quintic output): K = 4, as K = 2 and 3 miss the single Hertz
-#: collision's peak force by 8e-8 at t_c/10 (test_integrate.py; 1341 against 1946 steps per
+#: collision's peak force by 8e-8 at t_c/10 (test_integrate.py; 1242 against 1946 steps per
 #: ms on the paper chain at K = 10 before, at the same errors).
 GRADE_LEVELS = {DampingLaw.LINEAR: 2, DampingLaw.LINEAR_LOADING: 2,
                 DampingLaw.HERTZ_KUWABARA_KONO: 4}

@@ -45,10 +45,12 @@ these switches are *predicted* instead: the quintic Hermite polynomial through t
 its first two derivatives at this and the previous step's start, extrapolated, gives the
 rate's next zero, and the step is shortened (or stretched by at most 1 %) to end there; the
 switch is taken at the step's end when the zero lies within 1e-3 steps of it, else the step
-is cut back as above. On the paper chain (at the former default step t_c/8) a cubic
-predictor removed ~3/4 of the cut-back steps (1318 -> 984 steps per ms) at an unchanged
+is cut back as above. Where a contact nearby switched at this step's start, the derivatives'
+left limits there enter the fit and their jumps are added to the extrapolation. On the paper
+chain (at the former default step t_c/8) a cubic predictor from the rate and its first
+derivative removed ~3/4 of the cut-back steps (1318 -> 984 steps per ms) at an unchanged
 peak-force error. Contacts without a dashpot (gamma = 0, e.g. the paper's wall) track no
-dashpot switches (-> 978 steps; 837 at t_c/5; 733 with the steps in s; 664 with the quintic
+dashpot switches (-> 978 steps; 837 at t_c/5; 733 with the steps in s; 652 with the quintic
 predictor, which also needs the jerks at every step, and the relaxed tolerance above).
 
 The Runge-Kutta method is the 12-stage 8th-order formula of Dormand & Prince (DOP853,

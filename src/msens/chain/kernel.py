@@ -78,10 +78,10 @@ samples in between by 4.5e-7 (linear dashpot). The jerk costs one force-like pas
 step; in exchange the step grows to t_c/5 at a peak-force error of 4e-8 (482 instead of 673
 steps per ms).
 
-Performance layout (measured on the paper chain, n = 30: ~0.9 us per step including events,
-~30 ns per output sample plus ~0.2 us per step to form the interpolant's coefficients): the
-particle arrays and output rows are
-padded with zeros to a multiple of 8 entries past the wall, so the wall contact needs no
+Performance layout (measured on the paper chain, n = 30: ~1.0 us per step including events,
+1.2 us with the loading-only dashpot, ~30 ns per output sample plus ~0.2 us per step to form
+the interpolant's coefficients): the particle arrays and output rows are padded with zeros
+to a multiple of 8 entries past the wall, so the wall contact needs no
 special case and the force, stage and sampling loops vectorise without scalar remainders; the
 contact states enter as the products closed * A and dashpot * gamma, updated only when a
 contact toggles. Helpers called inside the sampling loops take scalars, not arrays: numba's

@@ -915,33 +915,29 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 k_open = -1
         if h <= 0.0:
             h = dt  # only rounding left: finish the last samples with one more step
-        rk_step(u, v, a0, h, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
-        steps += 1
-        if k_open >= 0:
-            # Newton on the step length until contact k_open's gap vanishes at the step's end.
-            h_first = h
-            ok = False
-            tol = _gap_tol(k_open, closed, damp, gam, hkk)
-            for it in range(_NEWTON_MAX + 1):
-                g = _gap(u1, k_open)
-                r = _gap(v1, k_open)
-                if abs(g) <= tol * h * abs(r):
-                    ok = True
-                    break
-                hn = h - g / r if r < 0.0 else -1.0
-                if it == _NEWTON_MAX or not 0.0 < hn <= 2.0 * h_first:
-                    break
-                h = hn
-                rk_step(u, v, a0, h, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
-                steps += 1
-            if not ok:
+        # The step; one to an opening (k_open) is refined by Newton on its length until the
+        # contact's gap vanishes at its end. (rk_step has two call sites in this function:
+        # each inlined copy costs ~4 s of compile time.)
+        h_first = h
+        tol = _gap_tol(k_open, closed, damp, gam, hkk) if k_open >= 0 else 0.0
+        for it in range(_NEWTON_MAX + 2):
+            rk_step(u, v, a0, h, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
+            steps += 1
+            if k_open < 0:
+                break
+            g = _gap(u1, k_open)
+            r = _gap(v1, k_open)
+            if abs(g) <= tol * h * abs(r):
+                break
+            hn = h - g / r if r < 0.0 else -1.0
+            if it >= _NEWTON_MAX or not 0.0 < hn <= 2.0 * h_first:
                 # The contact does not open as estimated (it grazes): a regular step of the
                 # estimated length; an opening in it is found as a violated state below.
                 mode = STEP_REGULAR
                 k_open = -1
                 h = h_first
-                rk_step(u, v, a0, h, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1, v1)
-                steps += 1
+            else:
+                h = hn
         if loading:
             accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
         # Find the earliest violated contact state: kind 0 = gap (open/closed), kind 1 = the
@@ -1010,16 +1006,15 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                     hc -= h_end
                     kmin = -1
                     k_open = -1
-                    rk_step(u, v, a0, hc, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1,
-                            v1)
-                    steps += 1
-                    if loading:
-                        accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
                 tol = _gap_tol(kmin, closed, damp, gam, hkk) if kmin >= 0 else 0.0
-                for it in range(_NEWTON_MAX + 1 if kmin >= 0 else 0):
+                for it in range(_NEWTON_MAX + 1):
                     rk_step(u, v, a0, hc, mode, cA, cg, hkk, load_p, inv_m, kv, tu, tv, u1,
                             v1)
                     steps += 1
+                    if kmin < 0:
+                        if loading:
+                            accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
+                        break
                     if it == _NEWTON_MAX or kind == 1:
                         # A rate switch is only a kink of the force: the cubic estimate of its
                         # time (error O(h^4)) is ample, no Newton refinement.

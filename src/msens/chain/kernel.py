@@ -409,7 +409,7 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
     ``septic``) jerks ``j0``/``j1`` at both ends of the step: septic, error O(h^8) in the
     gaps, O(h^7) in their rates; else quintic (O(h^6), O(h^5)). Padded layout (see
     :func:`contact_forces`): the output rows have the padded length p (entries past n come
-    out 0). ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (8, p + 1) are scratch. Without
+    out 0). ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (>= 8, p + 1) are scratch. Without
     ``store_uv`` the interpolant is applied directly to the contact gaps (it is linear in the
     end data), fused with the force law: in steps with more than ``_FEW_SAMPLES`` samples
     through its eight monomial coefficients in s = tau / h (formed once per step; the rate is
@@ -549,8 +549,8 @@ def _sample_sqrt(t_out, j, t0, h, mode, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, 
     for ``STEP_SQRT_START`` (a contact closed at t0), t_ref = t0 + h, hs = -h for
     ``STEP_SQRT_END`` (one opens at t0 + h). In x the solution is smooth (see
     :mod:`msens.chain.dop853_codegen`), in t it is not. Rates are d/dx over dt/dx = 2 hs x,
-    taken from the polynomial with its x^1 term zero (no division by x). ``cs`` (8, p + 1)
-    receives the coefficients (c0, c2..c7, per contact or, with ``store_uv``, per particle).
+    taken from the polynomial with its x^1 term zero (no division by x). ``cs`` (10, p + 1)
+    receives the coefficients (c0, c2..c10, per contact or, with ``store_uv``, per particle).
     """
     m = cA.shape[0]
     nt = t_out.shape[0]

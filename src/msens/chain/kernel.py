@@ -25,15 +25,16 @@ has a (t - t_0)^{7/2} term ((t - t_0)^{5/2} for Kuwabara-Kono) that caps the ord
 starting or ending at t_0. The steps next to a switch are therefore taken in s = sqrt(|t -
 t_0|), in which the solution's expansion (powers of (t - t_0)^{1/2}) is smooth
 (:mod:`msens.chain.dop853_codegen`): the step after a closing in s = sqrt(t - t_0)
-(``STEP_SQRT_START``, length dt 2^-K, then steps dt 2^-(K-1), ..., dt/2; K =
-``grade_levels``, deeper for a grazing closing whose rate changes within the first step),
+(``STEP_SQRT_START``, length dt 2^-K, then steps dt 2^-(K-1), ..., dt/2, each at most twice
+the time since the closing; K = ``grade_levels``, deeper for a grazing closing whose rate
+changes within the first step),
 and the step to an opening in s = sqrt(t_0 - t) (``STEP_SQRT_END``). An opening is foreseen
 from the gap's Taylor polynomial to second order; the contact is approached in halving steps
 to within dt/4 and the last step, in s, ends at the estimate, its length refined by Newton
 until the gap at its end is below the tolerance above. (Before, the steps were graded
 geometrically down to dt/16 on both sides of every switch: on the paper chain 482 steps per
 ms against 403 now, 1495 against 1011 without damping, where contacts open and close ~170
-times per ms; 890 with the relaxed tolerance above.) Dense output inside such a step is a
+times per ms; 907 with the relaxed tolerance above.) Dense output inside such a step is a
 polynomial in s (:func:`_sample_sqrt`).
 
 With the loading-only dashpot (``LAW_LINEAR_LOADING``) the dashpot of a closed contact is a
@@ -652,6 +653,17 @@ def _update_near(k, u, v, a, jk, with_jerk, cA, cg, law, load, inv_m):
             jk[i] = (d_prev - d) * inv_m[i]
 
 
+@nb.njit(cache=True, inline="always")
+def _opening_time(g, r, q, closed):
+    # Time until a closed contact opens, from its gap's Taylor quadratic g + r tau + q tau^2 / 2
+    # (gap g, rate r, relative acceleration q): the smallest positive root, in a form without
+    # cancellation; inf if it does not open on that estimate. Scalars and no branches, so that
+    # the scan over contacts vectorises.
+    disc = r * r - 2.0 * q * g
+    tau = 2.0 * g / max(np.sqrt(max(disc, 0.0)) - r, 1e-300)
+    return tau if (closed > 0.0 and r < 0.0 and disc >= 0.0) else np.inf
+
+
 @nb.njit(cache=True, fastmath=_FM)
 def _violated(u1, v1, closed, damp, gam, rate_tol, loading, skip):
     """Whether any contact but ``skip`` is in a violated state at (u1, v1): a gap of the wrong
@@ -724,9 +736,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     """Integrate one chain from t = 0 over t_out (sorted, t_out[0] >= 0) with nominal step dt.
 
     ``grade_levels`` is the depth K of the step grading after a contact closes (first step,
-    in sqrt(t - t0), dt 2^-K); ``rate_tol``
-    (m/s) the approach rate below which a sign change of the rate is not an event (the
-    loading-only dashpot then errs by at most gamma * rate_tol).
+    in sqrt(t - t0), dt 2^-K); ``rate_tol`` (m/s) the approach rate below which a sign change
+    of the rate is not an event (the loading-only dashpot then errs by at most
+    gamma * rate_tol).
 
     Fills out_F, out_d (and out_u, out_v if ``store_uv``), each (nt, p) with p = n rounded
     up to a multiple of ``_PAD`` (columns past n come out 0). Returns the
@@ -834,13 +846,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         # steps: half-way first.
         tau_min = 2.0 * h
         for k in range(n):
-            g = u[k] - u[k + 1]
-            r = v[k] - v[k + 1]
-            q = a0[k] - a0[k + 1]
-            disc = r * r - 2.0 * q * g
-            tau = 2.0 * g / max(np.sqrt(max(disc, 0.0)) - r, 1e-300)
-            tau = tau if (closed[k] > 0.0 and r < 0.0 and disc >= 0.0) else 2.0 * h
-            tau_min = min(tau_min, tau)
+            tau_min = min(tau_min, _opening_time(u[k] - u[k + 1], v[k] - v[k + 1],
+                                                 a0[k] - a0[k + 1], closed[k]))
         k_open = -1
         h_end = _END_FRAC * dt
         if tau_min < 2.0 * h:
@@ -851,14 +858,10 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                 # Which contact (a scalar pass, as rare as openings).
                 h_open = 2.0 * h
                 for k in range(n):
-                    r = _gap(v, k)
-                    g = _gap(u, k)
-                    disc = r * r - 2.0 * _gap(a0, k) * g
-                    if closed[k] > 0.0 and r < 0.0 and disc >= 0.0:
-                        tau = 2.0 * g / (np.sqrt(disc) - r)
-                        if tau < h_open:
-                            h_open = tau
-                            k_open = k
+                    tau = _opening_time(_gap(u, k), _gap(v, k), _gap(a0, k), closed[k])
+                    if tau < h_open:
+                        h_open = tau
+                        k_open = k
                 if k_open >= 0:
                     h = h_open
                     mode = STEP_SQRT_END

@@ -3,8 +3,9 @@
 Do not edit: run ``python -m msens.chain.dop853_codegen``. See :func:`rk_step`.
 """
 
-import numba as nb
 import numpy as np
+
+from msens.chain._noalias import njit_noalias
 
 FASTMATH = {"contract", "nnan", "ninf", "nsz"}
 N_STAGES = 12
@@ -143,7 +144,7 @@ _COEF = np.array([
 ])
 
 
-@nb.njit(cache=True, fastmath=FASTMATH)
+@njit_noalias(cache=True, fastmath=FASTMATH)
 def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
     """One DOP853 step of size ``h`` (s) from (u, v); ``a0`` = acceleration at (u, v).
 

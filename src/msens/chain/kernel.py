@@ -105,6 +105,7 @@ from msens.chain._dop853_step import (
     STEP_SQRT_START,
     rk_step,
 )
+from msens.chain._noalias import njit_noalias
 
 #: Order of the Runge-Kutta formula.
 RK_ORDER = 8
@@ -156,6 +157,25 @@ def padded_length(n: int) -> int:
     return -(-n // _PAD) * _PAD
 
 
+@nb.njit(cache=True)
+def _zeros64(size):
+    """Zeros of shape (size,) starting on a 64-byte boundary (a cache line, one AVX-512
+    register). numba aligns arrays to 32 bytes only: the kernel's loops then ran up to ~20 %
+    slower or faster from one process to the next, as its scratch arrays happened to straddle
+    cache lines or not."""
+    buf = np.zeros(size + 8)
+    off = (-(buf.ctypes.data // 8)) % 8
+    return buf[off:off + size]
+
+
+@nb.njit(cache=True)
+def _zeros64_rows(rows, cols):
+    """Zeros of shape (rows, c), c = cols rounded up to a multiple of 8, so that every row
+    starts on a 64-byte boundary (C-contiguous; the columns past cols are spare)."""
+    stride = -(-cols // _PAD) * _PAD
+    return _zeros64(rows * stride).reshape((rows, stride))
+
+
 @nb.njit(cache=True, inline="always")
 def _force(g, r, cA, cg, hkk):
     # Force of a contact (coefficients cA = closed * A, cg = dashpot * gamma) from its gap g
@@ -166,7 +186,7 @@ def _force(g, r, cA, cg, hkk):
     return cA * dp * w + cg * r * (w if hkk else 1.0)
 
 
-@nb.njit(cache=True, fastmath=_FM)
+@njit_noalias(cache=True, fastmath=_FM)
 def contact_forces(u, v, cA, cg, law, Fp):
     """Contact forces (N) on the padded layout, shifted by one into ``Fp``.
 
@@ -184,7 +204,7 @@ def contact_forces(u, v, cA, cg, law, Fp):
         Fp[k + 1] = _force(u[k] - u[k + 1], v[k] - v[k + 1], cA[k], cg[k], hkk)
 
 
-@nb.njit(cache=True, fastmath=_FM)
+@njit_noalias(cache=True, fastmath=_FM)
 def accelerations(u, v, cA, cg, law, load, inv_m, out):
     """Accelerations (m/s^2) into ``out`` (p + 1,) on the padded layout (zero past n).
 
@@ -210,7 +230,7 @@ def _dforce(g, r, q, cA, cg):
     return 1.5 * cA * np.sqrt(max(g, 0.0)) * r + cg * q
 
 
-@nb.njit(cache=True, fastmath=_FM)
+@njit_noalias(cache=True, fastmath=_FM)
 def jerks(u, v, a, cA, cg, inv_m, out):
     """Time derivatives of the accelerations (m/s^3) into ``out`` (p + 1,), linear-dashpot laws.
 
@@ -401,7 +421,7 @@ def _hermite3(p0, d0, p1, d1, t):
             + (-2 * t3 + 3 * t2) * p1 + (t3 - t2) * d1)
 
 
-@nb.njit(cache=True, fastmath=_FM)
+@nb.njit(cache=True, inline="always")
 def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
             store_uv, out_F, out_d, out_u, out_v, us, vs, Fp, cs):
     """Write the dense-output samples with t0 < t_out[j] <= t0 + h; return the next j.
@@ -412,17 +432,24 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
     :func:`contact_forces`): the output rows have the padded length p (entries past n come
     out 0). ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (>= 8, p + 1) are scratch. Without
     ``store_uv`` the interpolant is applied directly to the contact gaps (it is linear in the
-    end data), fused with the force law: in steps with more than ``_FEW_SAMPLES`` samples
-    through its eight monomial coefficients in s = tau / h (formed once per step; the rate is
-    the derivative), else through the weights of the end data at each sample. With
-    ``store_uv`` the weights are applied per particle and the forces follow.
+    end data), fused with the force law (:func:`_sample_gaps`); with ``store_uv``, or in a
+    sliver step shorter than ``tiny``, per particle (:func:`_sample_states`).
     """
+    if j >= t_out.shape[0] or t_out[j] > t0 + h:
+        return j
+    if store_uv or h < tiny:
+        return _sample_states(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg,
+                              law, septic, store_uv, out_F, out_d, out_u, out_v, us, vs, Fp)
+    return _sample_gaps(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
+                        out_F, out_d, cs)
+
+
+@nb.njit(cache=True, fastmath=_FM)
+def _sample_states(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
+                   store_uv, out_F, out_d, out_u, out_v, us, vs, Fp):
+    """:func:`_sample` per particle: the states at each sample, then their forces."""
     m = cA.shape[0]
     nt = t_out.shape[0]
-    if j >= nt or t_out[j] > t0 + h:
-        return j
-    hkk = law == LAW_HKK
-    inv_h = 1.0 / h
     if h < tiny:
         # A sliver step (cut at a contact event): Taylor from the left end, error O(h^3);
         # the Hermite form would divide rounding noise of u1 - u0 by h.
@@ -433,25 +460,40 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
                 vs[i] = v0[i] + tau * a0[i]
             j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp)
         return j
-    # Samples in this step: few -> weights of the end data per sample; many -> monomial
-    # coefficients once per step, then one Horner pass (value and derivative) per sample.
+    inv_h = 1.0 / h
+    while j < nt and t_out[j] <= t0 + h:
+        (w_dp, w_r0, w_r1, w_q0, w_q1, w_s0, w_s1,
+         v_dp, v_r0, v_r1, v_q0, v_q1, v_s0, v_s1) = _hermite_weights(
+            septic, (t_out[j] - t0) * inv_h, h)
+        for i in range(m + 1):
+            du = u1[i] - u0[i]
+            us[i] = (u0[i] + w_dp * du + w_r0 * v0[i] + w_r1 * v1[i] + w_q0 * a0[i]
+                     + w_q1 * a1[i] + w_s0 * j0[i] + w_s1 * j1[i])
+            vs[i] = (v_dp * du + v_r0 * v0[i] + v_r1 * v1[i] + v_q0 * a0[i]
+                     + v_q1 * a1[i] + v_s0 * j0[i] + v_s1 * j1[i])
+        j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp)
+    return j
+
+
+@njit_noalias(cache=True, fastmath=_FM)
+def _sample_gaps(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic, out_F,
+                 out_d, cs):
+    """:func:`_sample` on the contact gaps: in steps with more than ``_FEW_SAMPLES`` samples
+    through the interpolant's eight monomial coefficients in s = tau / h (formed once per
+    step into ``cs``; the rate is the derivative), else through the weights of the end data
+    at each sample."""
+    m = cA.shape[0]
+    nt = t_out.shape[0]
+    hkk = law == LAW_HKK
+    inv_h = 1.0 / h
     ns = 0
     while j + ns < nt and t_out[j + ns] <= t0 + h:
         ns += 1
-    if store_uv or ns <= _FEW_SAMPLES:
+    if ns <= _FEW_SAMPLES:
         for _ in range(ns):
             (w_dp, w_r0, w_r1, w_q0, w_q1, w_s0, w_s1,
              v_dp, v_r0, v_r1, v_q0, v_q1, v_s0, v_s1) = _hermite_weights(
                 septic, (t_out[j] - t0) * inv_h, h)
-            if store_uv:
-                for i in range(m + 1):
-                    du = u1[i] - u0[i]
-                    us[i] = (u0[i] + w_dp * du + w_r0 * v0[i] + w_r1 * v1[i] + w_q0 * a0[i]
-                             + w_q1 * a1[i] + w_s0 * j0[i] + w_s1 * j1[i])
-                    vs[i] = (v_dp * du + v_r0 * v0[i] + v_r1 * v1[i] + v_q0 * a0[i]
-                             + v_q1 * a1[i] + v_s0 * j0[i] + v_s1 * j1[i])
-                j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp)
-                continue
             for k in range(m):
                 g0 = u0[k] - u0[k + 1]
                 dg = (u1[k] - u1[k + 1]) - g0
@@ -468,37 +510,37 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
                 out_d[j, k] = max(g, 0.0)
                 out_F[j, k] = _force(g, r, cA[k], cg[k], hkk)
             j += 1
-        return j
-    hh = h * h
-    for k in range(m):
-        g0 = u0[k] - u0[k + 1]
-        r0 = v0[k] - v0[k + 1]
-        c1, c2, c3, c4, c5, c6, c7 = _hermite_coefficients(
-            septic, g0, h * r0, hh * (a0[k] - a0[k + 1]), hh * h * (j0[k] - j0[k + 1]),
-            (u1[k] - u1[k + 1]) - g0, h * (v1[k] - v1[k + 1]), hh * (a1[k] - a1[k + 1]),
-            hh * h * (j1[k] - j1[k + 1]))
-        cs[0, k] = g0
-        cs[1, k] = c1
-        cs[2, k] = c2
-        cs[3, k] = c3
-        cs[4, k] = c4
-        cs[5, k] = c5
-        cs[6, k] = c6
-        cs[7, k] = c7
-    for _ in range(ns):
-        x = (t_out[j] - t0) * inv_h
+    else:
+        hh = h * h
         for k in range(m):
-            # Horner's scheme for the gap and, alongside, its derivative in s: the eight
-            # coefficients are loaded once (loads, not arithmetic, bound this loop: 25 %
-            # faster than separate sums for the gap and its rate).
-            g = cs[7, k]
-            d = 0.0
-            for q in range(6, -1, -1):
-                d = d * x + g
-                g = g * x + cs[q, k]
-            out_d[j, k] = max(g, 0.0)
-            out_F[j, k] = _force(g, d * inv_h, cA[k], cg[k], hkk)
-        j += 1
+            g0 = u0[k] - u0[k + 1]
+            r0 = v0[k] - v0[k + 1]
+            c1, c2, c3, c4, c5, c6, c7 = _hermite_coefficients(
+                septic, g0, h * r0, hh * (a0[k] - a0[k + 1]), hh * h * (j0[k] - j0[k + 1]),
+                (u1[k] - u1[k + 1]) - g0, h * (v1[k] - v1[k + 1]), hh * (a1[k] - a1[k + 1]),
+                hh * h * (j1[k] - j1[k + 1]))
+            cs[0, k] = g0
+            cs[1, k] = c1
+            cs[2, k] = c2
+            cs[3, k] = c3
+            cs[4, k] = c4
+            cs[5, k] = c5
+            cs[6, k] = c6
+            cs[7, k] = c7
+        for _ in range(ns):
+            x = (t_out[j] - t0) * inv_h
+            for k in range(m):
+                # Horner's scheme for the gap and, alongside, its derivative in s: the eight
+                # coefficients are loaded once (loads, not arithmetic, bound this loop: 25 %
+                # faster than separate sums for the gap and its rate).
+                g = cs[7, k]
+                d = 0.0
+                for q in range(6, -1, -1):
+                    d = d * x + g
+                    g = g * x + cs[q, k]
+                out_d[j, k] = max(g, 0.0)
+                out_F[j, k] = _force(g, d * inv_h, cA[k], cg[k], hkk)
+            j += 1
     return j
 
 
@@ -664,7 +706,7 @@ def _opening_time(g, r, q, closed):
     return tau if (closed > 0.0 and r < 0.0 and disc >= 0.0) else np.inf
 
 
-@nb.njit(cache=True, fastmath=_FM)
+@njit_noalias(cache=True, fastmath=_FM)
 def _violated(u1, v1, closed, damp, gam, rate_tol, loading, skip):
     """Whether any contact but ``skip`` is in a violated state at (u1, v1): a gap of the wrong
     sign, or (``loading``) an approach rate of the wrong sign for its dashpot state
@@ -750,27 +792,27 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     if out_F.shape[1] != p or out_d.shape[1] != p or (store_uv and (
             out_u.shape[1] != p or out_v.shape[1] != p)):
         raise ValueError("output arrays must have padded_length(n) columns")
-    inv_m = np.zeros(p)
+    inv_m = _zeros64(p)
     inv_m[:n] = 1.0 / mass
-    load_p = np.zeros(p)
+    load_p = _zeros64(p)
     load_p[:n] = load
-    u = np.zeros(m)
-    v = np.zeros(m)
+    u = _zeros64(m)
+    v = _zeros64(m)
     u[:n] = u_init
     v[:n] = v_init
-    u1 = np.zeros(m)
-    v1 = np.zeros(m)
-    a0 = np.zeros(m)
-    a1 = np.zeros(m)
-    kv = np.zeros((N_STAGES, m))
-    tu = np.zeros(m)
-    tv = np.zeros(m)
-    F = np.zeros(m)
-    us = np.zeros(m)
-    cs = np.zeros((10, m))
-    j0 = np.zeros(m)
-    j1 = np.zeros(m)
-    vs = np.zeros(m)
+    u1 = _zeros64(m)
+    v1 = _zeros64(m)
+    a0 = _zeros64(m)
+    a1 = _zeros64(m)
+    kv = _zeros64_rows(N_STAGES, m)
+    tu = _zeros64(m)
+    tv = _zeros64(m)
+    F = _zeros64(m)
+    us = _zeros64(m)
+    cs = _zeros64_rows(10, m)
+    j0 = _zeros64(m)
+    j1 = _zeros64(m)
+    vs = _zeros64(m)
     # Loading law: approach rates and their first two derivatives at the start of the
     # previous step (size h_prev), and left limits of the derivatives at the latest switch
     # nearby (time t_left), for predicting dashpot switches.
@@ -783,8 +825,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     h_prev = 0.0
     closed = np.zeros(n)
     damp = np.zeros(n)
-    cA = np.zeros(p)
-    cg = np.zeros(p)
+    cA = _zeros64(p)
+    cg = _zeros64(p)
     loading = law == LAW_LINEAR_LOADING
     hkk = law == LAW_HKK
     # Septic dense output from the jerks (the Kuwabara-Kono jerk is unbounded at contact

@@ -990,9 +990,10 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         kmin = -1
         kind = 0
         th_min = 2.0
-        # Any violated state at all? (A branch-free pass; the detailed scan below is rare.)
-        bad = _violated(u1, v1, closed, damp, gam, rate_tol, loading, -1)
-        for k in range(n if bad else 0):
+        # Any violated state besides the predicted switch? (A branch-free pass; the detailed
+        # scan below is rare. The predicted switch's contact alone is checked otherwise.)
+        bad = _violated(u1, v1, closed, damp, gam, rate_tol, loading, k_pred)
+        for k in range(0 if bad else max(k_pred, 0), n if bad else k_pred + 1):
             if k == k_open:
                 continue  # opens at the step's end (below)
             g1 = _gap(u1, k)

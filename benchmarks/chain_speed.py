@@ -94,8 +94,11 @@ def main() -> dict:
         chains = [paper_chain(g, damping_law=law) for g in gammas]
         simulate_batch(chains[:4], v, tb)  # warm-up
         dt = stable_step(chains[0], v)  # the same step for every run (gamma does not change it)
+        steps = simulate_batch(chains, v, tb, dt=dt).steps
         t_batch = _best_time(lambda c=chains, d=dt: simulate_batch(c, v, tb, dt=d), 5)
         out[law.value]["batch"] = {"runs": len(chains), "output_samples": tb.size, "dt_s": dt,
+                                   "steps_mean": float(np.mean(steps)),
+                                   "steps_max": int(np.max(steps)),
                                    "t_s": t_batch, "runs_per_s": len(chains) / t_batch}
     out["load_avg_1min_after"] = os.getloadavg()[0]
     return out

@@ -177,7 +177,7 @@ def _zeros64(size):
 def _zeros64_rows(rows, cols):
     """Zeros of shape (rows, c), c = cols rounded up to a multiple of 8, so that every row
     starts on a 64-byte boundary (C-contiguous; the columns past cols are spare)."""
-    stride = -(-cols // _PAD) * _PAD
+    stride = padded_length(cols)
     return _zeros64(rows * stride).reshape((rows, stride))
 
 
@@ -704,8 +704,9 @@ def _update_near(k, u, v, a, jk, with_jerk, cA, cg, law, load, inv_m):
 def _opening_time(g, r, q, closed):
     # Time until a closed contact opens, from its gap's Taylor quadratic g + r tau + q tau^2 / 2
     # (gap g, rate r, relative acceleration q): the smallest positive root, in a form without
-    # cancellation; inf if it does not open on that estimate. Scalars and no branches, so that
-    # the scan over contacts vectorises.
+    # cancellation; inf if it does not open on that estimate. Scalars and no branches (the
+    # scan over contacts is a min-reduction; as a separate fast-math, vectorisable function it
+    # was not measurably faster).
     disc = r * r - 2.0 * q * g
     tau = 2.0 * g / max(np.sqrt(max(disc, 0.0)) - r, 1e-300)
     return tau if (closed > 0.0 and r < 0.0 and disc >= 0.0) else np.inf
@@ -888,8 +889,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             h = min(h, h_cap)
         mode = STEP_SQRT_START if sqrt_start else STEP_REGULAR
         # A closed contact about to open: the least time to opening, tau, from the gap's
-        # Taylor polynomial to second order (its smallest positive root; branch-free, so that
-        # the scan vectorises). Opening within the step: the step ends there, taken in
+        # Taylor polynomial to second order (its smallest positive root; branch-free, see
+        # _opening_time). Opening within the step: the step ends there, taken in
         # sqrt(t0 - t) (the Newton refinement of its length follows the step); within two
         # steps: half-way first.
         tau_min = 2.0 * h

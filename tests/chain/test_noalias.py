@@ -47,6 +47,8 @@ def _calls(name):
     a = np.zeros(P + 1)
     kernel.accelerations(u, v, cA, cg, kernel.LAW_LINEAR, load, inv_m, a)
     kv = np.zeros((_dop853_step.N_STAGES, P + 1))
+    closed = np.zeros(P)  # contact states are padded like cA
+    closed[:N] = 1.0
     return {
         "rk_step": (u, v, a, 2e-6, _dop853_step.STEP_REGULAR, cA, cg, False, load, inv_m, kv,
                     np.zeros(P + 1), np.zeros(P + 1), np.zeros(P + 1), np.zeros(P + 1)),
@@ -54,7 +56,10 @@ def _calls(name):
                           np.zeros(P + 1)),
         "jerks": (u, v, a, cA, cg, inv_m, np.zeros(P + 1)),
         "contact_forces": (u, v, cA, cg, kernel.LAW_HKK, np.zeros(P + 1)),
-        "_violated": (u, v, np.ones(P), np.ones(P), cg, 1e-12, True, -1),
+        "_violated": (u, v, closed, closed, cg, 1e-12, True, -1),
+        "_openings_within": (u, v, a, closed, 2e-6),
+        "_switch_candidates": (v, a, closed, (cg > 3.0) * closed, cg, 1e-12, 2e-6,
+                               np.zeros(P)),
         # two steps' worth of samples (weights) and five (monomial coefficients)
         "_sample_gaps": (np.linspace(0.0, 4e-6, 5), 1, 0.0, 2e-6, u, v, a, np.zeros(P + 1),
                          u + 2e-6 * v, v + 2e-6 * a, a, np.zeros(P + 1), cA, cg,
@@ -69,11 +74,13 @@ def _calls(name):
 
 def test_the_hot_kernels_are_compiled_noalias():
     assert set(_noalias_dispatchers()) == {"rk_step", "accelerations", "jerks",
-                                           "contact_forces", "_violated", "_sample_gaps"}
+                                           "contact_forces", "_violated", "_openings_within",
+                                           "_switch_candidates", "_sample_gaps"}
 
 
 @pytest.mark.parametrize("name", ["rk_step", "accelerations", "jerks", "contact_forces",
-                                  "_violated", "_sample_gaps", "_sample_gaps_many"])
+                                  "_violated", "_openings_within", "_switch_candidates",
+                                  "_sample_gaps", "_sample_gaps_many"])
 def test_noalias_kernel_keeps_the_contract_and_the_results(name):
     """Compiled afresh (no cache): the pointer arguments carry LLVM's ``noalias``, the body
     calls no reference counting (which views of one array share), and the results equal those

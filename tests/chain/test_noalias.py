@@ -57,7 +57,7 @@ def _calls(name):
         "jerks": (u, v, a, cA, cg, inv_m, np.zeros(P + 1)),
         "contact_forces": (u, v, cA, cg, kernel.LAW_HKK, np.zeros(P + 1)),
         "_violated": (u, v, closed, closed, cg, 1e-12, True, -1),
-        "_openings_within": (u, v, a, closed, 2e-6),
+        "_openings_within": (u, v, a, closed, 2e-6, np.zeros(P)),
         "_switch_candidates": (v, a, closed, (cg > 3.0) * closed, cg, 1e-12, 2e-6,
                                np.zeros(P)),
         # two steps' worth of samples (weights) and five (monomial coefficients)

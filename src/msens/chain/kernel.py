@@ -684,20 +684,24 @@ def _update_near(k, u, v, a, jk, with_jerk, cA, cg, law, load, inv_m):
     arithmetic as :func:`accelerations` and :func:`jerks` (padded layout)."""
     p = cA.shape[0]
     hkk = law == LAW_HKK
+    # Each contact's force (and its rate) once, carried over as in the full passes.
+    f_prev = 0.0
+    if k > 0:
+        f_prev = _force(u[k - 1] - u[k], v[k - 1] - v[k], cA[k - 1], cg[k - 1], hkk)
     for i in range(k, min(k + 2, p)):
-        f_prev = 0.0
-        if i > 0:
-            f_prev = _force(u[i - 1] - u[i], v[i - 1] - v[i], cA[i - 1], cg[i - 1], hkk)
         f = _force(u[i] - u[i + 1], v[i] - v[i + 1], cA[i], cg[i], hkk)
         a[i] = (load[i] + f_prev - f) * inv_m[i]
+        f_prev = f
     if with_jerk:
-        for i in range(max(k - 1, 0), min(k + 3, p)):
-            d_prev = 0.0
-            if i > 0:
-                d_prev = _dforce(u[i - 1] - u[i], v[i - 1] - v[i], a[i - 1] - a[i], cA[i - 1],
-                                 cg[i - 1])
+        i0 = max(k - 1, 0)
+        d_prev = 0.0
+        if i0 > 0:
+            d_prev = _dforce(u[i0 - 1] - u[i0], v[i0 - 1] - v[i0], a[i0 - 1] - a[i0],
+                             cA[i0 - 1], cg[i0 - 1])
+        for i in range(i0, min(k + 3, p)):
             d = _dforce(u[i] - u[i + 1], v[i] - v[i + 1], a[i] - a[i + 1], cA[i], cg[i])
             jk[i] = (d_prev - d) * inv_m[i]
+            d_prev = d
 
 
 @nb.njit(cache=True, inline="always")
@@ -734,12 +738,13 @@ def _violated(u1, v1, closed, damp, gam, rate_tol, loading, skip):
 
 
 @njit_noalias(cache=True, fastmath=_FM)
-def _openings_within(u, v, a, closed, T):
-    """Number of closed contacts that may open within time T: a superset (by a relative
-    margin of 1e-6) of those with :func:`_opening_time` < T, without its square root and
-    division (2 g / (sqrt(disc) - r) < T <=> 2 g + T r < T sqrt(disc)), so that the pass
-    vectorises; padded ``closed`` as in :func:`_violated`. Most steps have none, and skip the
-    scalar scan for the least time (on the paper chain 3 in 4 steps)."""
+def _openings_within(u, v, a, closed, T, flag):
+    """Flags (1.0) into ``flag`` (p,) the closed contacts that may open within time T, and
+    returns their number: a superset (by a relative margin of 1e-6) of those with
+    :func:`_opening_time` < T, found without its square root and division (2 g / (sqrt(disc)
+    - r) < T <=> 2 g + T r < T sqrt(disc)) so that the pass vectorises; padded ``closed`` as
+    in :func:`_violated`. Only flagged contacts then need the least time (on the paper chain
+    3 steps in 4 have none)."""
     count = 0
     for k in range(closed.shape[0]):
         g = u[k] - u[k + 1]
@@ -747,7 +752,9 @@ def _openings_within(u, v, a, closed, T):
         disc = r * r - 2.0 * (a[k] - a[k + 1]) * g
         lhs = 2.0 * g + T * r
         soon = (lhs < 0.0) | (lhs * lhs <= (1.0 + 1e-6) * T * T * disc)
-        count += 1 if ((closed[k] > 0.0) & (r < 0.0) & (disc >= 0.0) & soon) else 0
+        ok = (closed[k] > 0.0) & (r < 0.0) & (disc >= 0.0) & soon
+        flag[k] = 1.0 if ok else 0.0
+        count += 1 if ok else 0
     return count
 
 
@@ -940,10 +947,11 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         # sqrt(t0 - t) (the Newton refinement of its length follows the step); within two
         # steps: half-way first.
         tau_min = 2.0 * h
-        if _openings_within(u, v, a0, closed, tau_min) > 0:
+        if _openings_within(u, v, a0, closed, tau_min, flag) > 0:
             for k in range(n):
-                tau_min = min(tau_min, _opening_time(u[k] - u[k + 1], v[k] - v[k + 1],
-                                                     a0[k] - a0[k + 1], closed[k]))
+                if flag[k] > 0.0:
+                    tau_min = min(tau_min, _opening_time(u[k] - u[k + 1], v[k] - v[k + 1],
+                                                         a0[k] - a0[k + 1], closed[k]))
         k_open = -1
         h_end = _END_FRAC * dt
         if tau_min < 2.0 * h:

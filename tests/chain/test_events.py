@@ -54,3 +54,68 @@ def test_a_state_just_switched_within_its_tolerance_is_no_violation():
     # The same start value moving away from the allowed side, or too far on the wrong one.
     assert kernel._first_violation(1e-6, 1.0, 2.0, 1.0, False) == 0.0
     assert kernel._first_violation(1e-2, -1.0, 0.5, 3.0, False) == 0.0
+
+
+def _random_contact_states(rng, n=30):
+    """Padded states of n contacts near their switches: gaps, rates and relative accelerations
+    of either sign, about 1/3 of the contacts open, half the closed ones' dashpots on, some
+    without a dashpot."""
+    p = kernel.padded_length(n)
+    u, v, a = (np.zeros(p + 1) for _ in range(3))
+    u[:n] = np.cumsum(rng.normal(0.0, 1e-7, n)[::-1])[::-1]
+    v[:n] = rng.normal(0.0, 1e-2, n)
+    a[:n] = rng.normal(0.0, 1e4, n)
+    closed, damp, gam = (np.zeros(p) for _ in range(3))
+    closed[:n] = rng.random(n) < 2.0 / 3.0
+    damp[:n] = closed[:n] * (rng.random(n) < 0.5)
+    gam[:n] = np.where(rng.random(n) < 0.9, 4.8, 0.0)
+    return u, v, a, closed, damp, gam
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_vectorised_event_passes_match_their_scalar_definitions(seed):
+    """The branch-free passes over the padded contact arrays flag exactly what the scalar
+    tests they replaced select: violated states, dashpot-switch candidates, and (a superset
+    of) the contacts whose Taylor-quadratic opening time is below the horizon."""
+    rng = np.random.default_rng(seed)
+    n = 30
+    u, v, a, closed, damp, gam = _random_contact_states(rng, n)
+    g = u[:n] - u[1:n + 1]
+    r = v[:n] - v[1:n + 1]
+    q = a[:n] - a[1:n + 1]
+    c = closed[:n] > 0.0
+    d = damp[:n] > 0.0
+    tol = 1e-3
+    h = 1e-6
+    # Violated states (as a float formula before).
+    gap_bad = (c & (g < 0.0)) | (~c & (g > 0.0))
+    rate_bad = (gam[:n] > 0.0) & ((d & (r < -tol)) | (c & ~d & (r > tol)))
+    for loading in (False, True):
+        bad = gap_bad | (loading & rate_bad)
+        for skip in (-1, *np.flatnonzero(bad)[:3]):
+            expect = bool(np.any(np.delete(bad, skip) if skip >= 0 else bad))
+            assert kernel._violated(u, v, closed, damp, gam, tol, loading, skip) is expect
+    # Consistent states violate nothing; one contact put in the wrong state is found.
+    ok_closed = np.r_[g > 0.0, np.zeros(closed.size - n)].astype(float)
+    ok_damp = ok_closed * np.r_[r > 0.0, np.zeros(closed.size - n)]
+    assert not kernel._violated(u, v, ok_closed, ok_damp, gam, 0.0, True, -1)
+    k = int(rng.integers(n))
+    ok_closed[k] = 1.0 - ok_closed[k]
+    ok_damp[k] = ok_closed[k] * (r[k] > 0.0)
+    assert kernel._violated(u, v, ok_closed, ok_damp, gam, 0.0, True, -1)
+    assert not kernel._violated(u, v, ok_closed, ok_damp, gam, 0.0, True, k)
+    # Dashpot-switch candidates (as the predictor's branches before).
+    cand = (c & (gam[:n] > 0.0) & (r * q < 0.0) & (np.abs(r) > tol)
+            & (np.abs(r) < 2.0 * h * np.abs(q)) & ((r > 0.0) == d))
+    flag = np.full(closed.size, np.nan)
+    assert kernel._switch_candidates(v, a, closed, damp, gam, tol, 2.0 * h, flag) == cand.sum()
+    np.testing.assert_array_equal(flag, np.r_[cand, np.zeros(flag.size - n, bool)])
+    # Openings: every contact with _opening_time < T is flagged, and few others.
+    for T in (1e-6, 1e-5, 1e-4):
+        tau = np.array([kernel._opening_time(g[k], r[k], q[k], closed[k]) for k in range(n)])
+        flag[:] = np.nan
+        count = kernel._openings_within(u, v, a, closed, T, flag)
+        assert count == flag.sum() and not flag[n:].any()
+        assert np.all(flag[:n][tau < T] == 1.0)
+        near = np.abs(tau / T - 1.0) < 1e-5
+        assert np.all((flag[:n] == 1.0) == (tau < T) | near)

@@ -84,7 +84,15 @@ Performance layout (measured on the paper chain, n = 30: ~0.8 us per step includ
 rows are padded with zeros to a multiple of 8 entries past the wall, so the wall contact needs
 no special case and the force, stage and sampling loops vectorise without scalar remainders;
 the contact states enter as the products closed * A and dashpot * gamma, updated only when a
-contact toggles. The Runge-Kutta step and the other passes over the particle arrays are
+contact toggles. The states themselves are padded the same way, so that the per-step event
+passes (violated states, contacts that may open within the step, dashpot-switch candidates)
+are branch-free counts over p entries that vectorise; the scalar work (the least opening time,
+the switch predictor) then visits only the flagged contacts. (Over n = 30 entries LLVM's vector
+loop, 8 lanes x 4, never ran: all of it was the scalar remainder. With the candidates' tests as
+branches the predictor's scan took a sixth of the run time. With the three passes the
+``linear-loading`` batch of ``benchmarks/chain_speed.py`` went from 1906 to 2207-2402 runs/s on
+one day, at the same steps; ``git checkout 8cea9a2`` for the kernel before.) The Runge-Kutta
+step and the other passes over the particle arrays are
 compiled with their array arguments declared free of overlap
 (:func:`msens.chain._noalias.njit_noalias`): without, every vectorised loop began with run-time
 overlap checks of each pair of arrays, which cost more than the loop (0.70 -> 0.50 us per
@@ -721,9 +729,8 @@ def _violated(u1, v1, closed, damp, gam, rate_tol, loading, skip):
     """Whether any contact but ``skip`` is in a violated state at (u1, v1): a gap of the wrong
     sign, or (``loading``) an approach rate of the wrong sign for its dashpot state.
 
-    ``closed``, ``damp`` and ``gam`` are padded to p (zeros past n) like ``cA``: a branch-free
-    integer count over p entries vectorises, 21 against 65 ns per call over n = 30 entries,
-    where the vector loop (8 lanes x 4) never ran and all of it was the scalar remainder.
+    ``closed``, ``damp`` and ``gam`` are padded to p (zeros past n) like ``cA``, so that the
+    branch-free integer count vectorises (see the module notes).
     """
     bad = 0
     for k in range(closed.shape[0]):
@@ -765,7 +772,7 @@ def _switch_candidates(v, a, closed, damp, gam, rate_tol, two_h, flag):
     switched, within its tolerance) and closing in on zero within ``two_h`` on a linear
     estimate; returns their number. Branch-free over the padded arrays (vectorised); the
     predictor then visits only these (before, the scan over all contacts with these tests
-    as branches took a quarter of the run time)."""
+    as branches took a sixth of the run time)."""
     count = 0
     for k in range(closed.shape[0]):
         r = v[k] - v[k + 1]

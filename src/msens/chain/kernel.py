@@ -79,29 +79,30 @@ samples in between by 4.5e-7 (linear dashpot). The jerk costs one force-like pas
 step; in exchange the step grows to t_c/5 at a peak-force error of 4e-8 (482 instead of 673
 steps per ms).
 
-Performance layout (measured on the paper chain, n = 30: ~0.8 us per step including events,
-1.1 us with the loading-only dashpot, ~35 ns per output sample): the particle arrays and output
-rows are padded with zeros to a multiple of 8 entries past the wall, so the wall contact needs
-no special case and the force, stage and sampling loops vectorise without scalar remainders;
-the contact states enter as the products closed * A and dashpot * gamma, updated only when a
-contact toggles. The states themselves are padded the same way, so that the per-step event
-passes (violated states, contacts that may open within the step, dashpot-switch candidates)
-are branch-free counts over p entries that vectorise; the scalar work (the least opening time,
-the switch predictor) then visits only the flagged contacts. (Over n = 30 entries LLVM's vector
-loop, 8 lanes x 4, never ran: all of it was the scalar remainder. With the candidates' tests as
-branches the predictor's scan took a sixth of the run time. With the three passes the
-``linear-loading`` batch of ``benchmarks/chain_speed.py`` went from 1906 to 2207-2402 runs/s on
-one day, at the same steps; ``git checkout 8cea9a2`` for the kernel before.) The Runge-Kutta
-step and the other passes over the particle arrays are
-compiled with their array arguments declared free of overlap
+Performance layout (``benchmarks/chain_speed.py``, paper chain, n = 30: 0.64-0.67 ms for 403
+steps and 10,001 output samples with the linear dashpot, 1.00-1.07 ms for 651 with the
+loading-only one): the particle arrays and output rows are padded with zeros to a multiple of 8
+entries past the wall, so the wall contact needs no special case and the force, stage and
+sampling loops vectorise without scalar remainders; the contact states enter as the products
+closed * A and dashpot * gamma, updated only when a contact toggles. The states themselves are
+padded the same way, so that the per-step event passes (violated states, contacts that may open
+within the step, dashpot-switch candidates) are branch-free counts over p entries that
+vectorise; the scalar work (the least opening time, the switch predictor) then visits only the
+flagged contacts. (Over n = 30 entries LLVM's vector loop, 8 lanes x 4, never ran: all of it
+was the scalar remainder. With the candidates' tests as branches the predictor's scan took a
+sixth of the run time. ``benchmarks/chain_profile.py``, two runs each, before (``git checkout
+8cea9a2 -- src/msens/chain/kernel.py``) and after: 1100-1123 against 925-938 us per run at the
+same steps; ns per step for the openings 127-131 -> 54-55, the predictor 257-258 -> 187-192,
+the violated-state test 143-154 -> 94.) The Runge-Kutta step and the other passes over the
+particle arrays are compiled with their array arguments declared free of overlap
 (:func:`msens.chain._noalias.njit_noalias`): without, every vectorised loop began with run-time
 overlap checks of each pair of arrays, which cost more than the loop (0.70 -> 0.50 us per
 DOP853 step, 1.5x faster runs). The scratch arrays start on 64-byte boundaries
 (:func:`_zeros64`). Helpers called inside the sampling loops take scalars, not arrays: numba's
-reference counting of array arguments of inlined helpers stopped those loops from
-vectorising (sampling 1.5x slower). A 6th-order 7-stage Runge-Kutta formula (Butcher 1964) was
-tried in place of DOP853: it needs t_c/16 steps for the 1e-6 peak-force target against t_c/8
-for DOP853 (quintic output), so no net gain.
+reference counting of array arguments of inlined helpers stopped those loops from vectorising
+(sampling 1.5x slower). A 6th-order 7-stage Runge-Kutta formula (Butcher 1964) was tried in
+place of DOP853: it needs t_c/16 steps for the 1e-6 peak-force target against t_c/8 for DOP853
+(quintic output), so no net gain.
 """
 
 from __future__ import annotations

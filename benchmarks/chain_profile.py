@@ -96,8 +96,11 @@ def _instrumented_source() -> str:
     after = body.index("\n", body.index(")", rk)) + 1
     body = body[:after] + f"            prof[{len(PARTS)}] += _cycles() - _rk\n" + body[after:]
     body = body[:rk] + "            _rk = _cycles()\n" + body[rk:]
-    head = head.replace("from msens.chain._noalias import njit_noalias\n",
-                        "from msens.chain._noalias import njit_noalias\n" + _COUNTER, 1)
+    numpy = "\nimport numpy as np\n"
+    if numpy not in head:
+        sys.exit("chain_profile: kernel.py no longer imports numpy as np; update "
+                 "_instrumented_source")
+    head = head.replace(numpy, numpy + _COUNTER, 1)
     return (head + body).replace("cache=True", "cache=False")
 
 

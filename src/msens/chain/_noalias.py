@@ -3,10 +3,10 @@
 Why: numba passes every array argument as a plain pointer, so LLVM must assume that any two
 of them may overlap. Each vectorised loop that writes one array while reading others is then
 preceded by run-time overlap checks of every pair (with a scalar fallback loop). In the
-chain kernel's loops over 32 padded entries those checks cost more than the loops: one
-DOP853 step executed ~7800 instructions, most of them pointer comparisons, and took 0.86 us;
-declared free of overlaps, 0.50-0.65 us (``benchmarks/chain_speed.py`` measures the effect on
-whole runs).
+chain kernel's loops over 32 padded entries those checks cost more than the loops:
+``benchmarks/chain_profile.py`` times the DOP853 step inside the step loop at 954 ns with plain
+``njit`` (``git checkout 1a60657 -- src/msens/chain/kernel.py src/msens/chain/_dop853_step.py``)
+against 465-511 ns declared free of overlaps (with 64-byte aligned scratch arrays).
 
 The declaration is LLVM's ``noalias`` on the pointer arguments (C's ``restrict``), set through
 numba's own ``flags.noalias`` (the flag its parallel backend sets for kernels it has proven

@@ -96,8 +96,8 @@ same steps; ns per step for the openings 127-131 -> 54-55, the predictor 257-258
 the violated-state test 143-154 -> 94.) The Runge-Kutta step and the other passes over the
 particle arrays are compiled with their array arguments declared free of overlap
 (:func:`msens.chain._noalias.njit_noalias`): without, every vectorised loop began with run-time
-overlap checks of each pair of arrays, which cost more than the loop (0.70 -> 0.50 us per
-DOP853 step, 1.5x faster runs). The scratch arrays start on 64-byte boundaries
+overlap checks of each pair of arrays, which cost more than the loop (the DOP853 step 954 ->
+465-511 ns, see :mod:`msens.chain._noalias`). The scratch arrays start on 64-byte boundaries
 (:func:`_zeros64`). Helpers called inside the sampling loops take scalars, not arrays: numba's
 reference counting of array arguments of inlined helpers stopped those loops from vectorising
 (sampling 1.5x slower). A 6th-order 7-stage Runge-Kutta formula (Butcher 1964) was tried in
@@ -717,9 +717,9 @@ def _update_near(k, u, v, a, jk, with_jerk, cA, cg, law, load, inv_m):
 def _opening_time(g, r, q, closed):
     # Time until a closed contact opens, from its gap's Taylor quadratic g + r tau + q tau^2 / 2
     # (gap g, rate r, relative acceleration q): the smallest positive root, in a form without
-    # cancellation; inf if it does not open on that estimate. Scalars and no branches (the
-    # scan over contacts is a min-reduction; as a separate fast-math, vectorisable function it
-    # was not measurably faster).
+    # cancellation; inf if it does not open on that estimate. Scalars and no branches. (LLVM
+    # leaves the min-reduction over contacts scalar, also over padded arrays with fast-math:
+    # _openings_within spares most steps from it.)
     disc = r * r - 2.0 * q * g
     tau = 2.0 * g / max(np.sqrt(max(disc, 0.0)) - r, 1e-300)
     return tau if (closed > 0.0 and r < 0.0 and disc >= 0.0) else np.inf
@@ -887,7 +887,9 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     q_left = np.zeros(n)
     s_left = np.zeros(n)
     h_prev = 0.0
-    # Contact states and gamma padded like cA (zeros past n) for the vectorised passes.
+    # Contact states padded like cA (zeros past n) for the vectorised passes, with a padded
+    # copy of gamma and scratch flags. (Rebinding gam to its padded copy made the runs 2-3 %
+    # slower, with unchanged results.)
     closed = _zeros64(p)
     damp = _zeros64(p)
     gam_p = _zeros64(p)
@@ -994,7 +996,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             j0_ok = True
         if loading and h_prev > 0.0:
             h_max = h * (1.0 + _PRED_STRETCH)
-            # Candidates (see _switch_candidates), in contact order as before.
+            # Candidates (see _switch_candidates); of equal predicted times the first wins.
             if _switch_candidates(v, a0, closed, damp, gam_p, rate_tol, 2.0 * h, flag) > 0:
                 for k in range(n):
                     if flag[k] == 0.0:

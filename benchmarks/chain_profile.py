@@ -13,7 +13,7 @@ loop's share of the wall time says how much falls outside the parts).
 The counters cost a few ns each, and the parts are cut at source lines: after a change to
 ``kernel.integrate`` that moves them, the script stops and names the missing line.
 
-Run: python benchmarks/chain_profile.py [--law linear|linear-loading]
+Run: python benchmarks/chain_profile.py [--law linear|linear-loading] [--contacts 11,12,16,17]
 """
 
 from __future__ import annotations
@@ -75,8 +75,8 @@ def _instrumented_source() -> str:
     src = inspect.getsource(kernel)
     start = src.index("def integrate(")
     head, body = src[:start], src[start:]
-    body = body.replace("store_uv, out_F, out_d, out_u, out_v):",
-                        "store_uv, out_F, out_d, out_u, out_v, prof):", 1)
+    body = body.replace("store_uv, out_F, out_d, out_u, out_v, sel):",
+                        "store_uv, out_F, out_d, out_u, out_v, sel, prof):", 1)
     pos = 0
     for i, (_, line) in enumerate(PARTS):
         at = body.find(line, pos)
@@ -113,7 +113,7 @@ def _load(source: str, folder: Path):
     return module
 
 
-def main(law: DampingLaw) -> dict:
+def main(law: DampingLaw, contacts: list[int] | None = None) -> dict:
     v = striker_velocity()
     t = np.linspace(0.0, 1e-3, 1001)
     gammas = np.random.default_rng(12345).uniform(0.0, 9.6, 64)
@@ -121,14 +121,15 @@ def main(law: DampingLaw) -> dict:
     with tempfile.TemporaryDirectory() as folder:
         k = _load(_instrumented_source(), Path(folder))
         p = k.padded_length(30)
+        sel = np.arange(p) if contacts is None else np.array(contacts, dtype=np.int64)
         runs = []
         for g in gammas:
             c = paper_chain(g, damping_law=law)
             u0, v0 = _initial_state(c, v)
             runs.append((u0, v0, c.mass, c.stiffness, c.damping, _LAW_CODE[law], c.load(), t,
                          stable_step(c, v), GRADE_LEVELS[law], _rate_tol(v), False,
-                         np.empty((t.size, p)), np.empty((t.size, p)), np.empty((1, 30)),
-                         np.empty((1, 30)), prof))
+                         np.empty((t.size, sel.size)), np.empty((t.size, sel.size)),
+                         np.empty((1, 30)), np.empty((1, 30)), sel, prof))
         for r in runs:  # compile, warm up
             k.integrate(*r)
         # The counter's rate, against the wall clock.
@@ -147,6 +148,7 @@ def main(law: DampingLaw) -> dict:
     return {
         "problem": f"paper chain, {law.value}, 64 damping values 0-9.6 kg/s, 1 ms, 1001 "
                    "output samples, one thread",
+        "contacts": "all" if contacts is None else contacts,
         "us_per_run": wall_ns / 1e3 / (repeats * len(runs)),
         "steps_per_run": steps / (repeats * len(runs)),
         "loop_share_of_wall": loop / per_ns / wall_ns,
@@ -161,4 +163,8 @@ def main(law: DampingLaw) -> dict:
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--law", choices=["linear", "linear-loading"], default="linear-loading")
-    print(json.dumps(main(DampingLaw(parser.parse_args().law)), indent=2))
+    parser.add_argument("--contacts", type=lambda x: [int(c) for c in x.split(",")],
+                        help="output only these contacts (0-based, comma-separated), as "
+                             "simulate_batch(contacts=...); default all")
+    args = parser.parse_args()
+    print(json.dumps(main(DampingLaw(args.law), args.contacts), indent=2))

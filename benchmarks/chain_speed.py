@@ -5,12 +5,15 @@ Problem: the paper's 30-particle chain (gamma_c = 4.8 kg/s, gravity, striker fro
 relative error of the per-contact peak force against a converged reference (SciPy DOP853 at
 rtol = 1e-13). Speed: msens.chain.simulate against SciPy solve_ivp(DOP853, rtol=1e-10) on the
 same problem, and simulate_batch over 512 chains with varied gamma_c (numba threads over
-runs). ``output_share`` is the part of msens' time spent on the 10 MHz output samples (the
-same run with output at its two ends only, ``t_msens_output_at_ends_only_s``, for
-reference). Numba compile time is excluded (everything is warmed up first); times are the best
-of several repeats (msens single runs: repeated for at least 0.5 s, SciPy: 3 runs of ~0.3-0.7 s
-each, batches: 5 of ~0.15-0.3 s). The 1-minute load average before and after is reported:
-other work on the machine slows both sides, and the batch throughput most.
+runs), once with all contacts in the output (``batch``) and once with only the four contacts
+that the paper's top and bottom sensor beads average (``batch_sensor_contacts``, what
+msens.calibrate.fit_dissipation requests). ``output_share`` is the part of msens' time spent
+on the 10 MHz output samples (the same run with output at its two ends only,
+``t_msens_output_at_ends_only_s``, for reference). Numba compile time is excluded (everything
+is warmed up first); times are the best of several repeats (msens single runs: repeated for at
+least 0.5 s, SciPy: 3 runs of ~0.3-0.7 s each, batches: 5 of ~0.15-0.3 s). The 1-minute load
+average before and after is reported: other work on the machine slows both sides, and the
+batch throughput most.
 
 Targets (issue 2): ratio >= 300 at peak-force error <= 1e-6; runs_per_s >= 2000 on 2 cores.
 
@@ -35,6 +38,7 @@ from msens.chain import (
     stable_step,
     striker_velocity,
 )
+from msens.sensors import SensorKind, sensor_contacts
 
 
 def _best_time(fn, repeats, min_total_s=0.0):
@@ -87,18 +91,23 @@ def main() -> dict:
             "t_msens_s": t_msens, "t_scipy_s": t_scipy, "ratio": t_scipy / t_msens,
             "t_msens_output_at_ends_only_s": t_ends, "output_share": 1.0 - t_ends / t_msens,
         }
-    # Batch: 512 chains, gamma_c uniform in [0, 9.6] kg/s (seeded), 1 us output sampling.
+    # Batch: 512 chains, gamma_c uniform in [0, 9.6] kg/s (seeded), 1 us output sampling; all
+    # contacts, or those of sensor beads at particles 13 and 18 (contacts 11, 12, 16, 17).
     gammas = np.random.default_rng(12345).uniform(0.0, 9.6, 512)
     tb = np.linspace(0.0, 1e-3, 1001)
+    sensed = np.concatenate([sensor_contacts(SensorKind.BEAD, p, 30) for p in (13, 18)])
     for law in (DampingLaw.LINEAR, DampingLaw.LINEAR_LOADING):
         chains = [paper_chain(g, damping_law=law) for g in gammas]
         dt = stable_step(chains[0], v)  # the same step for every run (gamma does not change it)
-        steps = simulate_batch(chains, v, tb, dt=dt).steps  # also the warm-up
-        t_batch = _best_time(lambda c=chains, d=dt: simulate_batch(c, v, tb, dt=d), 5)
-        out[law.value]["batch"] = {"runs": len(chains), "output_samples": tb.size, "dt_s": dt,
-                                   "steps_mean": float(np.mean(steps)),
-                                   "steps_max": int(np.max(steps)),
-                                   "t_s": t_batch, "runs_per_s": len(chains) / t_batch}
+        for key, contacts in (("batch", None), ("batch_sensor_contacts", sensed)):
+            steps = simulate_batch(chains, v, tb, dt=dt, contacts=contacts).steps  # warm-up
+            t_batch = _best_time(lambda c=chains, d=dt, s=contacts:
+                                 simulate_batch(c, v, tb, dt=d, contacts=s), 5)
+            out[law.value][key] = {
+                "runs": len(chains), "output_samples": tb.size,
+                "contacts": "all" if contacts is None else contacts.tolist(), "dt_s": dt,
+                "steps_mean": float(np.mean(steps)), "steps_max": int(np.max(steps)),
+                "t_s": t_batch, "runs_per_s": len(chains) / t_batch}
     out["load_avg_1min_after"] = os.getloadavg()[0]
     return out
 

@@ -25,17 +25,22 @@ def _gauss(t, t0, sigma=9e-6):
     return np.exp(-0.5 * ((t - t0) / sigma) ** 2)
 
 
-def fake_simulator(chains, velocities, t_out):
-    """Stand-in for simulate_batch with known AR(gamma): each 'chain' is (gamma_c, gamma_w);
-    reflected amplitudes at the top (13) and bottom (18) sensors decay exponentially."""
+def fake_chain(gamma_c, gamma_w):
+    return SimpleNamespace(gamma_c=gamma_c, gamma_w=gamma_w, n_particles=N)
+
+
+def fake_simulator(chains, velocities, t_out, contacts):
+    """Stand-in for simulate_batch(..., contacts=...) with known AR(gamma): reflected
+    amplitudes at the top (13) and bottom (18) sensors decay exponentially with the chains'
+    gamma_c, gamma_w."""
     runs = len(chains)
     force = np.full((runs, t_out.size, N), 0.05)  # static force, removed by the sensors
-    for r, (gc, gw) in enumerate(chains):
+    for r, c in enumerate(chains):
         for p, t_inc, t_ref, kc in ((13, 110e-6, 430e-6, 0.10), (18, 155e-6, 385e-6, 0.06)):
-            ar = np.exp(-kc * gc - 0.05 * gw)
+            ar = np.exp(-kc * c.gamma_c - 0.05 * c.gamma_w)
             pulse = 8.0 * (_gauss(t_out, t_inc) + ar * _gauss(t_out, t_ref))
             force[r, :, p - 2:p] += pulse[:, None]
-    return SimpleNamespace(force=force, t=t_out)
+    return SimpleNamespace(force=force[..., contacts], t=t_out)
 
 
 def _target(gc, gw):
@@ -50,7 +55,7 @@ def test_objective_is_paper_eq10():
 
 def test_fit_recovers_interior_optimum():
     ar_t, ar_b = _target(3.3, 1.7)
-    fit = fit_dissipation(lambda gc, gw: (gc, gw), (13, 18), ar_t, ar_b, 0.3758, T,
+    fit = fit_dissipation(fake_chain, (13, 18), ar_t, ar_b, 0.3758, T,
                           simulator=fake_simulator, xatol=1e-5, fatol=1e-10)
     assert fit.gamma_c == pytest.approx(3.3, abs=2e-3)
     assert fit.gamma_w == pytest.approx(1.7, abs=4e-3)
@@ -65,7 +70,7 @@ def test_fit_stops_at_the_gamma_w_bound():
     # Targets that would need gamma_w < 0: the constrained optimum is on gamma_w = 0, and
     # there the best gamma_c minimises Eq. 10 along the bound (checked by a dense 1-D scan).
     ar_t, ar_b = _target(4.0, -1.0)
-    fit = fit_dissipation(lambda gc, gw: (gc, gw), (13, 18), ar_t, ar_b, 0.3758, T,
+    fit = fit_dissipation(fake_chain, (13, 18), ar_t, ar_b, 0.3758, T,
                           simulator=fake_simulator, xatol=1e-5, fatol=1e-12)
     assert fit.gamma_w == pytest.approx(0.0, abs=1e-3)
     gcs = np.linspace(0, 10, 20001)
@@ -77,10 +82,10 @@ def test_fit_stops_at_the_gamma_w_bound():
 
 def test_fit_rejects_bad_input():
     with pytest.raises(InputError, match="amplitude ratios"):
-        fit_dissipation(lambda gc, gw: (gc, gw), (13, 18), 0.0, 0.7, 0.3, T,
+        fit_dissipation(fake_chain, (13, 18), 0.0, 0.7, 0.3, T,
                         simulator=fake_simulator)
     with pytest.raises(InputError, match="no grid point"):
-        fit_dissipation(lambda gc, gw: (gc, gw), (13, 18), 0.5, 0.7, 0.3, T,
+        fit_dissipation(fake_chain, (13, 18), 0.5, 0.7, 0.3, T,
                         simulator=fake_simulator, min_delay=(1e-3, 1e-3), refine=False)
 
 

@@ -63,7 +63,7 @@ def _smooth_run(dt, n=10, F0=5.0, T=2e-4, t=None):
     t = np.array([0.0, T]) if t is None else t
     out = [np.empty((t.size, kernel.padded_length(n))) for _ in range(4)]
     kernel.integrate(u0, v0, c.mass, c.stiffness, c.damping, kernel.LAW_LINEAR, load, t, dt,
-                     5, 1e-14, True, *out)
+                     5, 1e-14, True, *out, np.arange(kernel.padded_length(n)))
     assert out[1][:, :n].min() > 0.0  # no contact opened
     return out[3][:, :n]
 
@@ -226,6 +226,34 @@ def test_batch_equals_single_runs():
         np.testing.assert_allclose(b.force[i], s.force, rtol=0, atol=1e-12)
         np.testing.assert_allclose(b.approach[i], s.approach, rtol=0, atol=1e-18)
         assert b.steps[i] == s.steps
+
+
+@pytest.mark.parametrize("law", list(DampingLaw))
+def test_batch_of_some_contacts_is_those_columns_exactly(law):
+    """contacts=...: the same steps and bit for bit the same samples as the full output, for
+    sensor contacts, the wall contact, one contact and all in reverse order; at 10 MHz (many
+    samples per step: monomial form, and steps in sqrt(t - t0) with samples) and 1 MHz (at
+    most a few per step: weights form)."""
+    v = striker_velocity()
+    g = 4.8 if law is not DampingLaw.HERTZ_KUWABARA_KONO else 4.8e3
+    chains = [paper_chain(f * g, damping_law=law) for f in (0.0, 0.5, 1.0, 1.75)]
+    for t in (np.linspace(0.0, 5e-4, 5001), np.linspace(0.0, 5e-4, 501)):
+        full = simulate_batch(chains, v, t)
+        for sel in ([11, 12, 16, 17], [29, 0, 5], [7], list(range(30))[::-1]):
+            part = simulate_batch(chains, v, t, contacts=sel)
+            assert part.force.shape == (4, t.size, len(sel))
+            np.testing.assert_array_equal(part.contacts, sel)
+            np.testing.assert_array_equal(part.steps, full.steps)
+            np.testing.assert_array_equal(part.force, full.force[..., sel])
+            np.testing.assert_array_equal(part.approach, full.approach[..., sel])
+    assert full.contacts is None
+
+
+@pytest.mark.parametrize("contacts", [[30], [-1], [3, 3], [], [[1, 2]], [1.0, 2.0]])
+def test_bad_output_contacts_raise(contacts):
+    with pytest.raises(ValueError, match=r"contacts must be distinct 0-based contact "
+                                         r"indices in 0\.\.29"):
+        simulate_batch([paper_chain()], 0.3, [0.0, 1e-6], contacts=contacts)
 
 
 def test_loading_dashpot_never_pulls_and_linear_may():

@@ -14,6 +14,7 @@ from msens.chain._noalias import _NoAliasCompiler, njit_noalias
 
 N = 30
 P = kernel.padded_length(N)
+SENSED = np.array([11, 12, 16, 17])
 
 
 def _noalias_dispatchers():
@@ -69,18 +70,30 @@ def _calls(name):
                               np.zeros(P + 1), u + 2e-6 * v, v + 2e-6 * a, a, np.zeros(P + 1),
                               cA, cg, kernel.LAW_LINEAR, True, np.zeros((6, P)),
                               np.zeros((6, P)), np.zeros((8, P + 1))),
+        # the same for four contacts (the sensors' of the paper)
+        "_sample_contacts": (np.linspace(0.0, 4e-6, 5), 1, 0.0, 2e-6, u, v, a, np.zeros(P + 1),
+                             u + 2e-6 * v, v + 2e-6 * a, a, np.zeros(P + 1), cA, cg,
+                             kernel.LAW_LINEAR, True, np.zeros((5, 4)), np.zeros((5, 4)),
+                             np.zeros((8, P + 1)), SENSED),
+        "_sample_contacts_many": (np.linspace(0.0, 2e-6, 6), 1, 0.0, 2e-6, u, v, a,
+                                  np.zeros(P + 1), u + 2e-6 * v, v + 2e-6 * a, a,
+                                  np.zeros(P + 1), cA, cg, kernel.LAW_LINEAR, True,
+                                  np.zeros((6, 4)), np.zeros((6, 4)), np.zeros((8, P + 1)),
+                                  SENSED),
     }[name]
 
 
 def test_the_hot_kernels_are_compiled_noalias():
     assert set(_noalias_dispatchers()) == {"rk_step", "accelerations", "jerks",
                                            "contact_forces", "_violated", "_openings_within",
-                                           "_switch_candidates", "_sample_gaps"}
+                                           "_switch_candidates", "_sample_gaps",
+                                           "_sample_contacts"}
 
 
 @pytest.mark.parametrize("name", ["rk_step", "accelerations", "jerks", "contact_forces",
                                   "_violated", "_openings_within", "_switch_candidates",
-                                  "_sample_gaps", "_sample_gaps_many"])
+                                  "_sample_gaps", "_sample_gaps_many", "_sample_contacts",
+                                  "_sample_contacts_many"])
 def test_noalias_kernel_keeps_the_contract_and_the_results(name):
     """Compiled afresh (no cache): the pointer arguments carry LLVM's ``noalias``, the body
     calls no reference counting (which views of one array share), and the results equal those

@@ -437,14 +437,15 @@ def _hermite3(p0, d0, p1, d1, t):
 
 @nb.njit(cache=True, inline="always")
 def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
-            store_uv, out_F, out_d, out_u, out_v, us, vs, Fp, cs):
+            store_uv, out_F, out_d, out_u, out_v, us, vs, Fp, cs, sel, subset):
     """Write the dense-output samples with t0 < t_out[j] <= t0 + h; return the next j.
 
     The interpolant is the Hermite polynomial through the states, accelerations and (with
     ``septic``) jerks ``j0``/``j1`` at both ends of the step: septic, error O(h^8) in the
     gaps, O(h^7) in their rates; else quintic (O(h^6), O(h^5)). Padded layout (see
-    :func:`contact_forces`): the output rows have the padded length p (entries past n come
-    out 0). ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (>= 8, p + 1) are scratch. Without
+    :func:`contact_forces`): column c of ``out_F`` and ``out_d`` is contact ``sel[c]``, all
+    contacts in order (``sel`` = 0, ..., p - 1, entries past n come out 0) unless
+    ``subset``. ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (>= 10, p + 1) are scratch. Without
     ``store_uv`` the interpolant is applied directly to the contact gaps (it is linear in the
     end data), fused with the force law (:func:`_sample_gaps`); with ``store_uv``, or in a
     sliver step shorter than ``tiny``, per particle (:func:`_sample_states`).
@@ -453,14 +454,18 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
         return j
     if store_uv or h < tiny:
         return _sample_states(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg,
-                              law, septic, store_uv, out_F, out_d, out_u, out_v, us, vs, Fp)
+                              law, septic, store_uv, out_F, out_d, out_u, out_v, us, vs, Fp,
+                              sel)
+    if subset:
+        return _sample_contacts(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law,
+                                septic, out_F, out_d, cs, sel)
     return _sample_gaps(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
                         out_F, out_d, cs)
 
 
 @nb.njit(cache=True, fastmath=_FM)
 def _sample_states(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
-                   store_uv, out_F, out_d, out_u, out_v, us, vs, Fp):
+                   store_uv, out_F, out_d, out_u, out_v, us, vs, Fp, sel):
     """:func:`_sample` per particle: the states at each sample, then their forces."""
     m = cA.shape[0]
     nt = t_out.shape[0]
@@ -472,7 +477,7 @@ def _sample_states(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg
             for i in range(m + 1):
                 us[i] = u0[i] + tau * (v0[i] + 0.5 * tau * a0[i])
                 vs[i] = v0[i] + tau * a0[i]
-            j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp)
+            j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp, sel)
         return j
     inv_h = 1.0 / h
     while j < nt and t_out[j] <= t0 + h:
@@ -485,8 +490,60 @@ def _sample_states(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg
                      + w_q1 * a1[i] + w_s0 * j0[i] + w_s1 * j1[i])
             vs[i] = (v_dp * du + v_r0 * v0[i] + v_r1 * v1[i] + v_q0 * a0[i]
                      + v_q1 * a1[i] + v_s0 * j0[i] + v_s1 * j1[i])
-        j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp)
+        j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp, sel)
     return j
+
+
+@nb.njit(cache=True, inline="always")
+def _gap_sample(k, w, u0, v0, a0, j0, u1, v1, a1, j1):
+    """Gap and gap rate of contact k at a sample, from the weights ``w`` of
+    :func:`_hermite_weights` (the interpolant is linear in the end data)."""
+    (w_dp, w_r0, w_r1, w_q0, w_q1, w_s0, w_s1, v_dp, v_r0, v_r1, v_q0, v_q1, v_s0, v_s1) = w
+    g0 = u0[k] - u0[k + 1]
+    dg = (u1[k] - u1[k + 1]) - g0
+    r0 = v0[k] - v0[k + 1]
+    r1 = v1[k] - v1[k + 1]
+    q0 = a0[k] - a0[k + 1]
+    q1 = a1[k] - a1[k + 1]
+    s0 = j0[k] - j0[k + 1]
+    s1 = j1[k] - j1[k + 1]
+    g = g0 + w_dp * dg + w_r0 * r0 + w_r1 * r1 + w_q0 * q0 + w_q1 * q1 + w_s0 * s0 + w_s1 * s1
+    r = v_dp * dg + v_r0 * r0 + v_r1 * r1 + v_q0 * q0 + v_q1 * q1 + v_s0 * s0 + v_s1 * s1
+    return g, r
+
+
+@nb.njit(cache=True, inline="always")
+def _gap_coefficients(cs, c, k, septic, h, hh, u0, v0, a0, j0, u1, v1, a1, j1):
+    """Monomial coefficients in s of contact k's gap over the step (end data as in
+    :func:`_sample`) into column c of ``cs`` (rows 0-7)."""
+    g0 = u0[k] - u0[k + 1]
+    c1, c2, c3, c4, c5, c6, c7 = _hermite_coefficients(
+        septic, g0, h * (v0[k] - v0[k + 1]), hh * (a0[k] - a0[k + 1]),
+        hh * h * (j0[k] - j0[k + 1]), (u1[k] - u1[k + 1]) - g0, h * (v1[k] - v1[k + 1]),
+        hh * (a1[k] - a1[k + 1]), hh * h * (j1[k] - j1[k + 1]))
+    cs[0, c] = g0
+    cs[1, c] = c1
+    cs[2, c] = c2
+    cs[3, c] = c3
+    cs[4, c] = c4
+    cs[5, c] = c5
+    cs[6, c] = c6
+    cs[7, c] = c7
+
+
+@nb.njit(cache=True, inline="always")
+def _horner(cs, c, x):
+    """Value and s-derivative at s = x of the polynomial in column c of ``cs`` (rows 0-7:
+    coefficients of s^0..s^7)."""
+    # Horner's scheme for both at once: the eight coefficients are loaded once (loads, not
+    # arithmetic, bound the sampling loop: 25 % faster than separate sums for the gap and its
+    # rate).
+    g = cs[7, c]
+    d = 0.0
+    for q in range(6, -1, -1):
+        d = d * x + g
+        g = g * x + cs[q, c]
+    return g, d
 
 
 @njit_noalias(cache=True, fastmath=_FM)
@@ -505,56 +562,57 @@ def _sample_gaps(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, s
         ns += 1
     if ns <= _FEW_SAMPLES:
         for _ in range(ns):
-            (w_dp, w_r0, w_r1, w_q0, w_q1, w_s0, w_s1,
-             v_dp, v_r0, v_r1, v_q0, v_q1, v_s0, v_s1) = _hermite_weights(
-                septic, (t_out[j] - t0) * inv_h, h)
+            w = _hermite_weights(septic, (t_out[j] - t0) * inv_h, h)
             for k in range(m):
-                g0 = u0[k] - u0[k + 1]
-                dg = (u1[k] - u1[k + 1]) - g0
-                r0 = v0[k] - v0[k + 1]
-                r1 = v1[k] - v1[k + 1]
-                q0 = a0[k] - a0[k + 1]
-                q1 = a1[k] - a1[k + 1]
-                s0 = j0[k] - j0[k + 1]
-                s1 = j1[k] - j1[k + 1]
-                g = (g0 + w_dp * dg + w_r0 * r0 + w_r1 * r1 + w_q0 * q0 + w_q1 * q1
-                     + w_s0 * s0 + w_s1 * s1)
-                r = (v_dp * dg + v_r0 * r0 + v_r1 * r1 + v_q0 * q0 + v_q1 * q1 + v_s0 * s0
-                     + v_s1 * s1)
+                g, r = _gap_sample(k, w, u0, v0, a0, j0, u1, v1, a1, j1)
                 out_d[j, k] = max(g, 0.0)
                 out_F[j, k] = _force(g, r, cA[k], cg[k], hkk)
             j += 1
-    else:
-        hh = h * h
+        return j
+    for k in range(m):
+        _gap_coefficients(cs, k, k, septic, h, h * h, u0, v0, a0, j0, u1, v1, a1, j1)
+    for _ in range(ns):
+        x = (t_out[j] - t0) * inv_h
         for k in range(m):
-            g0 = u0[k] - u0[k + 1]
-            r0 = v0[k] - v0[k + 1]
-            c1, c2, c3, c4, c5, c6, c7 = _hermite_coefficients(
-                septic, g0, h * r0, hh * (a0[k] - a0[k + 1]), hh * h * (j0[k] - j0[k + 1]),
-                (u1[k] - u1[k + 1]) - g0, h * (v1[k] - v1[k + 1]), hh * (a1[k] - a1[k + 1]),
-                hh * h * (j1[k] - j1[k + 1]))
-            cs[0, k] = g0
-            cs[1, k] = c1
-            cs[2, k] = c2
-            cs[3, k] = c3
-            cs[4, k] = c4
-            cs[5, k] = c5
-            cs[6, k] = c6
-            cs[7, k] = c7
+            g, d = _horner(cs, k, x)
+            out_d[j, k] = max(g, 0.0)
+            out_F[j, k] = _force(g, d * inv_h, cA[k], cg[k], hkk)
+        j += 1
+    return j
+
+
+@njit_noalias(cache=True, fastmath=_FM)
+def _sample_contacts(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
+                     out_F, out_d, cs, sel):
+    """:func:`_sample_gaps` for the contacts ``sel`` only (column c = contact sel[c]), with
+    the same arithmetic per contact (so the same values)."""
+    nt = t_out.shape[0]
+    hkk = law == LAW_HKK
+    inv_h = 1.0 / h
+    ns = 0
+    while j + ns < nt and t_out[j + ns] <= t0 + h:
+        ns += 1
+    cols = sel.shape[0]
+    if ns <= _FEW_SAMPLES:
         for _ in range(ns):
-            x = (t_out[j] - t0) * inv_h
-            for k in range(m):
-                # Horner's scheme for the gap and, alongside, its derivative in s: the eight
-                # coefficients are loaded once (loads, not arithmetic, bound this loop: 25 %
-                # faster than separate sums for the gap and its rate).
-                g = cs[7, k]
-                d = 0.0
-                for q in range(6, -1, -1):
-                    d = d * x + g
-                    g = g * x + cs[q, k]
-                out_d[j, k] = max(g, 0.0)
-                out_F[j, k] = _force(g, d * inv_h, cA[k], cg[k], hkk)
+            w = _hermite_weights(septic, (t_out[j] - t0) * inv_h, h)
+            for c in range(cols):
+                k = sel[c]
+                g, r = _gap_sample(k, w, u0, v0, a0, j0, u1, v1, a1, j1)
+                out_d[j, c] = max(g, 0.0)
+                out_F[j, c] = _force(g, r, cA[k], cg[k], hkk)
             j += 1
+        return j
+    for c in range(cols):
+        _gap_coefficients(cs, c, sel[c], septic, h, h * h, u0, v0, a0, j0, u1, v1, a1, j1)
+    for _ in range(ns):
+        x = (t_out[j] - t0) * inv_h
+        for c in range(cols):
+            k = sel[c]
+            g, d = _horner(cs, c, x)
+            out_d[j, c] = max(g, 0.0)
+            out_F[j, c] = _force(g, d * inv_h, cA[k], cg[k], hkk)
+        j += 1
     return j
 
 
@@ -597,9 +655,41 @@ def _sqrt_coefficients(septic, hs, p0, r0, q0, s0, dp, r1, q1, s1):
             15.0 * e0 - 5.0 * e1 + 0.5 * e2, 0.0, 0.0, 0.0)
 
 
+@nb.njit(cache=True, inline="always")
+def _sqrt_gap_coefficients(k, septic, hs, ur, vr, ar, jr, uo, vo, ao, jo):
+    """:func:`_sqrt_coefficients` of contact k's gap from the particle end data (r: at the
+    singular end, o: at the other)."""
+    g0 = ur[k] - ur[k + 1]
+    return _sqrt_coefficients(septic, hs, g0, vr[k] - vr[k + 1], ar[k] - ar[k + 1],
+                              jr[k] - jr[k + 1], (uo[k] - uo[k + 1]) - g0, vo[k] - vo[k + 1],
+                              ao[k] - ao[k + 1], jo[k] - jo[k + 1])
+
+
+@nb.njit(cache=True, inline="always")
+def _put_column(cs, c, coef):
+    # The ten coefficients into column c of cs.
+    cs[0, c] = coef[0]
+    for q in range(1, 10):
+        cs[q, c] = coef[q]
+
+
+@nb.njit(cache=True, inline="always")
+def _sqrt_value(cs, k, x, inv_2hs):
+    """Value and time derivative at x of the interpolant in x = sqrt((t - t_ref) / hs) in
+    column k of ``cs`` (see :func:`_sample_sqrt`)."""
+    # value c0 + x^2 (c2 + c3 x + ... + c10 x^8) (cs[q] = c_{q+1}, c1 = 0); rate =
+    # (d/dx) / (dt/dx = 2 hs x) = (2 c2 + 3 c3 x + ... + 10 c10 x^8) / (2 hs)
+    g = cs[9, k]
+    d = 10.0 * cs[9, k]
+    for q in range(8, 0, -1):
+        g = g * x + cs[q, k]
+        d = d * x + (q + 1) * cs[q, k]
+    return cs[0, k] + x * x * g, d * inv_2hs
+
+
 @nb.njit(cache=True, fastmath=_FM)
 def _sample_sqrt(t_out, j, t0, h, mode, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
-                 store_uv, out_F, out_d, out_u, out_v, us, vs, Fp, cs):
+                 store_uv, out_F, out_d, out_u, out_v, us, vs, Fp, cs, sel, subset):
     """:func:`_sample` for a step taken in a square-root time variable (``mode``).
 
     The interpolant is the Hermite polynomial in x = sqrt((t - t_ref) / hs): t_ref = t0, hs = h
@@ -607,7 +697,8 @@ def _sample_sqrt(t_out, j, t0, h, mode, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, 
     ``STEP_SQRT_END`` (one opens at t0 + h). In x the solution is smooth (see
     :mod:`msens.chain.dop853_codegen`), in t it is not. Rates are d/dx over dt/dx = 2 hs x,
     taken from the polynomial with its x^1 term zero (no division by x). ``cs`` (10, p + 1)
-    receives the coefficients (c0, c2..c10, per contact or, with ``store_uv``, per particle).
+    receives the coefficients (c0, c2..c10, per contact or, with ``store_uv``, per particle);
+    with ``subset`` only the contacts ``sel`` are sampled.
     """
     m = cA.shape[0]
     nt = t_out.shape[0]
@@ -618,42 +709,40 @@ def _sample_sqrt(t_out, j, t0, h, mode, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, 
     else:
         t_ref, hs = t0 + h, -h
         ur, vr, ar, jr, uo, vo, ao, jo = u1, v1, a1, j1, u0, v0, a0, j0
-    # Per particle (states wanted) or directly per contact gap (linear in the end data).
+    # Per particle (states wanted) or directly per contact gap (linear in the end data): the
+    # coefficients of contact sel[c] go to column c (a subset) or of contact k to column k.
     cols = m + 1 if store_uv else m
-    for k in range(cols):
-        if store_uv:
-            coef = _sqrt_coefficients(septic, hs, ur[k], vr[k], ar[k], jr[k], uo[k] - ur[k],
-                                      vo[k], ao[k], jo[k])
-        else:
-            g0 = ur[k] - ur[k + 1]
-            coef = _sqrt_coefficients(septic, hs, g0, vr[k] - vr[k + 1], ar[k] - ar[k + 1],
-                                      jr[k] - jr[k + 1], (uo[k] - uo[k + 1]) - g0,
-                                      vo[k] - vo[k + 1], ao[k] - ao[k + 1], jo[k] - jo[k + 1])
-        cs[0, k] = coef[0]
-        for q in range(1, 10):
-            cs[q, k] = coef[q]
+    if store_uv:
+        for k in range(cols):
+            _put_column(cs, k, _sqrt_coefficients(septic, hs, ur[k], vr[k], ar[k], jr[k],
+                                                  uo[k] - ur[k], vo[k], ao[k], jo[k]))
+    elif subset:
+        for c in range(sel.shape[0]):
+            _put_column(cs, c, _sqrt_gap_coefficients(sel[c], septic, hs, ur, vr, ar, jr, uo,
+                                                      vo, ao, jo))
+    else:
+        for k in range(cols):
+            _put_column(cs, k, _sqrt_gap_coefficients(k, septic, hs, ur, vr, ar, jr, uo, vo,
+                                                      ao, jo))
     inv_2hs = 0.5 / hs
     while j < nt and t_out[j] <= t0 + h:
         x = np.sqrt(max((t_out[j] - t_ref) / hs, 0.0))
-        for k in range(cols):
-            # value c0 + x^2 (c2 + c3 x + ... + c10 x^8) (cs[q] = c_{q+1}, c1 = 0); rate =
-            # (d/dx) / (dt/dx = 2 hs x) = (2 c2 + 3 c3 x + ... + 10 c10 x^8) / (2 hs)
-            g = cs[9, k]
-            d = 10.0 * cs[9, k]
-            for q in range(8, 0, -1):
-                g = g * x + cs[q, k]
-                d = d * x + (q + 1) * cs[q, k]
-            g = cs[0, k] + x * x * g
-            r = d * inv_2hs
-            if store_uv:
-                us[k] = g
-                vs[k] = r
-            else:
+        if store_uv:
+            for k in range(cols):
+                us[k], vs[k] = _sqrt_value(cs, k, x, inv_2hs)
+            j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp, sel)
+        elif subset:
+            for c in range(sel.shape[0]):
+                k = sel[c]
+                g, r = _sqrt_value(cs, c, x, inv_2hs)
+                out_d[j, c] = max(g, 0.0)
+                out_F[j, c] = _force(g, r, cA[k], cg[k], hkk)
+            j += 1
+        else:
+            for k in range(cols):
+                g, r = _sqrt_value(cs, k, x, inv_2hs)
                 out_d[j, k] = max(g, 0.0)
                 out_F[j, k] = _force(g, r, cA[k], cg[k], hkk)
-        if store_uv:
-            j = _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp)
-        else:
             j += 1
     return j
 
@@ -672,13 +761,15 @@ def _closing_grade(r, q, levels):
 
 
 @nb.njit(cache=True)
-def _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp):
-    # Forces and approaches (and with store_uv the states) of row j from (us, vs).
+def _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp, sel):
+    # Forces and approaches of the contacts sel (and with store_uv the states) of row j from
+    # (us, vs).
     m = cA.shape[0]
     contact_forces(us, vs, cA, cg, law, Fp)
-    for k in range(m):
-        out_F[j, k] = Fp[k + 1]
-        out_d[j, k] = max(us[k] - us[k + 1], 0.0)
+    for c in range(sel.shape[0]):
+        k = sel[c]
+        out_F[j, c] = Fp[k + 1]
+        out_d[j, c] = max(us[k] - us[k + 1], 0.0)
     if store_uv:
         for k in range(m):
             out_u[j, k] = us[k]
@@ -838,7 +929,7 @@ def _toggle(kind, k, closed, damp, A, gam, cA, cg):
 
 @nb.njit(cache=True)
 def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, rate_tol,
-              store_uv, out_F, out_d, out_u, out_v):
+              store_uv, out_F, out_d, out_u, out_v, sel):
     """Integrate one chain from t = 0 over t_out (sorted, t_out[0] >= 0) with nominal step dt.
 
     ``grade_levels`` is the depth K of the step grading after a contact closes (first step,
@@ -846,16 +937,27 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     of the rate is not an event (the loading-only dashpot then errs by at most
     gamma * rate_tol).
 
-    Fills out_F, out_d (and out_u, out_v if ``store_uv``), each (nt, p) with p = n rounded
-    up to a multiple of ``_PAD`` (columns past n come out 0). Returns the
-    number of steps taken (event cuts and Newton re-steps included).
+    Fills out_F, out_d with the forces and approaches of the contacts ``sel`` (int64, (c,)),
+    each (nt, c): all contacts are ``sel`` = 0, ..., p - 1 with p = n rounded up to a multiple
+    of ``_PAD`` (columns past n come out 0), through full-width vector loops; any other
+    ``sel`` (indices < n) is a subset, sampled contact by contact. With ``store_uv`` also
+    out_u, out_v, each (nt, p). Returns the number of steps taken (event cuts and Newton
+    re-steps included).
     """
     n = u_init.shape[0]
     p = padded_length(n)  # padded layout (see contact_forces): entries n.. stay 0
     m = p + 1
-    if out_F.shape[1] != p or out_d.shape[1] != p or (store_uv and (
+    subset = sel.shape[0] != p
+    for c in range(sel.shape[0]):
+        if sel[c] != c:
+            subset = True
+    for c in range(sel.shape[0] if subset else 0):
+        if not 0 <= sel[c] < n:
+            raise ValueError("output contacts must be in 0..n-1")
+    if out_F.shape[1] != sel.shape[0] or out_d.shape[1] != sel.shape[0] or (store_uv and (
             out_u.shape[1] != p or out_v.shape[1] != p)):
-        raise ValueError("output arrays must have padded_length(n) columns")
+        raise ValueError("out_F, out_d need one column per output contact, out_u, out_v "
+                         "padded_length(n)")
     inv_m = _zeros64(p)
     inv_m[:n] = 1.0 / mass
     load_p = _zeros64(p)
@@ -923,7 +1025,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     # Samples at the initial time.
     while j < nt and t_out[j] <= 0.0:
         j = _sample(t_out, j, -1.0, 1.0, 0.0, u, v, a0, j0, u, v, a0, j0, cA, cg, law, septic,
-                    store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs)
+                    store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs, sel, subset)
     t = 0.0
     steps = 0
     toggles_here = 0
@@ -1179,10 +1281,12 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
             j1_ok = True
         if mode == STEP_REGULAR or h < 1e-3 * dt:
             j = _sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, j0, u1, v1, a1, j1, cA, cg, law,
-                        septic, store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs)
+                        septic, store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs, sel,
+                        subset)
         elif j < nt and t_out[j] <= t + h:
             j = _sample_sqrt(t_out, j, t, h, mode, u, v, a0, j0, u1, v1, a1, j1, cA, cg, law,
-                             septic, store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs)
+                             septic, store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs, sel,
+                             subset)
         t += h
         sqrt_start = False
         u, u1 = u1, u
@@ -1216,10 +1320,11 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
 
 @nb.njit(cache=True, parallel=True)
 def integrate_batch(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, rate_tol,
-                    out_F, out_d):
+                    out_F, out_d, sel):
     """Integrate ``runs`` chains in parallel; arrays carry a leading run axis.
 
-    dt has shape (runs,). Returns the number of steps of each run.
+    dt has shape (runs,); ``sel``, the output contacts, is common (see :func:`integrate`).
+    Returns the number of steps of each run.
     """
     runs = u_init.shape[0]
     n = u_init.shape[1]
@@ -1228,5 +1333,5 @@ def integrate_batch(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_le
     for r in nb.prange(runs):
         steps[r] = integrate(u_init[r], v_init[r], mass[r], A[r], gam[r], law, load[r],
                              t_out, dt[r], grade_levels, rate_tol[r], False, out_F[r], out_d[r],
-                             dummy, dummy)
+                             dummy, dummy, sel)
     return steps

@@ -134,13 +134,14 @@ def fit_dissipation(make_chain: Callable[[float, float], object], sensors: tuple
     kind = SensorKind(kind)
     simulate_batch = simulator or _default_simulator()
     count = [0]
+    # Only the sensors' contacts are sampled (less memory and work for big grids).
+    n = make_chain(float(gc_grid[0]), float(gw_grid[0])).n_particles
+    sensed = [sensor_contacts(kind, p, n) for p in (top, bottom)]
+    sel = np.unique(np.concatenate(sensed))
 
     def model(gammas: np.ndarray) -> tuple[np.ndarray, ...]:
         """(runs, 2) gammas -> ar_top, ar_bottom, tof_top, tof_bottom, each (runs,)."""
         chains = [make_chain(float(gc), float(gw)) for gc, gw in gammas]
-        # Only the sensors' contacts are sampled (less memory and work for big grids).
-        sensed = [sensor_contacts(kind, p, chains[0].n_particles) for p in (top, bottom)]
-        sel = np.unique(np.concatenate(sensed))
         res = simulate_batch(chains, np.full(len(chains), velocity), t_out, contacts=sel)
         count[0] += len(chains)
         out = []

@@ -445,7 +445,7 @@ def _sample(t_out, j, t0, h, tiny, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, 
     gaps, O(h^7) in their rates; else quintic (O(h^6), O(h^5)). Padded layout (see
     :func:`contact_forces`): column c of ``out_F`` and ``out_d`` is contact ``sel[c]``, all
     contacts in order (``sel`` = 0, ..., p - 1, entries past n come out 0) unless
-    ``subset``. ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (>= 10, p + 1) are scratch. Without
+    ``subset``. ``us``, ``vs``, ``Fp`` (p + 1,) and ``cs`` (>= 8, p + 1) are scratch. Without
     ``store_uv`` the interpolant is applied directly to the contact gaps (it is linear in the
     end data), fused with the force law (:func:`_sample_gaps`); with ``store_uv``, or in a
     sliver step shorter than ``tiny``, per particle (:func:`_sample_states`).
@@ -546,6 +546,15 @@ def _horner(cs, c, x):
     return g, d
 
 
+@nb.njit(cache=True, inline="always")
+def _samples_in(t_out, j, t_end):
+    # Number of output times from t_out[j] on that are <= t_end (sorted t_out).
+    ns = 0
+    while j + ns < t_out.shape[0] and t_out[j + ns] <= t_end:
+        ns += 1
+    return ns
+
+
 @njit_noalias(cache=True, fastmath=_FM)
 def _sample_gaps(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, septic, out_F,
                  out_d, cs):
@@ -554,12 +563,9 @@ def _sample_gaps(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, s
     step into ``cs``; the rate is the derivative), else through the weights of the end data
     at each sample."""
     m = cA.shape[0]
-    nt = t_out.shape[0]
     hkk = law == LAW_HKK
     inv_h = 1.0 / h
-    ns = 0
-    while j + ns < nt and t_out[j + ns] <= t0 + h:
-        ns += 1
+    ns = _samples_in(t_out, j, t0 + h)
     if ns <= _FEW_SAMPLES:
         for _ in range(ns):
             w = _hermite_weights(septic, (t_out[j] - t0) * inv_h, h)
@@ -586,12 +592,9 @@ def _sample_contacts(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, la
                      out_F, out_d, cs, sel):
     """:func:`_sample_gaps` for the contacts ``sel`` only (column c = contact sel[c]), with
     the same arithmetic per contact (so the same values)."""
-    nt = t_out.shape[0]
     hkk = law == LAW_HKK
     inv_h = 1.0 / h
-    ns = 0
-    while j + ns < nt and t_out[j + ns] <= t0 + h:
-        ns += 1
+    ns = _samples_in(t_out, j, t0 + h)
     cols = sel.shape[0]
     if ns <= _FEW_SAMPLES:
         for _ in range(ns):

@@ -14,6 +14,7 @@ from msens.sensors import (
     mss_four_contact,
     mss_four_contact_rate,
     observe,
+    read_contacts,
     rod_sensor,
     sensor_contacts,
     time_derivative,
@@ -71,6 +72,31 @@ def test_batched_shapes_and_values_match_single_runs():
     assert dynamic_force(fb).shape == (3, 6, N)
     np.testing.assert_allclose(dynamic_force(fb)[:, 0, :], 0.0)
     assert contact_mean(fb, [0, 1]).shape == (3, 6)
+
+
+def test_read_contacts_is_the_sorted_union_of_the_sensors():
+    np.testing.assert_array_equal(read_contacts([("bead", 13), ("bead", 18)], N),
+                                  [11, 12, 16, 17])
+    np.testing.assert_array_equal(read_contacts([("mss", 13), (SensorKind.ROD, 13)], N),
+                                  [10, 11, 12, 13])
+    with pytest.raises(InputError, match="outside the chain"):
+        read_contacts([("bead", 13), ("bead", 31)], N)
+
+
+@pytest.mark.parametrize("kind", ["bead", "rod", "mss"])
+def test_observe_on_some_contacts_equals_observe_on_all(kind):
+    fb = _labelled_force(nt=6, runs=3)
+    some = np.array([17, 16, 9, 10, 11, 12, 13])  # any order, more than the sensor reads
+    np.testing.assert_array_equal(observe(kind, fb[..., some], 12, contacts=some),
+                                  observe(kind, fb, 12))
+
+
+def test_observe_without_the_sensors_contacts_raises():
+    some = np.array([11, 12, 16])
+    with pytest.raises(InputError, match=r"must include the contacts \[16, 17\]"):
+        observe("bead", _labelled_force()[..., some], 18, contacts=some)
+    with pytest.raises(InputError, match="one per column"):
+        observe("bead", _labelled_force()[..., some[:2]], 13, contacts=some)
 
 
 def test_bad_force_shape_raises():

@@ -20,7 +20,7 @@ from scipy.optimize import brentq, minimize
 from msens.errors import require
 from msens.features import pulse_features
 from msens.longwave import soliton_speed_precompressed, soliton_speed_uncompressed
-from msens.sensors import SensorKind, contact_mean, sensor_contacts
+from msens.sensors import SensorKind, observe, read_contacts
 
 
 @dataclass(frozen=True)
@@ -136,8 +136,7 @@ def fit_dissipation(make_chain: Callable[[float, float], object], sensors: tuple
     count = [0]
     # Only the sensors' contacts are sampled (less memory and work for big grids).
     n = make_chain(float(gc_grid[0]), float(gw_grid[0])).n_particles
-    sensed = [sensor_contacts(kind, p, n) for p in (top, bottom)]
-    sel = np.unique(np.concatenate(sensed))
+    sel = read_contacts([(kind, top), (kind, bottom)], n)
 
     def model(gammas: np.ndarray) -> tuple[np.ndarray, ...]:
         """(runs, 2) gammas -> ar_top, ar_bottom, tof_top, tof_bottom, each (runs,)."""
@@ -145,8 +144,8 @@ def fit_dissipation(make_chain: Callable[[float, float], object], sensors: tuple
         res = simulate_batch(chains, np.full(len(chains), velocity), t_out, contacts=sel)
         count[0] += len(chains)
         out = []
-        for contacts, delay in zip(sensed, min_delay, strict=True):
-            sensor = contact_mean(res.force, np.searchsorted(sel, contacts))
+        for p, delay in zip((top, bottom), min_delay, strict=True):
+            sensor = observe(kind, res.force, p, contacts=sel)
             out.append(pulse_features(sensor, t_out, min_delay=delay))
         return out[0].ar, out[1].ar, out[0].tof, out[1].tof
 

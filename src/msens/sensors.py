@@ -26,6 +26,7 @@ one run (nt, n) and on a batch (runs, nt, n) alike, and return (..., nt).
 from __future__ import annotations
 
 import enum
+from collections.abc import Iterable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -124,18 +125,22 @@ def contact_mean(force: ArrayLike, contacts: ArrayLike, *, dynamic: bool = True,
 
 
 def observe(kind: SensorKind | str, force: ArrayLike, particle: int, *, dynamic: bool = True,
-            static: ArrayLike | None = None) -> np.ndarray:
+            static: ArrayLike | None = None, contacts: ArrayLike | None = None) -> np.ndarray:
     """Force a sensor reads: mean of its contacts (see module docstring).
 
     Parameters
     ----------
     kind : SensorKind or {"bead", "rod", "mss"}
-    force : array_like, shape (..., nt, n)
-        Total contact forces, N.
+    force : array_like, shape (..., nt, n) or (..., nt, c)
+        Total contact forces, N: of all contacts, or of ``contacts``.
     particle : int
         1-based particle number of the sensor (centre, for the MsS).
     dynamic, static
-        As in :func:`contact_mean`.
+        As in :func:`contact_mean` (``static`` per column of ``force``).
+    contacts : array_like of int, shape (c,), optional
+        The 0-based contact of each column of ``force`` when it holds some contacts only
+        (e.g. ``simulate_batch(..., contacts=read_contacts(...))``); they must include those
+        the sensor reads. Default: all contacts, in order.
 
     Returns
     -------
@@ -144,8 +149,39 @@ def observe(kind: SensorKind | str, force: ArrayLike, particle: int, *, dynamic:
     """
     force = np.asarray(force, dtype=float)
     require(force.ndim >= 2, f"force must have shape (..., nt, n), got {force.shape}")
-    contacts = sensor_contacts(SensorKind(kind), particle, force.shape[-1])
-    return contact_mean(force, contacts, dynamic=dynamic, static=static)
+    if contacts is None:
+        return contact_mean(force, sensor_contacts(SensorKind(kind), particle, force.shape[-1]),
+                            dynamic=dynamic, static=static)
+    contacts = np.asarray(contacts, dtype=int)
+    # (The chain's length is not known here: whether its contacts are there is checked below.)
+    read = sensor_contacts(SensorKind(kind), particle,
+                           max(int(contacts.max()) + 1, particle + 2))
+    columns = [np.flatnonzero(contacts == c) for c in read]
+    require(contacts.shape == force.shape[-1:] and all(col.size for col in columns),
+            f"force holds contacts {contacts.tolist()}, which must include the contacts "
+            f"{read.tolist()} that the '{SensorKind(kind).value}' sensor at particle "
+            f"{particle} reads, one per column")
+    return contact_mean(force, [col[0] for col in columns], dynamic=dynamic, static=static)
+
+
+def read_contacts(sensors: Iterable[tuple[SensorKind | str, int]], n_contacts: int,
+                  ) -> np.ndarray:
+    """Sorted 0-based contacts that some sensors of one chain read together.
+
+    Parameters
+    ----------
+    sensors : iterable of (kind, particle)
+    n_contacts : int
+        Number of contacts of the chain.
+
+    Returns
+    -------
+    ndarray of int, shape (c,)
+        The union of their :func:`sensor_contacts`: what a simulation needs to output for
+        :func:`observe` (``contacts=``) to read them all.
+    """
+    return np.unique(np.concatenate([sensor_contacts(SensorKind(kind), p, n_contacts)
+                                     for kind, p in sensors]))
 
 
 def bead_sensor(force: ArrayLike, particle: int, **kw) -> np.ndarray:

@@ -11,8 +11,8 @@ import pytest
 from msens.chain import simulate_batch
 from msens.diagnose import predict
 from msens.diagnose.effects import Context, FirstOrderLowpass
-from msens.diagnose.predict import Predictor, baseline_state, read_contacts
-from msens.sensors import SensorKind, observe
+from msens.diagnose.predict import Predictor, baseline_state
+from msens.sensors import observe, read_contacts
 from msens.study import PAPER_TABLE2, builtin_study_path, load_study
 
 T = np.linspace(0.0, 3e-4, 3001)  # 10 MHz, the incident pulse past both sensors
@@ -42,15 +42,6 @@ def _expected(state) -> np.ndarray:
     return out
 
 
-def test_read_contacts_is_the_sorted_union_of_the_sensors():
-    study = load_study(builtin_study_path(PAPER_TABLE2))
-    bead = baseline_state(Context(study, study.setup("bead")), 4.8, 0.0)
-    moved = dataclasses.replace(bead, particles=(13, 20), kinds=(SensorKind.MSS,) * 2)
-    np.testing.assert_array_equal(read_contacts(bead), [11, 12, 16, 17])
-    np.testing.assert_array_equal(read_contacts(bead, moved), [10, 11, 12, 13, 16, 17, 18, 19,
-                                                               20])
-
-
 @pytest.mark.parametrize("batch_bytes", [predict.BATCH_BYTES, 1])
 def test_records_from_sensor_contacts_equal_records_from_all(states, batch_bytes, monkeypatch):
     # batch_bytes = 1: every run a call of its own (the split must not change a value).
@@ -74,5 +65,5 @@ def test_batches_are_bounded_by_their_output_memory(states, monkeypatch):
     monkeypatch.setattr(predict, "simulate_batch", spy)
     monkeypatch.setattr(predict, "BATCH_BYTES", 5 * 16 * T.size)
     Predictor(T).records([states[0], states[2], states[3]])
-    mss = read_contacts(states[2]).tolist()
+    mss = read_contacts(zip(states[2].kinds, states[2].particles, strict=True), 30).tolist()
     assert calls == [(1, [11, 12, 16, 17]), (1, mss), (1, [11, 12, 16, 17])]

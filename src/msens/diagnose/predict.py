@@ -20,7 +20,7 @@ from msens.chain.integrate import ChainResult, simulate_batch
 from msens.compare import smoothed_features as model_features_of
 from msens.diagnose.effects.base import Context, ModelState
 from msens.pipeline import SensorResult, SetupResult
-from msens.sensors import SensorKind, contact_mean, sensor_contacts, time_derivative
+from msens.sensors import SensorKind, observe, read_contacts, time_derivative
 
 #: Output memory of one simulate_batch call, bytes (forces and approaches, runs x nt x
 #: contacts doubles each): bounds the runs per call.
@@ -59,7 +59,7 @@ class Predictor:
         needs: dict[int, list[ModelState]] = {}
         for k, s in zip(keys, states, strict=True):
             needs.setdefault(unique[k], []).append(s)
-        forces = self._simulate(order, [read_contacts(*needs[i]) for i in range(len(order))])
+        forces = self._simulate(order, [_read_contacts(needs[i]) for i in range(len(order))])
         dt = float(self.t[1] - self.t[0])
         out = np.empty((len(states), len(states[0].particles), self.t.size))
         for r, (k, s) in enumerate(zip(keys, states, strict=True)):
@@ -104,25 +104,19 @@ class Predictor:
         return part, contacts
 
 
-def read_contacts(*states: ModelState) -> np.ndarray:
-    """Sorted 0-based contacts that the sensors of ``states`` (of one chain) average."""
-    n = states[0].chain.n_particles
-    return np.unique(np.concatenate([
-        sensor_contacts(kind, p, n)
-        for s in states for kind, p in zip(s.kinds, s.particles, strict=True)]))
+def _read_contacts(states: list[ModelState]) -> np.ndarray:
+    # The contacts that the sensors of states of one chain read (sorted).
+    return read_contacts([(kind, p) for s in states
+                          for kind, p in zip(s.kinds, s.particles, strict=True)],
+                         states[0].chain.n_particles)
 
 
 def observe_state(state: ModelState, force: np.ndarray, contacts: np.ndarray | None,
                   dt: float) -> np.ndarray:
     """Sensor records (sensors, nt) of a state, N, from contact forces (nt, c): column j is
-    contact ``contacts[j]`` (sorted), or contact j if ``contacts`` is None."""
-    n = state.chain.n_particles
-    out = []
-    for kind, p in zip(state.kinds, state.particles, strict=True):
-        read = sensor_contacts(kind, p, n)
-        out.append(contact_mean(force, read if contacts is None
-                                else np.searchsorted(contacts, read)))
-    out = np.array(out)
+    contact ``contacts[j]``, or contact j if ``contacts`` is None."""
+    out = np.array([observe(kind, force, p, contacts=contacts)
+                    for kind, p in zip(state.kinds, state.particles, strict=True)])
     for op in state.post:
         out = op(out, dt)
     return out

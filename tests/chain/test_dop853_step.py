@@ -12,7 +12,36 @@ from msens.chain import _dop853_step, dop853_codegen, kernel
 
 
 def test_committed_module_is_the_generator_output():
+    """Text equality holds on every machine: the generator's numbers are exactly rounded (next
+    test), so they do not depend on the CPU's float sums or BLAS."""
     assert dop853_codegen.TARGET.read_text() == dop853_codegen.step_source()
+
+
+def test_generated_coefficients_are_the_exactly_rounded_products():
+    """Every number of the three tableaus equals the exact value of its defining sum or product
+    of SciPy's doubles, rounded once to the nearest double. Reference: mpmath at 2000 bits,
+    where these sums of products of doubles are exact (a float evaluation differs from it by
+    up to 7.6e-12 relative, in 170 of the 378 generated numbers)."""
+    import mpmath
+
+    s_count = dop.N_STAGES
+    tab = dop853_codegen._tableaus()
+    with mpmath.workprec(2000):
+        a = [[mpmath.mpf(float(x)) for x in row] for row in dop.A[:s_count, :s_count]]
+        b = [mpmath.mpf(float(x)) for x in dop.B]
+        c = [sum(row) for row in a]
+        rng = range(s_count)
+        for mode, w in enumerate((None, [2 * x for x in c], [2 * (1 - x) for x in c])):
+            aw = a if w is None else [[a[i][j] * w[j] for j in rng] for i in rng]
+            bw = b if w is None else [b[j] * w[j] for j in rng]
+            ref = {"ch": [sum(row) for row in aw],
+                   "au": [[sum(aw[i][k] * aw[k][j] for k in rng) for j in rng] for i in rng],
+                   "av": aw,
+                   "bu": [sum(bw[k] * aw[k][j] for k in rng) for j in rng],
+                   "bv": bw}
+            for key, x in ref.items():
+                np.testing.assert_array_equal(tab[key][mode], np.vectorize(float)(np.array(x)),
+                                              err_msg=f"{key}, mode {mode}")
 
 
 @pytest.mark.parametrize("law", [kernel.LAW_LINEAR, kernel.LAW_HKK])

@@ -5,9 +5,9 @@ particle arrays per nonzero coefficient (~60 passes of 32 entries for DOP853), e
 and storing the stage sums. With the tableau's numbers written into the source as literals,
 every stage is a single pass that reads the earlier stage accelerations once, zero entries
 drop out, and the contact forces are evaluated inline. On the paper chain this halves the time
-of a step (1.6 -> 0.8 us for 30 particles, ``benchmarks/chain_speed.py``). The numbers are
-SciPy's DOP853 coefficients (see :mod:`msens.chain.kernel`), printed with ``repr`` so that
-they round-trip exactly.
+of a step (1.6 -> 0.8 us for 30 particles, ``benchmarks/chain_speed.py``). The numbers derive
+from SciPy's DOP853 coefficients (see :mod:`msens.chain.kernel`) in exact rational arithmetic,
+rounded once and printed with ``repr``, so the generated text is the same on every machine.
 
 The same step serves three time variables (``mode``), with one coefficient table each:
 
@@ -27,7 +27,9 @@ u + h (W 1)_s v + h^2 (W W)_s. kv, velocities v + h W_s. kv, solution weights b 
 pattern of W W is contained in that of A A, so the regular step loses nothing.
 
 Regenerate after changing this file: ``python -m msens.chain.dop853_codegen`` (a test checks
-that the committed module matches).
+that the committed module matches). Numba's cache of :mod:`msens.chain.kernel` holds the old
+step inlined, with ``_COEF`` frozen into it, and is not invalidated by the new module: delete
+``msens/chain/__pycache__/kernel.*.nb*`` after regenerating.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -120,23 +123,29 @@ def _tableaus() -> dict[str, np.ndarray]:
 
     ``ch`` (3, s): displacement weights of v per stage; ``au`` (3, s, s) and ``av`` of the
     stage accelerations in the stage displacements and velocities; ``bu``, ``bv`` (3, s) in
-    the solution.
+    the solution. Dimensionless.
+
+    Computed in exact rational arithmetic from SciPy's coefficients (each a double, hence an
+    exact fraction) and rounded once to the nearest double: float sums and BLAS products round
+    differently from one CPU to the next, which would change the generated text.
     """
     s_count = _dop.N_STAGES
-    a = np.asarray(_dop.A[:s_count, :s_count], dtype=float)
-    b = np.asarray(_dop.B, dtype=float)
+    a = np.array([[Fraction(float(x)) for x in row] for row in _dop.A[:s_count, :s_count]],
+                 dtype=object)
+    b = np.array([Fraction(float(x)) for x in _dop.B], dtype=object)
     c = a.sum(axis=1)
     out: dict[str, list] = {"ch": [], "au": [], "av": [], "bu": [], "bv": []}
-    for w in (None, 2.0 * c, 2.0 * (1.0 - c)):
+    for w in (None, 2 * c, 2 * (1 - c)):
         # Regular mode unscaled, so that its numbers are exactly those of the classic form.
         aw = a if w is None else a * w
         bw = b if w is None else b * w
-        out["ch"].append(c if w is None else aw.sum(axis=1))
+        out["ch"].append(aw.sum(axis=1))
         out["au"].append(aw @ aw)
         out["av"].append(aw)
         out["bu"].append(bw @ aw)
         out["bv"].append(bw)
-    return {k: np.array(x) for k, x in out.items()}
+    # float(Fraction) is correctly rounded (integer true division).
+    return {k: np.array(x, dtype=object).astype(float) for k, x in out.items()}
 
 
 def _assign(target: str, first: str, terms: list[str]) -> str:

@@ -49,6 +49,19 @@ def cylinder_magnet_bz(z: ArrayLike, radius: float, length: float,
     return thin_solenoid_bz(z, radius, length, remanence / MU0, 1.0)
 
 
+def ring_magnet_bz(z: ArrayLike, r_in: float, r_out: float, length: float,
+                   remanence: float) -> np.ndarray:
+    """On-axis B_z of an axially magnetised (rigid, μ_rec = 1) ring centred at z = 0, T.
+
+    The ring is the cylinder of radius ``r_out`` minus that of radius ``r_in`` (superposition
+    of magnetisations), so B_z is the difference of two :func:`cylinder_magnet_bz`, each
+    B = (B_r/2) [(z + L/2)/√(R² + (z + L/2)²) − (z − L/2)/√(R² + (z − L/2)²)], valid inside
+    and outside the magnet. Radii, length L and z in m, ``remanence`` B_r in T.
+    """
+    return (cylinder_magnet_bz(z, r_out, length, remanence)
+            - cylinder_magnet_bz(z, r_in, length, remanence))
+
+
 def loop_vector_potential(a: float, r: ArrayLike, z: ArrayLike, current: float = 1.0):
     """A_φ of a circular loop (radius a, at z = 0, current I) at (r, z), T m.
 

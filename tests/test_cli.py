@@ -6,6 +6,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from msens.cli import main
@@ -83,3 +84,22 @@ def test_run_writes_summary_and_reruns(tmp_path):
     second = json.loads((out / "summary.json").read_text())
     assert first == second  # reproducible
     assert {r["setup"] for r in first["rows"]} == {"bead", "rod", "mss"}
+
+
+def test_compare_mss_data_against_bead_study_exit_2(tmp_path, capsys):
+    from msens.io.read import write_waveform
+    from msens.io.waveform import Channel, Waveform
+
+    bead_only = GOOD.split('[[setup]]\nname = "rod"')[0].replace("t_end_s = 1.0e-3",
+                                                                   "t_end_s = 2.0e-4")
+    data = tmp_path / "mss.csv"
+    write_waveform(Waveform(time=np.arange(200) * 1e-7, data=np.zeros((200, 2)),
+                            channels=(Channel("mss", 13), Channel("mss", 18)),
+                            metadata={"units": "V"}), data)
+    code = main(["compare", str(_study(tmp_path, bead_only)), str(data), "--out",
+                 str(tmp_path / "cmp")])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "mss@13, mss@18 of the data have no sensor" in err
+    assert "bead (bead@13, bead@18)" in err
+    assert "Traceback" not in err and err.count("\n") == 1

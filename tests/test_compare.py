@@ -83,3 +83,20 @@ def test_cli_bad_setup_exit_2(tmp_path, capsys):
                  "--setup", "laser"])
     assert code == 2
     assert "--setup must be one of" in capsys.readouterr().err
+
+
+def test_channel_without_sensor_is_named(result):
+    w = Waveform(time=np.arange(100) * 1e-7, data=np.zeros((100, 2)),
+                 channels=(Channel("bead", 13), Channel("mss", 7)))
+    with pytest.raises(InputError, match=r"channel\(s\) mss@7 of the data have no sensor in "
+                                         r"study 'paper-table2'.*bead \(bead@13, bead@18\)"):
+        compare(result, w)
+
+
+@pytest.mark.parametrize(("name", "unit"), [("bead", "N/V"), ("mss", "N/(V s)")])
+def test_gain_unit_and_truncated_record(result, name, unit):
+    waveform = synthesize(_setup(result, name), RigEffects(seed=2))
+    assert compare(result, waveform)["channels"][0]["gain_unit"] == unit
+    cut = Waveform(waveform.time[:2500], waveform.data[:2500], waveform.channels)
+    with pytest.raises(InputError, match="no reflected pulse in the record"):
+        compare(result, cut)

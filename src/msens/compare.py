@@ -1,10 +1,25 @@
 """Predicted against measured waveforms: alignment, Eq. 11 calibration and agreement metrics.
 
-For every shot the measured channels are baseline-corrected (pre-trigger mean), MsS voltages
-are integrated with drift correction (the coil sees dF/dt, paper Eq. 5), one time offset per
-shot is found by cross-correlating the top channel with the model (a single offset keeps the
-wave speed between channels intact), and each channel's conversion factor K = F_model / V_peak
-(paper Eq. 11) turns volts into newtons. Metrics per channel are then averaged over shots.
+One time offset per shot is found by cross-correlating the top channel with the model (a
+single offset keeps the wave speed between channels intact); each channel then gets its
+conversion factor K and is compared with the model record of the same kind. Metrics per
+channel are averaged over shots.
+
+Bead, rod and four-contact MsS channels: the measured record is baseline-corrected
+(pre-trigger mean), an MsS voltage is integrated with drift correction (the coil sees dF/dt,
+paper Eq. 5), and K = F_model / V_peak (paper Eq. 11, N/V or N/(V s)) turns it into newtons.
+
+Physics MsS channels: the model predicts the DAQ voltage itself, and it is not zero before
+the pulse reaches the coil (contacts well above it are sensitive too), so a pre-trigger
+baseline is not a zero level. Model and measurement are compared as voltages and go
+through the same steps instead: the shot is aligned by cross-correlating voltages; the
+measured voltage on the model's time grid is fitted by ``v_model / K + offset``
+(least squares over the whole record: K is dimensionless, V/V, the full-record analogue of
+Eq. 11's peak ratio, and the offset needs no quiet window); both voltages are then
+integrated, the measured one (offset removed, times K) starting from the model's integral
+at the record's first sample, so the two records differ only by what the data differ from
+the model. Features (TOF, AR, peaks in V s) and agreement metrics are those of the
+integrated voltages.
 """
 
 from __future__ import annotations
@@ -12,6 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.integrate import cumulative_trapezoid
 
 from msens.errors import InputError
 from msens.features import PulseFeatures, centre_distance, pulse_features, wave_speed
@@ -19,7 +35,8 @@ from msens.io.waveform import Channel, Waveform
 from msens.pipeline import SensorResult, SetupResult, StudyResult
 from msens.processing import integrate_drift_corrected, lowpass, xcorr_delay
 from msens.sensors import SensorKind
-from msens.study import SetupSpec
+from msens.study import SetupSpec, Study
+from msens.synth import UNITS, UNITS_KEY, is_physics_mss
 
 #: Peaks and times are read from records low-passed at this frequency, Hz — the model's too,
 #: so the filter biases neither side. Solitary pulses here last ~20 µs (content < 100 kHz);
@@ -41,6 +58,11 @@ def smoothed_features(force: np.ndarray, t: np.ndarray) -> PulseFeatures:
     return pulse_features(smoothed, t)
 
 
+#: A physics MsS record holds a pulse when its voltage correlates with the model's at least
+#: this well after alignment; white noise alone gives about 1/sqrt(samples), ~0.01.
+MIN_PULSE_CORRELATION = 0.2
+
+
 @dataclass(frozen=True)
 class ShotRecord:
     """One measured channel of one shot on the model's time axis.
@@ -51,14 +73,22 @@ class ShotRecord:
     t : ndarray, shape (nt,)
         Model time (since impact), s.
     raw : ndarray, shape (nt,)
-        Force-like measured record: V (bead, rod) or V s (integrated MsS voltage); NaN where
-        the record does not cover the model time.
+        Force-like measured record: V (bead, rod), V s (integrated four-contact MsS
+        voltage) or V s (integrated physics MsS voltage, offset removed, at the data's
+        scale); NaN where the record does not cover the model time.
     gain : float
-        Eq. 11 factor K, N/V or N/(V s).
+        Conversion factor K: N/V (bead, rod), N/(V s) (four-contact MsS, paper Eq. 11) or
+        V/V (physics MsS, model voltage over measured voltage).
     delay_s : float
         Impact-to-trigger delay found for the shot, s.
     features : PulseFeatures
         Features of ``gain * raw``.
+    model : ndarray or None, shape (nt,)
+        The model record ``gain * raw`` is compared with (:func:`model_record`), in its unit;
+        None stands for the sensor's force.
+    offset : float
+        Fitted DC offset of a physics MsS record, V (data scale); 0 for the others, whose
+        baseline is the pre-trigger mean.
     """
 
     channel: Channel
@@ -67,25 +97,47 @@ class ShotRecord:
     gain: float
     delay_s: float
     features: PulseFeatures
+    model: np.ndarray | None = None
+    offset: float = 0.0
 
     @property
     def force(self) -> np.ndarray:
-        """Measured record in newtons, shape (nt,)."""
+        """Calibrated measured record, shape (nt,): N, or V s for a physics MsS."""
         return self.gain * self.raw
+
+
+def _names(pairs: set[tuple[str, int]]) -> str:
+    return ", ".join(f"{k}@{p}" for k, p in sorted(pairs, key=lambda x: (x[1], x[0])))
+
+
+def _match(study_name: str, setups: list[tuple[str, set[tuple[str, int]]]],
+           waveform: Waveform) -> int:
+    """Index of the setup whose sensors are exactly the data's channels, else InputError
+    naming the channels without a sensor and what each setup has."""
+    wanted = {(c.kind, c.particle) for c in waveform.channels}
+    for i, (_, have) in enumerate(setups):
+        if wanted == have:
+            return i
+    known = set().union(*(have for _, have in setups))
+    orphans = wanted - known
+    lead = (f"channel(s) {_names(orphans)} of the data have no sensor in study "
+            f"{study_name!r}" if orphans
+            else f"no setup of study {study_name!r} has exactly the data's sensors")
+    listing = "; ".join(f"{name} ({_names(have)})" for name, have in setups)
+    raise InputError(f"the study does not match the data's sensors: {lead}; data has "
+                     f"{_names(wanted)}; study setups: {listing}")
 
 
 def match_setup(result: StudyResult, waveform: Waveform) -> SetupResult:
     """The study setup whose sensors are exactly the data's channels (kind and particle)."""
-    wanted = {(c.kind, c.particle) for c in waveform.channels}
-    names = []
-    for s in result.setups:
-        have = {(x.sensor.kind.value, x.sensor.particle) for x in s.sensors}
-        names.append(f"{s.setup.name} ({', '.join(sorted(f'{k}@{p}' for k, p in have))})")
-        if wanted == have:
-            return s
-    data = ", ".join(sorted(f"{k}@{p}" for k, p in wanted))
-    raise InputError(f"the study does not match the data's sensors: data has {data}; "
-                     f"study setups: {'; '.join(names)}")
+    setups = [(s.setup.name, setup_spec_channels(s.setup)) for s in result.setups]
+    return result.setups[_match(result.study.name, setups, waveform)]
+
+
+def match_setup_spec(study: Study, waveform: Waveform) -> SetupSpec:
+    """:func:`match_setup` on the study file alone, before anything is simulated."""
+    setups = [(s.name, setup_spec_channels(s)) for s in study.setups]
+    return study.setups[_match(study.name, setups, waveform)]
 
 
 def setup_spec_channels(setup: SetupSpec) -> set[tuple[str, int]]:
@@ -93,9 +145,27 @@ def setup_spec_channels(setup: SetupSpec) -> set[tuple[str, int]]:
     return {(s.kind.value, s.particle) for s in setup.sensors}
 
 
-def _model_force(sensor: SensorResult) -> np.ndarray:
-    """The model record a calibrated measurement is compared with, N."""
+def check_units(waveform: Waveform) -> None:
+    """Reject data whose metadata give another unit than volts (design.md §8)."""
+    unit = waveform.metadata.get(UNITS_KEY)
+    if unit is not None and unit != UNITS:
+        raise InputError(f"the data's metadata say {UNITS_KEY}: {unit}; msens reads every "
+                         f"channel in volts ({UNITS_KEY}: {UNITS}): convert the data to V")
+
+
+def model_record(sensor: SensorResult, t: np.ndarray) -> np.ndarray:
+    """The model record a calibrated measurement is compared with, shape (nt,).
+
+    The sensor's force (N) for bead, rod and four-contact MsS; for a physics MsS the running
+    integral of its DAQ voltage from impact (``t`` = 0), V s.
+    """
+    if is_physics_mss(sensor):
+        return cumulative_trapezoid(sensor.voltage_shape, t, initial=0.0)
     return sensor.force
+
+
+def _model_force(setup: SetupResult, sensor: SensorResult) -> np.ndarray:
+    return model_record(sensor, setup.history.t)
 
 
 def _force_like(waveform: Waveform, channel: Channel, kind: str) -> np.ndarray:
@@ -122,12 +192,23 @@ def _shots(waveform: Waveform) -> list[list[Channel]]:
 
 
 def align_shot(setup: SetupResult, waveform: Waveform, channels: list[Channel]) -> float:
-    """Impact-to-trigger delay of one shot, s, from its top channel (smallest particle)."""
+    """Impact-to-trigger delay of one shot, s, from its top channel (smallest particle).
+
+    A physics MsS channel is aligned by its voltage (mean removed, both low-passed) against
+    the model's DAQ voltage; the others by their force-like record against the model force.
+    """
     top = min(channels, key=lambda c: c.particle)
     sensor = _sensor(setup, top)
     tau = waveform.time
-    measured = _force_like(waveform, top, top.kind)
-    model_on_tau = np.interp(tau, setup.history.t, _model_force(sensor), left=0.0, right=0.0)
+    if is_physics_mss(sensor):
+        v = np.asarray(waveform.channel(top), dtype=float)
+        measured = smooth(v - v.mean(), waveform.dt)
+        model_on_tau = smooth(np.interp(tau, setup.history.t, sensor.voltage_shape,
+                                        left=0.0, right=0.0), waveform.dt)
+    else:
+        measured = _force_like(waveform, top, top.kind)
+        model_on_tau = np.interp(tau, setup.history.t, _model_force(setup, sensor),
+                                 left=0.0, right=0.0)
     # measured(tau) ~ model(tau + D): it leads the model by D, so the lag found is -D
     lag = xcorr_delay(model_on_tau, measured, waveform.dt)
     return -lag
@@ -140,10 +221,42 @@ def _sensor(setup: SetupResult, channel: Channel) -> SensorResult:
     raise InputError(f"channel {channel.name} has no sensor in setup {setup.setup.name!r}")
 
 
+def _physics_record(setup: SetupResult, sensor: SensorResult, waveform: Waveform,
+                    ch: Channel, delay: float) -> ShotRecord:
+    """A physics MsS channel processed like the model (see the module docstring)."""
+    t = setup.history.t
+    v = np.interp(t, waveform.time + delay, np.asarray(waveform.channel(ch), dtype=float),
+                  left=np.nan, right=np.nan)
+    ok = np.flatnonzero(np.isfinite(v))
+    model_v = sensor.voltage_shape
+    if ok.size < 10:
+        raise InputError(f"channel {ch.name}: the record covers {ok.size} samples of the "
+                         f"model's time span (0 .. {t[-1] * 1e6:.0f} us after impact)")
+    seg = slice(ok[0], ok[-1] + 1)  # the covered samples are contiguous
+    design = np.column_stack((model_v[seg], np.ones(ok.size)))
+    (slope, offset), *_ = np.linalg.lstsq(design, v[seg], rcond=None)
+    corr = float(np.corrcoef(v[seg], model_v[seg])[0, 1]) if np.std(v[seg]) > 0 else 0.0
+    if not (slope > 0 and corr >= MIN_PULSE_CORRELATION):
+        raise InputError(
+            f"channel {ch.name}: no pulse found: after alignment the record correlates "
+            f"with the model's coil voltage at {corr:.2f} (a pulse gives > "
+            f"{MIN_PULSE_CORRELATION}) with fitted gain {slope:.3g} V/V")
+    gain = 1.0 / float(slope)
+    model = model_record(sensor, t)
+    raw = np.full(t.size, np.nan)
+    # both integrals start at the record's first sample from the model's value there
+    raw[seg] = model[ok[0]] / gain + cumulative_trapezoid(v[seg] - offset, t[seg], initial=0.0)
+    held = np.concatenate((np.full(ok[0], raw[ok[0]]), raw[seg],
+                           np.full(t.size - ok[-1] - 1, raw[ok[-1]])))
+    feats = pulse_features(gain * smooth(held, float(t[1] - t[0])), t)
+    return ShotRecord(channel=ch, t=t, raw=raw, gain=gain, delay_s=delay, features=feats,
+                      model=model, offset=float(offset))
+
+
 def shot_records(setup: SetupResult, waveform: Waveform) -> list[list[ShotRecord]]:
     """Aligned and calibrated records, per shot and channel."""
     t = setup.history.t
-    model_peak = {id(s): float(smoothed_features(_model_force(s), t).f_incident)
+    model_peak = {id(s): float(smoothed_features(_model_force(setup, s), t).f_incident)
                   for s in setup.sensors}
     out = []
     for channels in _shots(waveform):
@@ -151,6 +264,9 @@ def shot_records(setup: SetupResult, waveform: Waveform) -> list[list[ShotRecord
         records = []
         for ch in channels:
             sensor = _sensor(setup, ch)
+            if is_physics_mss(sensor):
+                records.append(_physics_record(setup, sensor, waveform, ch, delay))
+                continue
             raw = np.interp(t, waveform.time + delay, _force_like(waveform, ch, ch.kind),
                             left=np.nan, right=np.nan)
             filled = smooth(np.where(np.isfinite(raw), raw, 0.0), float(t[1] - t[0]))
@@ -160,30 +276,70 @@ def shot_records(setup: SetupResult, waveform: Waveform) -> list[list[ShotRecord
             gain = model_peak[id(sensor)] / float(f_raw.f_incident)
             feats = pulse_features(gain * filled, t)
             records.append(ShotRecord(channel=ch, t=t, raw=raw, gain=gain, delay_s=delay,
-                                      features=feats))
+                                      features=feats, model=sensor.force))
         out.append(records)
     return out
 
 
-def _metrics(record: ShotRecord, sensor: SensorResult, m: PulseFeatures) -> dict[str, float]:
-    model = _model_force(sensor)
+def _peak_unit(sensor: SensorResult) -> str:
+    return "V_s" if is_physics_mss(sensor) else "N"
+
+
+def gain_unit(sensor: SensorResult) -> str:
+    """Unit of a channel's conversion factor K."""
+    if is_physics_mss(sensor):
+        return "V/V"
+    return "N/(V s)" if sensor.sensor.kind is SensorKind.MSS else "N/V"
+
+
+def _check_coverage(record: ShotRecord, m: PulseFeatures) -> None:
+    """The aligned record must span the model's incident and reflected peaks: outside it,
+    features would be taken from whatever the record holds instead (ringing, noise)."""
+    covered = record.t[np.isfinite(record.raw)]
+    first, last = float(covered[0]), float(covered[-1])
+    for label, when in (("incident", m.t_incident), ("reflected", m.t_reflected)):
+        if np.isfinite(when) and not first <= float(when) <= last:
+            raise InputError(
+                f"channel {record.channel.name}: no {label} pulse in the record: aligned "
+                f"with the model it covers {first * 1e6:.0f} .. {last * 1e6:.0f} us after "
+                f"impact, the model's {label} peak is at {float(when) * 1e6:.0f} us")
+
+
+def _metrics(record: ShotRecord, setup: SetupResult, sensor: SensorResult,
+             m: PulseFeatures) -> dict[str, float]:
+    _check_coverage(record, m)
+    model = _model_force(setup, sensor)
     ok = np.isfinite(record.raw)
     diff = record.force[ok] - model[ok]
     scale = float(np.max(np.abs(model[ok])))
     corr = float(np.corrcoef(record.force[ok], model[ok])[0, 1])
     f = record.features
-    return {
+    unit = _peak_unit(sensor)
+    out = {
         "gain": record.gain,
         "tof_us": float(f.tof) * 1e6,
         "ar": float(f.ar),
         "width_us": float(f.width) * 1e6,
-        "incident_peak_N": float(f.f_incident),
-        "reflected_peak_N": float(f.f_reflected),
+        f"incident_peak_{unit}": float(f.f_incident),
+        f"reflected_peak_{unit}": float(f.f_reflected),
         "incident_time_error_us": float(f.t_incident - m.t_incident) * 1e6,
         "reflected_time_error_us": float(f.t_reflected - m.t_reflected) * 1e6,
         "nrmse": float(np.sqrt(np.mean(diff**2)) / scale),
         "correlation": corr,
     }
+    if is_physics_mss(sensor):
+        out["offset_V"] = record.offset
+    bad = [k for k, x in out.items() if not np.isfinite(x)]
+    if bad:
+        missing = ("no reflected pulse found" if not np.isfinite(f.f_reflected)
+                   else "no pulse width found" if not np.isfinite(f.width)
+                   else "non-finite metrics")
+        raise InputError(
+            f"channel {record.channel.name}: {missing} in the measured record "
+            f"({', '.join(bad)} undefined; it covers {record.t[ok][0] * 1e6:.0f} .. "
+            f"{record.t[ok][-1] * 1e6:.0f} us after impact, the model's reflected peak is "
+            f"at {float(m.t_reflected) * 1e6:.0f} us)")
+    return out
 
 
 def _stats(values: list[dict[str, float]]) -> dict[str, dict[str, float]]:
@@ -203,28 +359,50 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
     -------
     dict
         ``{"setup", "shots", "channels": [{"channel", "kind", "particle", "model": {...},
-        "measured": {metric: {"mean", "std"}}}], "speed": {...}}`` — the content of
-        ``compare.json``. Gains are N/V (bead, rod) or N/(V s) (MsS).
+        "measured": {metric: {"mean", "std"}}, "gain_unit", "record"}], "speed": {...}}``
+        — the content of ``compare.json``. Gains are N/V (bead, rod), N/(V s) (four-contact
+        MsS) or V/V (physics MsS); the features of a physics MsS are those of its integrated
+        DAQ voltage (peaks in V s), model and measured alike, and the model's chain
+        features (sensitivity-weighted force, N) are added as ``model.chain_*``.
+
+    Raises
+    ------
+    InputError
+        If no setup matches the data's channels, the metadata give a unit other than V, or
+        a measured record has no pulse (or no reflected pulse) to take features from.
     """
+    check_units(waveform)
     setup = match_setup(result, waveform)
     shots = shot_records(setup, waveform)
+    t = setup.history.t
     channels = []
+    model_feats = {}
     for sensor in setup.sensors:
-        m = smoothed_features(_model_force(sensor), setup.history.t)
+        m = smoothed_features(_model_force(setup, sensor), t)
+        model_feats[sensor.sensor.particle] = m
         per_shot = [
-            _metrics(r, sensor, m) for recs in shots for r in recs
+            _metrics(r, setup, sensor, m) for recs in shots for r in recs
             if r.channel.kind == sensor.sensor.kind.value
             and r.channel.particle == sensor.sensor.particle
         ]
-        channels.append({
+        unit = _peak_unit(sensor)
+        model = {"tof_us": float(m.tof) * 1e6, "ar": float(m.ar),
+                 "width_us": float(m.width) * 1e6,
+                 f"incident_peak_{unit}": float(m.f_incident)}
+        entry = {
             "channel": f"{sensor.sensor.kind.value}@{sensor.sensor.particle}",
             "kind": sensor.sensor.kind.value,
             "particle": sensor.sensor.particle,
-            "model": {"tof_us": float(m.tof) * 1e6, "ar": float(m.ar),
-                      "width_us": float(m.width) * 1e6,
-                      "incident_peak_N": float(m.f_incident)},
+            "model": model,
             "measured": _stats(per_shot),
-        })
+            "gain_unit": gain_unit(sensor),
+        }
+        if is_physics_mss(sensor):
+            f = sensor.features
+            model.update({"chain_tof_us": float(f.tof) * 1e6, "chain_ar": float(f.ar),
+                          "chain_incident_peak_N": float(f.f_incident)})
+            entry["record"] = "integrated DAQ voltage, V s"
+        channels.append(entry)
     out = {"setup": setup.setup.name, "shots": len(shots), "channels": channels}
     parts = sorted(s.sensor.particle for s in setup.sensors)
     if len(parts) >= 2:
@@ -235,8 +413,15 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
             if parts[0] in by_p and parts[-1] in by_p:
                 speeds.append(float(wave_speed(d, by_p[parts[0]].features.t_incident,
                                                by_p[parts[-1]].features.t_incident)))
-        out["speed"] = {"model_m_per_s": setup.speed_incident,
+        model_speed = setup.speed_incident
+        if any(is_physics_mss(s) for s in setup.sensors):
+            # the measured speed comes from integrated voltages: so must the model's
+            model_speed = float(wave_speed(d, model_feats[parts[0]].t_incident,
+                                           model_feats[parts[-1]].t_incident))
+        out["speed"] = {"model_m_per_s": model_speed,
                         "measured_m_per_s": {"mean": float(np.mean(speeds)),
                                              "std": float(np.std(speeds, ddof=1))
                                              if len(speeds) > 1 else 0.0}}
+        if model_speed != setup.speed_incident:
+            out["speed"]["model_chain_m_per_s"] = setup.speed_incident
     return out

@@ -4,6 +4,15 @@ A synthetic shot is the model's sensor record seen through an unknown channel ga
 offset, a trigger delay with shot-to-shot jitter, white noise and the DAQ's sampling. The
 truth (gains, delays) is written into the metadata under ``truth_*`` keys so that tests can
 score what calibration and diagnosis recover; nothing in msens reads those keys back.
+
+Every channel is written in volts (metadata ``units: V``, design.md §8). What the volts are
+depends on the sensor's model:
+
+- bead, rod: dynamic force (N) times a gain in V/N (:attr:`RigEffects.gain_force`);
+- four-contact MsS: d(force)/dt (N/s) times a gain in V per N/s (paper Eq. 5,
+  :attr:`RigEffects.gain_rate`);
+- physics MsS: the predicted DAQ voltage (V) times an amplifier gain of order 1, V/V
+  (:attr:`RigEffects.gain_amplifier`).
 """
 
 from __future__ import annotations
@@ -15,6 +24,11 @@ import numpy as np
 from msens.io.waveform import Channel, Waveform
 from msens.pipeline import SensorResult, SetupResult
 from msens.sensors import SensorKind
+from msens.study import MssModel
+
+#: Metadata key and value saying what unit the channels' samples are in.
+UNITS_KEY = "units"
+UNITS = "V"
 
 
 @dataclass(frozen=True)
@@ -37,6 +51,9 @@ class RigEffects:
         Range (log-uniform) of bead/rod channel gains, V/N.
     gain_rate : tuple of float
         Range (log-uniform) of four-contact MsS gains, V per N/s.
+    gain_amplifier : tuple of float
+        Range (log-uniform) of the amplifier gain after a physics MsS, whose model record is
+        already the DAQ voltage, V/V.
     offset : float
         DC offset range, ± fraction of the channel's peak.
     seed : int
@@ -50,6 +67,7 @@ class RigEffects:
     pretrigger_s: float = 20e-6
     gain_force: tuple[float, float] = (0.02, 0.2)
     gain_rate: tuple[float, float] = (1e-8, 1e-7)
+    gain_amplifier: tuple[float, float] = (0.5, 2.0)
     offset: float = 0.02
     seed: int = 0
 
@@ -58,11 +76,25 @@ def model_signal(sensor: SensorResult) -> np.ndarray:
     """What a sensor's output is proportional to, shape (nt,).
 
     Bead and rod: dynamic force, N. Four-contact MsS: d(force)/dt, N/s (paper Eq. 5). A
-    physics MsS record already in volts is returned as it is.
+    physics MsS: its predicted DAQ voltage, V.
     """
     if sensor.sensor.kind is SensorKind.MSS:
         return sensor.voltage_shape
     return sensor.force
+
+
+def is_physics_mss(sensor: SensorResult) -> bool:
+    """Whether the sensor's model record is a DAQ voltage in volts (a physics MsS)."""
+    return sensor.sensor.kind is SensorKind.MSS and sensor.sensor.model is MssModel.PHYSICS
+
+
+def gain_bounds(sensor: SensorResult, effects: RigEffects) -> tuple[float, float]:
+    """Range of the unknown gain between :func:`model_signal` and the channel's volts."""
+    if is_physics_mss(sensor):
+        return effects.gain_amplifier
+    if sensor.sensor.kind is SensorKind.MSS:
+        return effects.gain_rate
+    return effects.gain_force
 
 
 def truth_gain_key(kind: str, particle: int) -> str:
@@ -91,7 +123,9 @@ def synthesize(setup: SetupResult, effects: RigEffects = RigEffects(), *,
     -------
     Waveform
         Channels ``<kind>@<particle>[#k]``, volts, on the model's sample grid shifted so
-        that t = 0 is the trigger.
+        that t = 0 is the trigger. Metadata: ``units: V``, the effects and the truth
+        (``truth_gain_<kind>_<particle>``: the gain of :func:`gain_bounds`, V/N, V per N/s
+        or V/V; ``truth_trigger_delay_s``, ``truth_delay_s_<k>``: impact to trigger, s).
     """
     rng = np.random.default_rng(effects.seed)
     t = setup.history.t
@@ -102,12 +136,12 @@ def synthesize(setup: SetupResult, effects: RigEffects = RigEffects(), *,
     n_rec = t.size - int(np.ceil((delay + effects.jitter_s) / dt)) + n_pre - 1
     tau = (np.arange(n_rec) - n_pre) * dt
     sensors = setup.sensors
-    gains = [_log_uniform(rng, effects.gain_rate if s.sensor.kind is SensorKind.MSS
-                          else effects.gain_force) for s in sensors]
+    # one draw per sensor whatever its kind, so a seed gives the other channels the same data
+    gains = [_log_uniform(rng, gain_bounds(s, effects)) for s in sensors]
     columns, channels = [], []
-    meta = {"synthetic": "true", "seed": str(effects.seed), "setup": setup.setup.name,
-            "shots": str(effects.shots), "noise_fraction": repr(effects.noise),
-            "truth_trigger_delay_s": repr(delay)}
+    meta = {UNITS_KEY: UNITS, "synthetic": "true", "seed": str(effects.seed),
+            "setup": setup.setup.name, "shots": str(effects.shots),
+            "noise_fraction": repr(effects.noise), "truth_trigger_delay_s": repr(delay)}
     for s, g in zip(sensors, gains, strict=True):
         meta[truth_gain_key(s.sensor.kind.value, s.sensor.particle)] = repr(g)
     jitters = rng.uniform(-effects.jitter_s, effects.jitter_s, effects.shots)

@@ -9,10 +9,10 @@ from msens.cli import main
 from msens.field.cache import geometry_key
 from msens.field.geometry import SensorGeometry
 from msens.fieldsetup import geometry_from_study
+from msens.magnetics.transducer import cache_key
 from msens.materials import BEAD_STEEL, STEEL_1018_BH
 from msens.steel_law import law_for_steel
 from msens.study import default_study_path, load_study
-from msens.transducer import cache_key
 
 MSS = default_study_path().read_text()
 
@@ -78,7 +78,7 @@ def test_study_without_table_keeps_1018():
 def transducer_key(g: SensorGeometry) -> str:
     # the key transducer_report uses: the law follows the geometry's table
     return cache_key(g, stress_force=g.beads.contact_load, law=law_for_steel(g.steel),
-                     material=BEAD_STEEL, reluctance=True)
+                     material=BEAD_STEEL, approach=True)
 
 
 def test_cache_keys(tmp_path):
@@ -89,9 +89,9 @@ def test_cache_keys(tmp_path):
     assert same.steel.name == "user table" and soft.steel.name == "user table"
     # the committed default mesh and transducers keep their names
     assert geometry_key(SensorGeometry()) == "c98c0f57b0741787"
-    assert transducer_key(SensorGeometry()) == "e82f91f1a54e1317"
+    assert transducer_key(SensorGeometry()) == "3201845427876390"
     # the material is not geometry: every table shares the default mesh
     assert geometry_key(same) == geometry_key(soft) == geometry_key(default)
     # transducers depend on the curve's points, not on its name
-    assert transducer_key(same) == transducer_key(default) == "e82f91f1a54e1317"
+    assert transducer_key(same) == transducer_key(default) == "3201845427876390"
     assert transducer_key(soft) != transducer_key(default)

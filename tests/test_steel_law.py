@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-import msens.transducer as transducer
+import msens.magnetics.transducer as transducer
 from msens.field.geometry import SensorGeometry
 from msens.magnetoelastic import DEFAULT_STEEL, flux_density
 from msens.materials import STEEL_1018_BH, BHCurve

@@ -90,13 +90,13 @@ def _trough(record) -> dict:
 def physics_summary(result: StudyResult) -> dict:
     """Physics-MsS part of ``summary.json``: per-coil voltage and sensitivity profile, the
     magnet's precompression per contact and the dominant transduction mechanism."""
-    coils, villari, reluctance = [], 0.0, 0.0
+    coils, villari, approach = [], 0.0, 0.0
     precompression = []
     for s in result.setups:
         if not s.transducers:
             continue
         from msens.electronics import resonance
-        from msens.transducer import magnetic_precompression
+        from msens.magnetics.transducer import magnetic_precompression
 
         magnetic = magnetic_precompression(s.transducers)
         for c, f in enumerate(np.cumsum(magnetic)[:-1], start=1):
@@ -108,7 +108,7 @@ def physics_summary(result: StudyResult) -> dict:
                 continue
             tr = s.transducers[r.sensor.particle]
             villari += float(np.sum(np.abs(tr.sensitivity_villari)))
-            reluctance += float(np.sum(np.abs(tr.sensitivity_reluctance)))
+            approach += float(np.sum(np.abs(tr.sensitivity_approach)))
             f0, q = resonance(r.mss.circuit)
             coils.append({
                 "setup": s.setup.name, "particle": r.sensor.particle,
@@ -119,15 +119,15 @@ def physics_summary(result: StudyResult) -> dict:
                 "pre_peak_trough": _trough(r.mss),
                 "sensitivity_profile": [
                     {"contact": int(c), "dLambda_dF_Wb_per_N": float(v + g),
-                     "villari_Wb_per_N": float(v), "reluctance_Wb_per_N": float(g)}
+                     "villari_Wb_per_N": float(v), "approach_Wb_per_N": float(g)}
                     for c, v, g in zip(tr.contacts, tr.sensitivity_villari,
-                                       tr.sensitivity_reluctance, strict=True)],
+                                       tr.sensitivity_approach, strict=True)],
             })
     if not coils:
         return {}
     return {"coils": coils, "magnetic_precompression_N": precompression,
-            "dominant_mechanism": "villari" if villari >= reluctance else "reluctance",
-            "mechanism_magnitude_Wb_per_N": {"villari": villari, "reluctance": reluctance}}
+            "dominant_mechanism": "villari" if villari >= approach else "contact approach",
+            "mechanism_magnitude_Wb_per_N": {"villari": villari, "approach": approach}}
 
 
 FIGURES = ("contact_forces.png", "sensor_profiles.png", "sensor_records.png", "table2.png")

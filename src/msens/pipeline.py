@@ -39,7 +39,7 @@ class SensorResult:
     features : PulseFeatures
         Scalar features of ``force``.
     mss : MssRecord or None
-        For a physics MsS: flux change, EMF and DAQ voltage (:mod:`msens.mss`).
+        For a physics MsS: flux change, EMF and DAQ voltage (:mod:`msens.magnetics.mss`).
     """
 
     sensor: SensorSpec
@@ -66,7 +66,7 @@ class SetupResult:
     speed_incident, speed_reflected : float
         Pulse speed between the top and bottom sensor, m/s (NaN with one sensor).
     transducers : dict or None
-        Physics MsS transducers by coil particle (:class:`msens.transducer.Transducer`).
+        Physics MsS transducers by coil particle (:class:`msens.magnetics.transducer.Transducer`).
     """
 
     setup: SetupSpec
@@ -163,11 +163,13 @@ def _positions(sensors: tuple[SensorSpec, ...]) -> list[str]:
 
 def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static: np.ndarray,
                  transducers: dict, study: Study, index: int) -> SensorResult:
-    from msens.mss import mss_record, readout
+    from msens.fieldsetup import coil_geometry
+    from msens.magnetics.mss import mss_record, readout
     from msens.study import CoilSpec
 
     tr = transducers[sensor.particle]
-    circuit = readout(tr, sensor.coil or CoilSpec(), study.electronics)
+    coil = coil_geometry(sensor.coil or CoilSpec(), sensor.particle)
+    circuit = readout(coil, tr.resistance_ohm, tr.inductance_H, study.electronics)
     rec = mss_record(tr, circuit, history.t, history.force, study.electronics,
                      static=static, seed_offset=index)
     voltage = np.interp(history.t, rec.t_daq, rec.voltage)
@@ -228,9 +230,38 @@ def setup_transducers(study: Study, setup: SetupSpec) -> dict | None:
     if not any(s.model is MssModel.PHYSICS for s in setup.sensors):
         return None
     from msens.fieldsetup import geometry_from_study
-    from msens.transducer import transducers_for
+    from msens.magnetics.transducer import transducers_for
 
     return transducers_for(geometry_from_study(study, setup))
+
+
+def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_contact: float,
+                   gamma_wall: float, extra: np.ndarray | None = None,
+                   transducers: dict | None = None) -> tuple[Chain, ChainResult]:
+    """The chain of one setup, with the magnets' static forces, and its history.
+
+    Parameters
+    ----------
+    study : Study
+    setup : SetupSpec
+    t : ndarray, shape (nt,)
+        Output times, s.
+    gamma_contact, gamma_wall : float
+        Damping coefficients, kg/s.
+    extra : ndarray, shape (n,), optional
+        Extra static particle forces, N (+ toward the wall).
+    transducers : dict, optional
+        The setup's physics MsS transducers: their magnets' pull on the beads becomes
+        static precompression (:func:`msens.magnetics.transducer.magnetic_precompression`).
+    """
+    if transducers:
+        from msens.magnetics.transducer import magnetic_precompression
+
+        magnetic = magnetic_precompression(transducers)
+        extra = magnetic if extra is None else extra + magnetic
+    chain = build_chain(study, setup, gamma_contact=gamma_contact, gamma_wall=gamma_wall,
+                        static_force=extra)
+    return chain, simulate(chain, study.striker.velocity_m_per_s, t, dt=study.simulation.dt_s)
 
 
 def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = None,
@@ -256,15 +287,10 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
     gw = fit.gamma_w if fit is not None else study.chain.gamma_wall
     setups = []
     for setup in study.setups:
-        extra = (static_forces or {}).get(setup.name)
         transducers = setup_transducers(study, setup)
-        if transducers:
-            from msens.transducer import magnetic_precompression
-
-            magnetic = magnetic_precompression(transducers)
-            extra = magnetic if extra is None else extra + magnetic
-        chain = build_chain(study, setup, gamma_contact=gc, gamma_wall=gw, static_force=extra)
-        history = simulate(chain, study.striker.velocity_m_per_s, t, dt=study.simulation.dt_s)
+        chain, history = simulate_setup(study, setup, t, gamma_contact=gc, gamma_wall=gw,
+                                        extra=(static_forces or {}).get(setup.name),
+                                        transducers=transducers)
         setups.append(observe_setup(setup, chain, history, transducers=transducers,
                                     study=study))
     return StudyResult(study=study, gamma_contact=gc, gamma_wall=gw, fit=fit,

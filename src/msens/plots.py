@@ -214,8 +214,8 @@ def sensitivity_profile(result: StudyResult) -> Figure:
         c = np.asarray(tr.contacts)
         ax.plot(c, np.asarray(tr.sensitivity_villari) * 1e9, "o-", color=f"C{i}", ms=3,
                 label=f"coil @{r.sensor.particle}: Villari")
-        ax.plot(c, np.asarray(tr.sensitivity_reluctance) * 1e9, "s--", color=f"C{i}", ms=3,
-                alpha=0.6, label=f"coil @{r.sensor.particle}: contact reluctance")
+        ax.plot(c, np.asarray(tr.sensitivity_approach) * 1e9, "s--", color=f"C{i}", ms=3,
+                alpha=0.6, label=f"coil @{r.sensor.particle}: contact approach")
     ax.axhline(0.0, color="0.5", lw=0.8)
     ax.set_xlabel("contact c (joins particles c and c+1)")
     ax.set_ylabel("∂Λ/∂F_c (nWb/N)")

@@ -78,9 +78,10 @@ def test_coil_sweep_cli_outputs_and_byte_identical_rerun(tmp_path, capsys):
     rows = _rows(out / "designs.csv")
     assert [r["design"] for r in rows] == ["0", "1", "2", "3"]
     assert all(r["status"] == "ok" for r in rows)
-    # more turns, same geometry -> more flux linkage (sensitivity ∝ N for a thin change)
-    s = [abs(float(r["sensitivity_Wb_per_N"])) for r in rows]
+    # more turns, same geometry -> more flux linkage: a larger EMF (both mechanisms)
+    s = [float(r["peak_emf_V"]) for r in rows]
     assert s[2] > s[0] and s[3] > s[1]
+    assert all(float(r["dLambda_dapproach_Wb_per_m"]) != 0.0 for r in rows)
     assert all(float(r["peak_emf_V"]) > 0 and float(r["snr"]) > 0 for r in rows)
     rec = json.loads((out / "recommendation.json").read_text())
     assert rec["design"] in range(4) and rec["reasons"]
@@ -91,17 +92,54 @@ def test_coil_sweep_cli_outputs_and_byte_identical_rerun(tmp_path, capsys):
     assert (out / "designs.csv").read_bytes() == first
 
 
+def test_design_refuses_to_overwrite_a_users_file(tmp_path, capsys):
+    study, spec = _files(tmp_path, TINY_COIL)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "designs.csv").write_text("my own table\n")
+    args = ["design", str(study), "--sweep", str(spec), "--out", str(out)]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "refusing to overwrite" in err and "designs.csv" in err
+    assert (out / "designs.csv").read_text() == "my own table\n"
+    assert not (out / "recommendation.json").exists()
+
+
+def test_design_of_the_papers_coil_equals_msens_run(tmp_path):
+    """One transducer core: design's EMF for the study's own coil is the run's."""
+    study = api.load(ROOT / "studies" / "paper-mss.toml")
+    spec = tmp_path / "sweep.toml"
+    spec.write_text('schema = "msens.sweep/1"\nname = "paper-coil"\nsensor = 13\n[coil]\n'
+                    'turns = [1100]\nlength_m = [7e-3]\ninner_radius_m = [7.95e-3]\n'
+                    'wire = ["AWG36"]\naxial_offset_m = [0.0]\n')
+    result = api.design(study, spec, tmp_path / "out", progress=False)
+    row = _rows(tmp_path / "out" / "designs.csv")[0]
+    assert result.designs == 1 and row["status"] == "ok"
+    coil = next(c for c in api.physics_summary(api.run(study))["coils"] if c["particle"] == 13)
+    # 10-digit CSV; the table quadrature differs from exact mesh quadrature by < 1e-5
+    assert float(row["peak_emf_V"]) == pytest.approx(coil["peak_emf_V"], rel=1e-3)
+    assert float(row["peak_voltage_V"]) == pytest.approx(coil["peak_voltage_V"], rel=1e-2)
+    assert float(row["inductance_H"]) == pytest.approx(coil["inductance_H"], rel=1e-9)
+    assert float(row["resistance_ohm"]) == pytest.approx(coil["resistance_ohm"], rel=1e-9)
+    assert float(row["resonance_Hz"]) == pytest.approx(coil["resonance_Hz"], rel=1e-9)
+
+
 @pytest.mark.slow
-def test_magnet_sweep_local_and_dask_identical(tmp_path):
+@pytest.mark.parametrize("sweep", [TINY_COIL, TINY_MAGNET], ids=["coil", "magnet"])
+def test_sweep_local_and_dask_identical(tmp_path, sweep, monkeypatch):
     distributed = pytest.importorskip("distributed")
-    study, spec = _files(tmp_path, TINY_MAGNET)
+    study, spec = _files(tmp_path, sweep)
     s, sw = load_study(study), load_sweep(spec)
     local = run_design(s, sw, tmp_path / "local", workers=2, progress=False)
+    # relative --out: workers run in their own folders, so the paths they get must be absolute
+    monkeypatch.chdir(tmp_path)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=":0") as cluster:
-        remote = run_design(s, sw, tmp_path / "dask", scheduler=cluster.scheduler_address,
+        remote = run_design(s, sw, Path("dask"), scheduler=cluster.scheduler_address,
                             progress=False)
-    assert local.computed == remote.computed == 2
+        seen = {str(entry[0]) for entry in cluster.scheduler.transition_log}
+    assert local.computed == remote.computed == (4 if sweep is TINY_COIL else 2)
+    assert len(seen) >= (1 if sweep is TINY_COIL else 2)  # tasks ran on the cluster
     for name in ("designs.csv", "recommendation.json"):
         assert (tmp_path / "local" / name).read_bytes() == (tmp_path / "dask" / name).read_bytes()
 

@@ -1,9 +1,12 @@
 """Sensor design sweeps: ``msens design STUDY.toml --sweep SWEEP.toml --out DIR``.
 
 - :mod:`.sweep` — sweep spec (TOML) parsing and validation; design geometries.
-- :mod:`.reciprocity` — Villari sources, one factorisation, summed-area flux tables.
-- :mod:`.coil_sweep` — coil-only sweeps from one bias solve.
-- :mod:`.magnet_sweep` — one nonlinear solve per design through :mod:`msens.parallel`.
+- :mod:`.physics` — the study's wave as a design sees it (the run's chain).
+- :mod:`.metrics` — EMF, DAQ voltage and circuit figures per design (the transducer core and
+  the run's read-out circuit).
+- :mod:`.coil_sweep` — coil-only sweeps from one field model (table quadrature of the
+  transducer core's source potentials), chunks through :mod:`msens.parallel`.
+- :mod:`.magnet_sweep` — the transducer core per design through :mod:`msens.parallel`.
 - :mod:`.cache`, :mod:`.runner` — content-hash result cache, resumable runs, progress bar.
 - :mod:`.report` — designs.csv, Pareto plot, recommendation.
 """
@@ -25,6 +28,8 @@ from msens.design.sweep import (
     sweep_sensor,
     validate_designs,
 )
+from msens.fieldsetup import geometry_from_study
+from msens.output import OutputDir
 from msens.study import Study
 
 FILES = ("designs.csv", "pareto.png", "recommendation.json")
@@ -57,7 +62,8 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         Output directory; its ``cache/`` holds per-design results and meshes, so rerunning
         into the same directory resumes an interrupted sweep.
     scheduler : str, optional
-        Dask scheduler address (magnet sweeps); default local processes.
+        Dask scheduler address; default local processes (magnet sweeps) or this process
+        (the chunks of a coil sweep).
     workers : int, optional
         Local worker processes.
     progress : bool
@@ -68,38 +74,46 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
     from msens.design.magnet_sweep import MagnetTask, evaluate_design
     from msens.design.runner import run_cached
 
-    out = Path(out)
+    target = OutputDir(out)
+    target.check(list(FILES))  # before any work: never overwrite a user's file
     sensor = sweep_sensor(study, spec)
-    base = base_geometry(study, spec.bead_padding)
     designs = spec.designs()
-    validate_designs(base, sensor.particle, designs, spec.source)
-    cache = ResultCache(Path(cache_dir) if cache_dir else out / "cache")
+    # paths handed to workers are absolute: a Dask worker has its own working folder
+    cache = ResultCache((Path(cache_dir) if cache_dir else target.path / "cache").resolve())
     if spec.kind == "coil":
-        rows, computed = run_coil_sweep(study, spec, base, sensor.particle, designs, cache,
-                                        mesh_dir=cache.directory / "meshes", progress=progress)
+        # the run's own field model: a design equal to the study's coil reproduces the run
+        full = geometry_from_study(study)
+        validate_designs(full, sensor.particle, designs, spec.source)
+        rows, computed = run_coil_sweep(study, full, sensor.particle, designs, cache,
+                                        scheduler=scheduler, progress=progress)
     else:
+        base = base_geometry(study, spec.bead_padding)
+        validate_designs(base, sensor.particle, designs, spec.source)
         mesh_dir = str(cache.directory / "meshes")
         tasks = []
         for d in designs:
             g = design_geometry(base, sensor.particle, d)
-            tasks.append((content_key("magnet-design", study, g, sensor.particle),
+            tasks.append((content_key("magnet-design/2", study, g, sensor.particle),
                           MagnetTask(study, g, sensor.particle, mesh_dir)))
         rows, computed = run_cached(evaluate_design, tasks, cache, scheduler=scheduler,
                                     workers=workers, progress=progress,
                                     description="magnet designs")
-    return write_results(spec, designs, rows, out, computed=computed)
+    return write_results(spec, designs, rows, target, computed=computed)
 
 
-def write_results(spec: SweepSpec, designs, rows, out: Path, *, computed: int) -> DesignResult:
-    """Write the three output files (atomically) and return the summary."""
+def write_results(spec: SweepSpec, designs, rows, out: OutputDir, *, computed: int
+                  ) -> DesignResult:
+    """Write the three output files (atomically, only over msens' own) and the summary."""
     rec = recommend(designs, rows, spec.recommend)
-    paths = [out / f for f in FILES]
+    paths = [out.target(f) for f in FILES]
+    for f in FILES:
+        out.record(f)
     atomic_write_bytes(paths[0], csv_text(designs, rows).encode())
-    pareto_plot(designs, rows, paths[1], rec.get("design"))
+    pareto_plot(designs, rows, paths[1], rec.get("design"), spec.recommend.objective)
     atomic_write_bytes(paths[2], (json.dumps(rec, indent=2, sort_keys=True) + "\n").encode())
     failed = sum(r["status"] != "ok" for r in rows)
-    return DesignResult(out=out, files=tuple(paths), recommendation=rec, designs=len(rows),
-                        failed=failed, computed=computed, kind=spec.kind)
+    return DesignResult(out=out.path, files=tuple(paths), recommendation=rec,
+                        designs=len(rows), failed=failed, computed=computed, kind=spec.kind)
 
 
 def format_result(result: DesignResult) -> str:

@@ -1,15 +1,20 @@
-"""Coil-only sweeps: one bias solve, then every coil design by quadrature (>= 1000/s).
+"""Coil-only sweeps: one field model, then every coil design by table quadrature.
 
-The coil is a passive receiver and (magnetically) air, so the bias state, the Villari sources
-and their incremental potentials a_i do not depend on the coil; by reciprocity
-(:mod:`msens.design.reciprocity`) bead i's sensitivity for a coil of N turns on the rectangle
-[r_in, r_out] × [z0, z1] is S_i = (N/S) ∫∫ 2π r a_i dr dz, read from a summed-area table.
+The coil is a passive receiver and (magnetically) air, so the bias state and the incremental
+potentials of both mechanisms' sources do not depend on it
+(:func:`msens.magnetics.transducer.mechanism_potentials`). A coil of N turns on the rectangle
+[r_in, r_out] × [z0, z1] links each source by (N/S) ∫∫ 2π r a_s dr dz, read from a
+summed-area table of the same potentials the run's transducer integrates exactly
+(:mod:`msens.magnetics.potentials`); the per-contact sensitivities, EMF and read-out follow
+from the transducer core and :mod:`msens.design.metrics`. The field model and the wave are
+the run's own (the study's whole geometry and chain), so a design equal to the study's coil
+reproduces ``msens run``.
 
-Electrical data per design from :mod:`msens.coil`: R (copper, 20 °C), the winding's
-self-capacitance estimate, and L = L_Wheeler × (L_inc/L_air) of the study's own coil — the
-bias-point incremental inductance of the base coil (field model) over its air-core value,
-i.e. the steel's share of the flux is taken to scale like the air-core flux (an approximation
-of a few per cent for coils near the base design; magnet sweeps compute L_inc exactly).
+Electrical data per design: R from the winding (:func:`msens.field.sensor_model.
+coil_resistance`); L = L_inc × L_W / L_W,0, the study coil's bias-point incremental
+inductance (field model) scaled by the designs' Wheeler air-core inductance ratio — exact for
+the study's own coil, an approximation of a few per cent for coils near it (magnet sweeps
+compute L_inc exactly).
 """
 
 from __future__ import annotations
@@ -21,101 +26,64 @@ from pathlib import Path
 
 import numpy as np
 
-from msens.coil import wheeler_inductance, winding_capacitance, winding_from_coil
+from msens.coil import wheeler_inductance
 from msens.design.cache import ResultCache, atomic_write_bytes, content_key
-from msens.design.metrics import circuit_metrics, peak_emf
-from msens.design.physics import (
-    bias_state,
-    gravity_static,
-    magnetic_compression,
-    study_wave,
-    wave_speed_change,
-)
-from msens.design.reciprocity import (
-    LinkageTable,
-    contact_sensitivities,
-    linkage_table,
-    rect_integral,
-)
-from msens.design.sweep import Design, SweepSpec, design_unit
+from msens.design.metrics import Wave, design_rows
+from msens.design.physics import study_wave
+from msens.design.runner import run_cached
+from msens.design.sweep import Design, design_unit
 from msens.field.geometry import SensorGeometry, SensorUnit
-from msens.field.regions import Winding
-from msens.field.sensor_model import (
-    coil_current_density,
-    flux_linkage,
-    regions_for,
+from msens.field.sensor_model import coil_resistance
+from msens.magnetics.mss import winding_of
+from msens.magnetics.potentials import LinkageTable, linkage_table, rect_integral
+from msens.magnetics.transducer import (
+    ContactRates,
+    bias_solution,
+    contact_profiles,
+    mechanism_potentials,
+    transducers_for,
 )
-from msens.field.solve import FieldSolution, MagnetostaticProblem, incremental, solve
-from msens.fieldsetup import mss_setup
-from msens.study import Study
+from msens.steel_law import law_for_steel
+from msens.study import ElectronicsSpec, Study
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm
-#: gives < 1e-5 relative error against exact mesh quadrature for the paper's coil).
+#: gives < 1e-4 relative error against exact mesh quadrature for the paper's coil, tests).
 TABLE_SPACING = 0.1e-3
-#: Designs evaluated (and cached) per chunk.
+#: Designs evaluated (and cached) per task.
 CHUNK = 2048
 
 
 @dataclass(frozen=True)
 class CoilContext:
-    """Everything a coil design needs from the one solve.
+    """Everything a coil design needs from the one field model (picklable, saved as .npz).
 
     Attributes
     ----------
     table : LinkageTable
-    contacts : ndarray, shape (n_c,)
-        Contact numbers c covered (between beads c and c+1).
-    force_rate : ndarray, shape (n_c, nt)
-        dF_c/dt of the study's wave, N/s.
+        Over all sources: Villari per bead, then approach per contact.
+    particles : ndarray of int, shape (n_b,)
+        Beads with a Villari source.
+    approach_contacts : ndarray of int, shape (n_a,)
+        Contacts with an approach source.
+    count : int
+        Particles in the chain.
+    wave : Wave
     z_center : float
         Axial position of the sensor bead's centre, m.
-    inductance_ratio : float
-        L_inc / L_air of the study's coil.
-    precompression_N, precompression_max_N, wave_speed_change : float
-        Magnetic static compression (mean over c_{p−2}..c_{p+1}, max) and the relative change
-        of the solitary-wave speed it causes.
+    inductance : float
+        Bias-point incremental inductance of the study's coil, H.
+    wheeler : float
+        Its Wheeler air-core inductance, H.
     """
 
     table: LinkageTable
-    contacts: np.ndarray
-    force_rate: np.ndarray
+    particles: np.ndarray
+    approach_contacts: np.ndarray
+    count: int
+    wave: Wave
     z_center: float
-    inductance_ratio: float
-    precompression_N: float
-    precompression_max_N: float
-    wave_speed_change: float
-
-
-def coil_inductances(sol: FieldSolution, geometry: SensorGeometry, unit: SensorUnit
-                     ) -> tuple[float, float]:
-    """Incremental (bias point) and air-core inductance of a coil in the mesh, H."""
-    axi = sol.problem.mesh
-    c = unit.coil
-    name = f"coil_{c.particle}"
-    j = coil_current_density(c)
-    inc = flux_linkage(incremental(sol, {name: Winding(j)}), name, c)
-    air = regions_for(geometry, list(axi.subdomains), magnets=False, steel=False)
-    air[name] = Winding(j)
-    return inc, flux_linkage(solve(MagnetostaticProblem(axi, air)), name, c)
-
-
-def wave_summary(study: Study, sol: FieldSolution, geometry: SensorGeometry, particle: int,
-                 contacts: Sequence[int]) -> dict:
-    """Force rates at ``contacts`` and the magnetic precompression figures of one bias state."""
-    setup = mss_setup(study)
-    n = study.chain.n_particles
-    comp, pf = magnetic_compression(sol, geometry, n)
-    t, force, static = study_wave(study, setup, pf)
-    idx = np.asarray(contacts) - 1
-    rate = np.gradient(force[:, idx], t, axis=0).T
-    own = slice(max(particle - 3, 0), particle + 1)  # c_{p-2} .. c_{p+1}
-    grav = gravity_static(study, setup)
-    peak_dyn = float(np.max(force[:, particle - 1] - static[particle - 1]))
-    change = float(wave_speed_change(study, peak_dyn, grav[particle - 1],
-                                     comp[particle - 1]))
-    return {"force_rate": rate, "precompression_N": float(np.mean(comp[own])),
-            "precompression_max_N": float(np.max(np.abs(comp[own]))),
-            "wave_speed_change": change}
+    inductance: float
+    wheeler: float
 
 
 def _coil_box(unit: SensorUnit, designs: Sequence[Design], geometry: SensorGeometry
@@ -127,117 +95,128 @@ def _coil_box(unit: SensorUnit, designs: Sequence[Design], geometry: SensorGeome
 
 
 def build_context(study: Study, geometry: SensorGeometry, particle: int,
-                  designs: Sequence[Design], mesh_dir: str | Path | None = None
-                  ) -> CoilContext:
-    """The one bias solve of a coil sweep and everything derived from it."""
+                  designs: Sequence[Design]) -> CoilContext:
+    """The one field model of a coil sweep (the run's) and everything derived from it."""
     unit = next(u for u in geometry.sensors if u.coil.particle == particle)
-    state = bias_state(geometry, particle, mesh_dir)
+    transducers = transducers_for(geometry)
+    tr = transducers[particle]
+    wave = study_wave(study, transducers, particle)
+    sol, _ = bias_solution(geometry)
+    model = mechanism_potentials(sol, geometry, stress_force=tr.reference_force,
+                                 law=law_for_steel(geometry.steel))
     r_rng, z_rng = _coil_box(unit, designs, geometry)
-    table = linkage_table(state.solution, state.potentials, r_rng, z_rng, TABLE_SPACING)
-    l_inc, l_air = coil_inductances(state.solution, geometry, unit)
-    wave = wave_summary(study, state.solution, geometry, particle, state.contacts)
-    return CoilContext(table=table, contacts=np.asarray(state.contacts),
-                       force_rate=wave["force_rate"],
-                       z_center=geometry.beads.center(particle), inductance_ratio=l_inc / l_air,
-                       precompression_N=wave["precompression_N"],
-                       precompression_max_N=wave["precompression_max_N"],
-                       wave_speed_change=wave["wave_speed_change"])
+    table = linkage_table(sol, model.potentials, r_rng, z_rng, TABLE_SPACING)
+    return CoilContext(table=table, particles=model.particles,
+                       approach_contacts=model.contacts, count=model.count, wave=wave,
+                       z_center=geometry.beads.center(particle), inductance=tr.inductance_H,
+                       wheeler=wheeler_inductance(winding_of(unit.coil)))
 
 
 def save_context(ctx: CoilContext, path: Path) -> None:
     """Atomic .npz of a context."""
+    w = ctx.wave
     buf = io.BytesIO()
     np.savez(buf, r=ctx.table.r, z=ctx.table.z, cumulative=ctx.table.cumulative,
-             contacts=ctx.contacts, force_rate=ctx.force_rate,
-             scalars=np.array([ctx.z_center, ctx.inductance_ratio, ctx.precompression_N,
-                               ctx.precompression_max_N, ctx.wave_speed_change]))
+             particles=ctx.particles, approach_contacts=ctx.approach_contacts,
+             contacts=w.contacts, t=w.rates.t, force_rate=w.rates.force,
+             approach_rate=w.rates.approach,
+             scalars=np.array([ctx.count, ctx.z_center, ctx.inductance, ctx.wheeler,
+                               w.precompression_N, w.precompression_max_N,
+                               w.wave_speed_change]))
     atomic_write_bytes(path, buf.getvalue())
 
 
 def load_context(path: Path) -> CoilContext:
+    """The context :func:`save_context` wrote."""
     with np.load(path) as f:
         s = f["scalars"]
-        return CoilContext(LinkageTable(f["r"], f["z"], f["cumulative"]), f["contacts"],
-                           f["force_rate"], *map(float, s))
+        wave = Wave(contacts=f["contacts"],
+                    rates=ContactRates(f["t"], f["force_rate"], f["approach_rate"]),
+                    precompression_N=float(s[4]), precompression_max_N=float(s[5]),
+                    wave_speed_change=float(s[6]))
+        return CoilContext(LinkageTable(f["r"], f["z"], f["cumulative"]), f["particles"],
+                           f["approach_contacts"], int(s[0]), wave, float(s[1]), float(s[2]),
+                           float(s[3]))
 
 
 def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
-             geometry: SensorGeometry, study: Study) -> list[dict]:
+             geometry: SensorGeometry, electronics: ElectronicsSpec) -> list[dict]:
     """Metrics of coil designs (no validation: :func:`msens.design.sweep.validate_designs`)."""
-    units = [design_unit(unit, d.values, geometry.tube) for d in designs]
-    coils = [u.coil for u in units]
+    coils = [design_unit(unit, d.values, geometry.tube).coil for d in designs]
     zc = np.array([ctx.z_center + c.axial_offset for c in coils])
     half = np.array([c.length / 2 for c in coils])
     r_in = np.array([c.inner_radius for c in coils])
     r_out = np.array([c.outer_radius for c in coils])
     turns = np.array([c.turns for c in coils], dtype=float)
     area = (r_out - r_in) * 2 * half
-    beads = turns[:, None] / area[:, None] * rect_integral(ctx.table, r_in, r_out, zc - half,
-                                                           zc + half)
-    sens = contact_sensitivities(beads)
-    elec = {}
-    for c in coils:
-        key = (c.turns, c.length, c.inner_radius, c.wire.name)
-        if key not in elec:
-            w = winding_from_coil(c.turns, c.length, c.inner_radius, c.wire.name,
-                                  c.packing_factor, insulated_diameter=c.wire.insulated_diameter)
-            elec[key] = (w.resistance(), wheeler_inductance(w), winding_capacitance(w))
-    rlc = np.array([elec[(c.turns, c.length, c.inner_radius, c.wire.name)] for c in coils])
-    inductance = rlc[:, 1] * ctx.inductance_ratio
-    circ = circuit_metrics(rlc[:, 0], inductance, rlc[:, 2], study.electronics)
-    emf = peak_emf(sens, ctx.force_rate)
-    snr = emf * circ["dc_gain"] / circ["noise_rms_V"]
-    rows = []
-    for k in range(len(designs)):
-        rows.append({
-            "outer_radius_m": float(r_out[k]), "resistance_ohm": float(rlc[k, 0]),
-            "inductance_H": float(inductance[k]), "inductance_air_H": float(rlc[k, 1]),
-            "winding_capacitance_F": float(rlc[k, 2]),
-            "resonance_Hz": float(circ["resonance_Hz"][k]),
-            "quality_factor": float(circ["quality_factor"][k]),
-            "bandwidth_Hz": float(circ["bandwidth_Hz"][k]),
-            "noise_rms_V": float(circ["noise_rms_V"][k]),
-            "sensitivity_Wb_per_N": float(np.sum(sens[k])),
-            "peak_emf_V": float(emf[k]), "snr": float(snr[k]),
-            "precompression_N": ctx.precompression_N,
-            "precompression_max_N": ctx.precompression_max_N,
-            "wave_speed_change": ctx.wave_speed_change,
-            "contacts": [int(c) for c in ctx.contacts],
-            "dLambda_dF_Wb_per_N": [float(v) for v in sens[k]],
-        })
+    link = (turns / area)[:, None] * rect_integral(ctx.table, r_in, r_out, zc - half,
+                                                   zc + half)
+    contacts, s_vil, dl = contact_profiles(ctx.particles, ctx.approach_contacts, ctx.count,
+                                           link)
+    # the run's transducer covers the same contacts
+    assert np.array_equal(contacts, ctx.wave.contacts)
+    resistance = np.array([coil_resistance(c) for c in coils])
+    inductance = np.array([ctx.inductance * wheeler_inductance(winding_of(c)) / ctx.wheeler
+                           for c in coils])
+    rows = design_rows(coils, resistance, inductance, s_vil, dl, ctx.wave, electronics)
+    for row, sv, d in zip(rows, s_vil, dl, strict=True):
+        row["contacts"] = [int(c) for c in contacts]
+        row["dLambda_dF_Wb_per_N"] = [float(v) for v in sv]
+        row["dLambda_ddelta_Wb_per_m"] = [float(v) for v in d]
     return rows
 
 
-def run_coil_sweep(study: Study, spec: SweepSpec, geometry: SensorGeometry, particle: int,
-                   designs: Sequence[Design], cache: ResultCache, *,
-                   mesh_dir: str | Path | None = None, progress: bool = True
-                   ) -> tuple[list[dict], int]:
-    """All coil designs' rows (with ``status``) and how many were computed afresh."""
-    from tqdm import tqdm
+@dataclass(frozen=True)
+class CoilChunk:
+    """Payload of one chunk of coil designs (picklable: runs on local workers or Dask)."""
 
+    context: CoilContext
+    unit: SensorUnit
+    designs: tuple[Design, ...]
+    geometry: SensorGeometry
+    electronics: ElectronicsSpec
+
+
+def evaluate_chunk(task: CoilChunk) -> dict:
+    """``{"rows": [...]}`` of one chunk (a module-level task function)."""
+    return {"rows": evaluate(task.context, task.unit, task.designs, task.geometry,
+                             task.electronics)}
+
+
+def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
+                   designs: Sequence[Design], cache: ResultCache, *,
+                   scheduler: str | None = None, progress: bool = True
+                   ) -> tuple[list[dict], int]:
+    """All coil designs' rows (with ``status``) and how many were computed afresh.
+
+    The field model runs here, once; the chunks of designs run through
+    :func:`msens.design.runner.run_cached` — in this process, or on the Dask cluster at
+    ``scheduler`` (the context travels inside each task, so workers need no shared files).
+    """
     unit = next(u for u in geometry.sensors if u.coil.particle == particle)
-    ckey = content_key("coil-context", study, geometry, particle, _coil_box(unit, designs,
-                                                                          geometry))
+    ckey = content_key("coil-context/2", study, geometry, particle,
+                       _coil_box(unit, designs, geometry))
     cpath = cache.directory / f"context-{ckey}.npz"
     if cpath.exists():
         ctx = load_context(cpath)
     else:
-        ctx = build_context(study, geometry, particle, designs, mesh_dir)
+        ctx = build_context(study, geometry, particle, designs)
         save_context(ctx, cpath)
+    chunks = [tuple(designs[k:k + CHUNK]) for k in range(0, len(designs), CHUNK)]
+    tasks = [(content_key("coil-chunk/2", ckey, [d.values for d in c]),
+              CoilChunk(ctx, unit, c, geometry, study.electronics)) for c in chunks]
+    fresh = sum(len(c) for c, (key, _) in zip(chunks, tasks, strict=True)
+                if cache.get(key) is None)
+    results, _ = run_cached(evaluate_chunk, tasks, cache, scheduler=scheduler, workers=1,
+                            progress=progress, description="coil chunks")
     rows: list[dict] = []
-    computed = 0
-    chunks = [designs[k:k + CHUNK] for k in range(0, len(designs), CHUNK)]
-    for chunk in tqdm(chunks, desc="coil designs", unit="chunk", disable=not progress):
-        key = content_key("coil-chunk", ckey, [d.values for d in chunk])
-        got = cache.get(key)
-        if got is None:
-            got = [{"status": "ok", **r} for r in evaluate(ctx, unit, chunk, geometry, study)]
-            cache.put(key, got)
-            got = cache.get(key)
-            computed += len(chunk)
-        rows.extend(got)
-    return rows, computed
+    for chunk, res in zip(chunks, results, strict=True):
+        if res["status"] == "ok":
+            rows.extend({"status": "ok", **r} for r in res["rows"])
+        else:
+            rows.extend({"status": "failed", "reason": res["reason"]} for _ in chunk)
+    return rows, fresh
 
 
-__all__ = ["CHUNK", "TABLE_SPACING", "CoilContext", "build_context", "coil_inductances",
-           "evaluate", "run_coil_sweep", "wave_summary"]
+__all__ = ["CHUNK", "TABLE_SPACING", "CoilChunk", "CoilContext", "build_context",
+           "evaluate", "evaluate_chunk", "load_context", "run_coil_sweep", "save_context"]

@@ -1,79 +1,133 @@
-"""Per-design figures of merit, vectorised over designs (coil sweeps evaluate thousands).
+"""Per-design figures of merit from the transducer core, vectorised over designs.
 
-Circuit (as :mod:`msens.electronics` with no cable series resistance): coil R, L in series,
-the winding, cable and DAQ input capacitances in parallel, C = C_w + C_cable + C_in, across
-the DAQ input resistance R_in (G = 1/R_in). H(s) = 1 / (a0 + b s + c s²) with a0 = 1 + R G,
-b = R C + L G, c = L C. Then
+A design's coil signal is computed exactly as ``msens run`` computes it: the open-circuit EMF
+V = -Σ_c [(∂Λ/∂F_c) dF_c/dt + (∂Λ/∂δ_c) dδ_c/dt] of both mechanisms
+(:func:`msens.magnetics.transducer.emf_from_rates`) for the study's wave, and the read-out
+circuit of :func:`msens.magnetics.mss.readout` (coil R and bias-point L, winding, cable and
+DAQ input capacitances, DAQ input resistance). From them:
 
-- self-resonance ω0² = a0/c and Q = ω0 c / b (the poles of H);
-- −3 dB bandwidth: |H(jω)|² = |H(0)|²/2 has exactly one root x = ω² > 0 of
-  c² x² + (b² − 2 a0 c) x − a0² = 0;
-- Johnson noise at the DAQ over all frequencies: every resistor at temperature T and the DAQ
-  node is one capacitor C, so equipartition gives v_rms² = k T / C exactly; the DAQ's input
-  noise adds e_n² f_s / 2 and its quantisation LSB²/12 (as :func:`msens.electronics.noise_rms`
-  with ``bandwidth=None``; both agree in tests/design/test_metrics.py).
-
-Signal: EMF(t) = −Σ_c (∂Λ/∂F_c) dF_c/dt (issue 4) for the study's wave; the SNR is
-peak |EMF| |H(0)| / v_rms (the resonance gain inside the band is not counted).
+- ``peak_emf_V``: max |EMF| (the figure ``summary.json`` reports per coil);
+- ``peak_voltage_V``: max |V_DAQ| of the noise-free DAQ voltage, the EMF filtered by the
+  circuit's transfer function (:func:`msens.electronics.transfer_function`, by FFT on a grid
+  padded by 14 decay times of the circuit's slowest pole, so the ringing of a resonance
+  inside the band counts and does not wrap around);
+- ``noise_rms_V``: :func:`msens.magnetics.mss.figure_noise_rms` (Johnson noise of the circuit,
+  DAQ noise, quantisation); ``snr`` = peak_voltage_V / noise_rms_V;
+- resonance, Q, DC gain and -3 dB bandwidth of the circuit (:mod:`msens.electronics`).
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
 import numpy as np
+import scipy.fft
 
+from msens.electronics import bandwidth, poles, resonance, transfer_function
+from msens.field.geometry import Coil
+from msens.magnetics.mss import figure_noise_rms, readout
+from msens.magnetics.transducer import ContactRates, emf_from_rates
 from msens.study import ElectronicsSpec
-from msens.units import K_B
+
+#: Designs whose EMF records are formed at once (bounds memory: chunk × nt doubles).
+EMF_CHUNK = 256
+#: FFT padding in decay times of the slowest circuit pole (e^-14 ≈ 1e-6 of wrapped ringing).
+DECAY_TIMES = 14.0
 
 
-def circuit_metrics(resistance: np.ndarray, inductance: np.ndarray,
-                    winding_capacitance: np.ndarray, electronics: ElectronicsSpec
-                    ) -> dict[str, np.ndarray]:
-    """Resonance (Hz), Q, bandwidth (Hz), DC gain and noise rms (V) per design.
+@dataclass(frozen=True)
+class Wave:
+    """The study's wave as a design sees it.
 
-    Parameters
+    Attributes
     ----------
-    resistance, inductance, winding_capacitance : ndarray, shape (n,)
-        Ω, H, F.
-    electronics : ElectronicsSpec
-        Cable and DAQ data, temperature and DAQ noise.
+    contacts : ndarray of int, shape (n_c,)
+        Contacts the rates belong to (the transducer's).
+    rates : ContactRates
+        dF_c/dt and dδ_c/dt of those contacts, shape (nt, n_c) each.
+    precompression_N, precompression_max_N : float
+        Magnetic static compression at the sensor: mean over c_{p-2}..c_{p+1} and max |.|.
+    wave_speed_change : float
+        Relative change of the solitary-wave speed at the sensor the magnets cause.
     """
-    r = np.asarray(resistance, dtype=float)
-    ind = np.asarray(inductance, dtype=float)
-    cap = np.asarray(winding_capacitance, dtype=float) + electronics.cable_capacitance_f \
-        + electronics.input_capacitance_f
-    g = 0.0 if np.isinf(electronics.input_resistance_ohm) else \
-        1.0 / electronics.input_resistance_ohm
-    a0 = 1.0 + r * g
-    b = r * cap + ind * g
-    c = ind * cap
-    omega0 = np.sqrt(a0 / c)
-    bb = b**2 - 2.0 * a0 * c
-    x = (-bb + np.sqrt(bb**2 + 4.0 * c**2 * a0**2)) / (2.0 * c**2)
-    var = K_B * electronics.temperature_k / cap
-    fs = electronics.sample_rate_hz
-    var = var + electronics.input_noise_v_per_rthz**2 * fs / 2.0
-    if electronics.adc_bits is not None and electronics.adc_range_v is not None:
-        var = var + (electronics.adc_range_v / 2**electronics.adc_bits) ** 2 / 12.0
-    return {"resonance_Hz": omega0 / (2 * np.pi), "quality_factor": omega0 * c / b,
-            "bandwidth_Hz": np.sqrt(x) / (2 * np.pi), "dc_gain": 1.0 / a0,
-            "noise_rms_V": np.sqrt(var)}
+
+    contacts: np.ndarray
+    rates: ContactRates
+    precompression_N: float
+    precompression_max_N: float
+    wave_speed_change: float
 
 
-def peak_emf(sensitivity: np.ndarray, force_rate: np.ndarray, chunk: int = 256) -> np.ndarray:
-    """max_t |Σ_c S_c dF_c/dt| per design, V.
+def _circuit_figures(coil: Coil, resistance: float, inductance: float,
+                     electronics: ElectronicsSpec) -> dict:
+    circuit = readout(coil, resistance, inductance, electronics)
+    f0, q = resonance(circuit)
+    return {"circuit": circuit, "resonance_Hz": f0, "quality_factor": q,
+            "bandwidth_Hz": bandwidth(circuit), "noise_rms_V": figure_noise_rms(circuit,
+                                                                              electronics),
+            "winding_capacitance_F": circuit.winding_capacitance,
+            "decay_s": 1.0 / float(np.min(-poles(circuit).real))}
+
+
+def design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndarray,
+                sensitivity_villari: np.ndarray, dlambda_dapproach: np.ndarray, wave: Wave,
+                electronics: ElectronicsSpec) -> list[dict]:
+    """Metrics of coil designs, one dict per design.
 
     Parameters
     ----------
-    sensitivity : ndarray, shape (n_designs, n_contacts)
+    coils : sequence of Coil, length n_d
+    resistance, inductance : ndarray, shape (n_d,)
+        Ω and H (bias-point incremental inductance).
+    sensitivity_villari : ndarray, shape (n_d, n_c)
         ∂Λ/∂F_c, Wb/N.
-    force_rate : ndarray, shape (n_contacts, nt)
-        dF_c/dt of the study's wave, N/s.
+    dlambda_dapproach : ndarray, shape (n_d, n_c)
+        ∂Λ/∂δ_c, Wb/m.
+    wave : Wave
+    electronics : ElectronicsSpec
     """
-    s = np.atleast_2d(sensitivity)
-    out = np.empty(s.shape[0])
-    for k in range(0, s.shape[0], chunk):
-        out[k:k + chunk] = np.max(np.abs(s[k:k + chunk] @ force_rate), axis=1)
-    return out
+    t = wave.rates.t
+    nt = t.size
+    dt = float(t[1] - t[0])
+    keys = [(round(float(r), 12), round(float(ind), 15), c.turns, c.length, c.inner_radius,
+             c.wire.name, c.packing_factor) for c, r, ind in zip(coils, resistance, inductance,
+                                                                 strict=True)]
+    circuits: dict = {}
+    for k, c, r, ind in zip(keys, coils, resistance, inductance, strict=True):
+        if k not in circuits:
+            circuits[k] = _circuit_figures(c, float(r), float(ind), electronics)
+    decay = max(cf["decay_s"] for cf in circuits.values())
+    n_fft = scipy.fft.next_fast_len(nt + math.ceil(DECAY_TIMES * decay / dt), real=True)
+    freq = np.fft.rfftfreq(n_fft, dt)
+    for cf in circuits.values():
+        cf["transfer"] = transfer_function(cf["circuit"], freq)
+    s_app = dlambda_dapproach  # Wb/m
+    rows: list[dict] = []
+    for lo in range(0, len(coils), EMF_CHUNK):
+        hi = min(lo + EMF_CHUNK, len(coils))
+        e = emf_from_rates(wave.rates, sensitivity_villari[lo:hi], s_app[lo:hi])
+        spectrum = scipy.fft.rfft(e, n_fft, axis=1)
+        for k in range(lo, hi):
+            cf = circuits[keys[k]]
+            v = scipy.fft.irfft(spectrum[k - lo] * cf["transfer"], n_fft)[:nt]
+            peak_v = float(np.max(np.abs(v)))
+            rows.append({
+                "outer_radius_m": coils[k].outer_radius,
+                "resistance_ohm": float(resistance[k]), "inductance_H": float(inductance[k]),
+                "winding_capacitance_F": cf["winding_capacitance_F"],
+                "resonance_Hz": cf["resonance_Hz"], "quality_factor": cf["quality_factor"],
+                "bandwidth_Hz": cf["bandwidth_Hz"], "noise_rms_V": cf["noise_rms_V"],
+                "sensitivity_villari_Wb_per_N": float(np.sum(sensitivity_villari[k])),
+                "dLambda_dapproach_Wb_per_m": float(np.sum(dlambda_dapproach[k])),
+                "peak_emf_V": float(np.max(np.abs(e[k - lo]))),
+                "peak_voltage_V": peak_v, "snr": peak_v / cf["noise_rms_V"],
+                "precompression_N": wave.precompression_N,
+                "precompression_max_N": wave.precompression_max_N,
+                "wave_speed_change": wave.wave_speed_change,
+            })
+    return rows
 
 
-__all__ = ["circuit_metrics", "peak_emf"]
+__all__ = ["DECAY_TIMES", "EMF_CHUNK", "Wave", "design_rows"]

@@ -1,126 +1,74 @@
-"""Physics shared by coil and magnet sweeps: bias state, magnetic precompression, the wave.
+"""The study's wave as a design sees it: the same chain ``msens run`` simulates.
 
-- :func:`bias_state`: mesh (cached by content hash), nonlinear bias solve, Villari sources of
-  the beads within :data:`SENSITIVE_BEADS` of the sensor and their incremental potentials
-  (:mod:`msens.design.reciprocity`).
-- :func:`magnetic_compression`: the static compression each modelled contact carries from the
-  magnets (eggshell Maxwell stress, :func:`msens.field.sensor_model.contact_forces`) and the
-  equivalent static particle forces for the chain (x down: f_p = C_p − C_{p−1}; the magnets'
-  compression is taken to end at the modelled column's ends).
-- :func:`study_wave`: the chain of the study's MsS setup with those forces in place of the
-  setup's declared [[precompression]] (the physics replaces the paper's 1.8 N guess), with the
-  study's damping (no Eq. 10 calibration in a sweep).
-- :func:`wave_speed_change`: relative change of the long-wave solitary-wave speed at the
-  sensor's contact caused by the magnetic precompression (paper Eq. 3-5, msens.longwave).
+:func:`study_wave` simulates the study's MsS setup exactly as :func:`msens.pipeline.run_study`
+does (its damping, or its Eq. 10 fit; the magnets' pull on the beads from the design's
+transducers as static precompression) and reduces it to what a design needs: the contact
+rates the transducer reads and the magnetic precompression figures at the sensor.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from pathlib import Path
+from collections.abc import Mapping
+from dataclasses import replace
 
 import numpy as np
 
 from msens.assemble import build_chain
 from msens.chain.equilibrium import static_contact_forces
-from msens.chain.integrate import simulate
-from msens.design.reciprocity import source_potentials, villari_sources
-from msens.field.geometry import SensorGeometry
-from msens.field.sensor_model import bias_problem, contact_forces, load_mesh
-from msens.field.solve import FieldSolution, solve
+from msens.design.metrics import Wave
+from msens.fieldsetup import mss_setup
 from msens.longwave import soliton_speed_precompressed
-from msens.pipeline import output_times
+from msens.magnetics.transducer import Transducer, contact_rates, magnetic_precompression
+from msens.pipeline import calibrate_dissipation, output_times, simulate_setup
 from msens.study import Study
 
-#: Beads on either side of the sensor bead whose Villari sources are solved; at 4 the outer
-#: beads' S_i are below 30 % of the central ones and change sign (tests/design).
-SENSITIVE_BEADS = 4
-#: Newton iterations allowed for a design's bias solve (strongly saturated contacts converge
-#: slowly; see progress-fieldcore.md).
-MAX_NEWTON = 40
 
+def study_wave(study: Study, transducers: Mapping[int, Transducer], particle: int) -> Wave:
+    """The wave of the study's MsS setup with the transducers' magnets, seen at ``particle``.
 
-@dataclass(frozen=True)
-class BiasState:
-    """One bias solve and the incremental potentials of its Villari sources.
-
-    Attributes
+    Parameters
     ----------
-    solution : FieldSolution
-    particles : tuple of int
-        Beads with a source, top to bottom (consecutive).
-    potentials : ndarray, shape (n_beads, n_dofs)
-        A_φ per newton of a two-pole load on each bead, T m/N.
+    study : Study
+    transducers : mapping of int -> Transducer
+        All transducers of one field model (their magnets set the precompression).
+    particle : int
+        The swept sensor's coil particle.
     """
-
-    solution: FieldSolution
-    particles: tuple[int, ...]
-    potentials: np.ndarray
-
-    @property
-    def contacts(self) -> tuple[int, ...]:
-        """Contacts c (between beads c and c+1) covered by the sensitivities."""
-        return self.particles[:-1]
-
-
-def bias_state(geometry: SensorGeometry, particle: int,
-               mesh_dir: str | Path | None = None) -> BiasState:
-    """Mesh, bias solve and Villari potentials around the sensor at ``particle``."""
-    axi, _ = load_mesh(geometry, mesh_dir=mesh_dir)
-    sol = solve(bias_problem(geometry, axi), max_iter=MAX_NEWTON)
-    b = geometry.beads
-    parts = tuple(p for p in range(particle - SENSITIVE_BEADS, particle + SENSITIVE_BEADS + 1)
-                  if b.first <= p <= b.last)
-    pot = source_potentials(sol, villari_sources(sol, geometry, parts))
-    return BiasState(sol, parts, pot)
-
-
-def magnetic_compression(sol: FieldSolution, geometry: SensorGeometry, n_particles: int
-                         ) -> tuple[np.ndarray, np.ndarray]:
-    """Magnetic static compression per chain contact and the equivalent particle forces.
-
-    Returns
-    -------
-    compression : ndarray, shape (n_particles,)
-        N, contact c_i (particles i, i+1) at index i − 1; zero where not modelled.
-    particle_force : ndarray, shape (n_particles,)
-        Static force on each particle along +x (toward the wall), N.
-    """
-    comp = np.zeros(n_particles)
-    for cf in contact_forces(sol, geometry):
-        comp[cf.upper - 1] = cf.magnetic_force_N
-    above = np.concatenate([[0.0], comp[:-1]])
-    return comp, comp - above
-
-
-def study_wave(study: Study, setup, particle_force: np.ndarray | None
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Contact forces of the study's wave with magnetic static forces.
-
-    Returns
-    -------
-    t : ndarray, shape (nt,)
-        s.
-    force : ndarray, shape (nt, n)
-        Total contact forces, N.
-    static : ndarray, shape (n,)
-        Static contact forces at rest (gravity + magnets), N.
-    """
-    clean = replace(setup, precompression=())
-    chain = build_chain(study, clean, static_force=particle_force)
+    setup = mss_setup(study)
     t = output_times(study)
-    history = simulate(chain, study.striker.velocity_m_per_s, t, dt=study.simulation.dt_s)
-    return t, history.force, static_contact_forces(chain)
-
-
-def gravity_static(study: Study, setup) -> np.ndarray:
-    """Static contact forces without magnets, N, shape (n,)."""
-    return static_contact_forces(build_chain(study, replace(setup, precompression=())))
+    fit = calibrate_dissipation(study, t)
+    gc = fit.gamma_c if fit is not None else study.chain.gamma_contact
+    gw = fit.gamma_w if fit is not None else study.chain.gamma_wall
+    chain, history = simulate_setup(study, setup, t, gamma_contact=gc, gamma_wall=gw,
+                                    transducers=dict(transducers))
+    tr = transducers[particle]
+    rates = contact_rates(t, history.force, tr.contacts, tr.contact_stiffness)
+    comp = np.cumsum(magnetic_precompression(transducers))  # contact c at index c - 1
+    own = slice(max(particle - 3, 0), particle + 1)  # c_{p-2} .. c_{p+1}
+    static = static_contact_forces(chain)
+    grav = static_contact_forces(build_chain(study, replace(setup, precompression=())))
+    peak_dyn = float(np.max(history.force[:, particle - 1] - static[particle - 1]))
+    change = float(wave_speed_change(study, peak_dyn, grav[particle - 1], comp[particle - 1]))
+    return Wave(contacts=np.asarray(tr.contacts), rates=rates,
+                precompression_N=float(np.mean(comp[own])),
+                precompression_max_N=float(np.max(np.abs(comp[own]))),
+                wave_speed_change=change)
 
 
 def wave_speed_change(study: Study, peak_dynamic: float, f_gravity: float,
                       f_magnet: np.ndarray) -> np.ndarray:
-    """V(F_m + F_mag, F0 + F_mag) / V(F_m, F0) − 1 with F_m = F0 + peak dynamic force."""
+    """V(F_m + F_mag, F0 + F_mag) / V(F_m, F0) − 1 with F_m = F0 + peak dynamic force.
+
+    Parameters
+    ----------
+    study : Study
+    peak_dynamic : float
+        Peak dynamic contact force at the sensor, N.
+    f_gravity : float
+        Static contact force from gravity alone, N.
+    f_magnet : float or ndarray
+        Magnetic static compression, N.
+    """
     c = study.chain
     rho = c.bead_mass_kg / (np.pi * c.bead_diameter_m**3 / 6)
     args = (c.bead_diameter_m, c.youngs_modulus_pa, c.poisson_ratio, rho)
@@ -130,5 +78,4 @@ def wave_speed_change(study: Study, peak_dynamic: float, f_gravity: float,
     return soliton_speed_precompressed(f0 + mag + peak_dynamic, f0 + mag, *args) / base - 1.0
 
 
-__all__ = ["MAX_NEWTON", "SENSITIVE_BEADS", "BiasState", "bias_state", "gravity_static",
-           "magnetic_compression", "study_wave", "wave_speed_change"]
+__all__ = ["study_wave", "wave_speed_change"]

@@ -18,10 +18,17 @@ import numpy as np
 from msens.design.cache import atomic_write_bytes
 from msens.design.sweep import Design, Recommend
 
-METRICS = ("outer_radius_m", "resistance_ohm", "inductance_H", "inductance_air_H",
-           "winding_capacitance_F", "resonance_Hz", "quality_factor", "bandwidth_Hz",
-           "noise_rms_V", "sensitivity_Wb_per_N", "peak_emf_V", "snr", "precompression_N",
-           "precompression_max_N", "wave_speed_change")
+METRICS = ("outer_radius_m", "resistance_ohm", "inductance_H", "winding_capacitance_F",
+           "resonance_Hz", "quality_factor", "bandwidth_Hz", "noise_rms_V",
+           "sensitivity_villari_Wb_per_N", "dLambda_dapproach_Wb_per_m", "peak_emf_V",
+           "peak_voltage_V", "snr", "precompression_N", "precompression_max_N",
+           "wave_speed_change")
+#: Axis labels of the metrics a recommendation can rank on.
+LABELS = {"snr": "SNR (peak DAQ voltage / noise rms)", "peak_emf_V": "peak EMF (V)",
+          "peak_voltage_V": "peak DAQ voltage (V)", "bandwidth_Hz": "bandwidth (Hz)",
+          "sensitivity_villari_Wb_per_N": "Σ ∂Λ/∂F_c, Villari (Wb/N)",
+          "dLambda_dapproach_Wb_per_m": "Σ ∂Λ/∂δ_c, contact approach (Wb/m)",
+          "resonance_Hz": "resonance (Hz)"}
 
 
 def _fmt(v) -> str:
@@ -92,26 +99,49 @@ def recommend(designs: Sequence[Design], rows: Sequence[dict], rule: Recommend) 
                        f"{abs(rows[second][rule.objective]):.4g}")
     for k, op, v in limits:
         reasons.append(f"{k} = {r[k]:.4g} ({op} {v:g})")
-    reasons.append(f"sensitivity {r['sensitivity_Wb_per_N']:.4g} Wb/N, peak EMF "
-                   f"{r['peak_emf_V']:.4g} V, SNR {r['snr']:.4g}, bandwidth "
+    edges = range_edges(designs, best)
+    reasons.extend(f"the optimum sits on the {side} of the swept range of {column_name(k)} "
+                   f"({v:g}): the best design may lie beyond it" for k, v, side in edges)
+    reasons.append(f"peak EMF {r['peak_emf_V']:.4g} V, peak DAQ voltage "
+                   f"{r['peak_voltage_V']:.4g} V, SNR {r['snr']:.4g}, bandwidth "
                    f"{r['bandwidth_Hz']:.4g} Hz, resonance {r['resonance_Hz']:.4g} Hz, "
                    f"precompression {r['precompression_N']:.4g} N (wave speed "
                    f"{100 * r['wave_speed_change']:+.3g} %)")
     return {**out, "design": designs[best].index,
+            "at_range_edge": [column_name(k) for k, _, _ in edges],
             "parameters": {column_name(k): v for k, v in designs[best].values},
             "metrics": {m: r[m] for m in METRICS}, "reasons": reasons}
 
 
+def range_edges(designs: Sequence[Design], best: int) -> list[tuple[str, float, str]]:
+    """Numeric parameters (3 or more swept values) whose best value is the sweep's min or max.
+
+    Returns
+    -------
+    list of (parameter, value, "lower end" | "upper end")
+    """
+    out = []
+    for j, (key, v) in enumerate(designs[best].values):
+        values = {d.values[j][1] for d in designs}
+        if isinstance(v, str) or len(values) < 3:
+            continue
+        if v == min(values):
+            out.append((key, float(v), "lower end"))
+        elif v == max(values):
+            out.append((key, float(v), "upper end"))
+    return out
+
+
 def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
-                best: int | None) -> None:
-    """Sensitivity against precompression and against bandwidth, Pareto fronts marked."""
+                best: int | None, objective: str = "snr") -> None:
+    """The objective against precompression and against bandwidth, Pareto fronts marked."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     ok = [i for i, r in enumerate(rows) if r["status"] == "ok"]
-    s = np.array([abs(rows[i]["sensitivity_Wb_per_N"]) for i in ok])
+    s = np.array([abs(rows[i][objective]) for i in ok])
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), constrained_layout=True)
     for ax, key, better, label in (
             (axes[0], "precompression_N", "min", "magnetic precompression (N)"),
@@ -126,7 +156,7 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
                 k = [designs[i].index for i in ok].index(best)
                 ax.plot(x[k], s[k], "*", c="C3", ms=14, label=f"recommended ({best})")
         ax.set_xlabel(label)
-        ax.set_ylabel("|sensitivity| Σ ∂Λ/∂F_c (Wb/N)")
+        ax.set_ylabel(LABELS.get(objective, objective))
         ax.legend(fontsize=8)
     fig.suptitle(f"{len(ok)} designs ({len(rows) - len(ok)} failed)")
     buf = io.BytesIO()
@@ -135,4 +165,5 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
     atomic_write_bytes(path, buf.getvalue())
 
 
-__all__ = ["METRICS", "column_name", "csv_text", "pareto_mask", "pareto_plot", "recommend"]
+__all__ = ["LABELS", "METRICS", "column_name", "csv_text", "pareto_mask", "pareto_plot",
+           "range_edges", "recommend"]

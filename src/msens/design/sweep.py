@@ -75,7 +75,7 @@ MAGNET_PARAMETERS: dict[str, tuple[str, float, float]] = {
 }
 #: Most designs a sweep may hold (a guard against typos such as num = 1e6).
 MAX_DESIGNS = 200_000
-OBJECTIVES = ("snr", "peak_emf_V", "sensitivity_Wb_per_N")
+OBJECTIVES = ("snr", "peak_voltage_V", "peak_emf_V", "bandwidth_Hz")
 
 
 @dataclass(frozen=True)

@@ -45,6 +45,9 @@ def atomic_write_bytes(path: str | os.PathLike[str], content: bytes, overwrite: 
             fh.write(content)
             fh.flush()
             os.fsync(fh.fileno())
+        umask = os.umask(0)  # mkstemp makes 0600: give the file the usual permissions
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         if overwrite:
             os.replace(tmp, p)
         else:

@@ -1,0 +1,120 @@
+"""Physics MsS read-out: chain contact forces -> coil EMF -> voltage at the DAQ.
+
+The transducer (:mod:`msens.magnetics.transducer`) gives each contact's Villari sensitivity
+∂Λ/∂F_c and contact-approach sensitivity ∂Λ/∂δ_c; the EMF is
+V = -Σ_c [(∂Λ/∂F_c) dF_c/dt + (∂Λ/∂δ_c) dδ_c/dt]. The read-out circuit (coil resistance and
+bias-point inductance, winding capacitance, cable, DAQ input; :mod:`msens.electronics`) then
+shapes it: :func:`readout` is the one place a coil's circuit is built, for runs and design
+sweeps alike. The *flux change* ΔΛ(t) — what an integrated coil voltage measures — divided by
+Σ_c ∂Λ/∂F_c (both mechanisms, at the reference load) is a sensitivity-weighted mean contact
+force in newtons, comparable with the paper's four-contact average.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from msens.coil import Winding, winding_capacitance, winding_from_coil
+from msens.electronics import NoiseModel, ReadoutCircuit, daq_voltage, noise_rms
+from msens.field.geometry import Coil
+from msens.magnetics.transducer import Transducer, contact_rates, emf_from_rates
+from msens.study import ElectronicsSpec
+
+
+@dataclass(frozen=True)
+class MssRecord:
+    """What one physics MsS produces for one chain run.
+
+    Attributes
+    ----------
+    t : ndarray, shape (nt,)
+        Chain output times, s.
+    flux : ndarray, shape (nt,)
+        Change of the coil's flux linkage ΔΛ(t), Wb.
+    weighted_force : ndarray, shape (nt,)
+        ΔΛ / Σ_c ∂Λ/∂F_c, N: the sensitivity-weighted mean dynamic contact force.
+    emf : ndarray, shape (nt,)
+        Open-circuit EMF, V.
+    t_daq, voltage : ndarray, shape (m,)
+        DAQ sampling instants (s) and the voltage recorded there (V).
+    circuit : ReadoutCircuit
+    """
+
+    t: np.ndarray
+    flux: np.ndarray
+    weighted_force: np.ndarray
+    emf: np.ndarray
+    t_daq: np.ndarray
+    voltage: np.ndarray
+    circuit: ReadoutCircuit
+
+
+def winding_of(coil: Coil) -> Winding:
+    """The :mod:`msens.coil` winding of a field-model coil (same wire, packing, size)."""
+    return winding_from_coil(coil.turns, coil.length, coil.inner_radius, coil.wire.name,
+                             coil.packing_factor, insulated_diameter=coil.wire.insulated_diameter)
+
+
+def readout(coil: Coil, resistance: float, inductance: float,
+            electronics: ElectronicsSpec) -> ReadoutCircuit:
+    """A coil's read-out circuit: its R (Ω) and bias-point L (H), the winding capacitance
+    estimate of :mod:`msens.coil`, the study's cable and DAQ input."""
+    return ReadoutCircuit(resistance=resistance, inductance=inductance,
+                          winding_capacitance=winding_capacitance(winding_of(coil)),
+                          cable_capacitance=electronics.cable_capacitance_f,
+                          input_resistance=electronics.input_resistance_ohm,
+                          input_capacitance=electronics.input_capacitance_f)
+
+
+def noise_model(electronics: ElectronicsSpec) -> NoiseModel | None:
+    """The study's noise settings, or None when every source is off."""
+    if not (electronics.johnson_noise or electronics.adc_bits
+            or electronics.input_noise_v_per_rthz > 0):
+        return None
+    # Johnson noise is generated at temperature_K; a zero temperature switches it off.
+    return NoiseModel(temperature_K=electronics.temperature_k if electronics.johnson_noise
+                      else 0.0,
+                      adc_bits=electronics.adc_bits, adc_range_V=electronics.adc_range_v,
+                      input_noise_V_per_rtHz=electronics.input_noise_v_per_rthz)
+
+
+def figure_noise_rms(circuit: ReadoutCircuit, electronics: ElectronicsSpec) -> float:
+    """RMS noise at the DAQ for figures of merit, V: Johnson noise of the circuit at the
+    study's temperature (whether or not the study adds it to its records), the DAQ's input
+    noise and quantisation, over all frequencies (per sample)."""
+    noise = NoiseModel(temperature_K=electronics.temperature_k, adc_bits=electronics.adc_bits,
+                       adc_range_V=electronics.adc_range_v,
+                       input_noise_V_per_rtHz=electronics.input_noise_v_per_rthz)
+    return noise_rms(circuit, noise, sample_rate=electronics.sample_rate_hz)
+
+
+def mss_record(transducer: Transducer, circuit: ReadoutCircuit, t: np.ndarray,
+               force: np.ndarray, electronics: ElectronicsSpec, *,
+               static: np.ndarray | None = None, seed_offset: int = 0) -> MssRecord:
+    """Coil signals of one physics MsS for contact forces ``force`` (nt, n), N.
+
+    Parameters
+    ----------
+    static : ndarray, shape (n,), optional
+        Static contact forces, N; default the first sample.
+    seed_offset : int
+        Added to the study's noise seed so that two coils get independent noise.
+    """
+    contacts = np.asarray(transducer.contacts, dtype=int)
+    use = contacts <= force.shape[1]
+    base = force[0] if static is None else static
+    cols = contacts[use] - 1
+    delta = (np.clip(force[:, cols], 0.0, None) / transducer.contact_stiffness) ** (2 / 3)
+    delta0 = (np.clip(base[cols], 0.0, None) / transducer.contact_stiffness) ** (2 / 3)
+    flux = ((force[:, cols] - base[cols]) @ transducer.sensitivity_villari[use]
+            + (delta - delta0) @ transducer.dlambda_dapproach[use])
+    total = float(np.sum(transducer.sensitivity("both")[use]))
+    rates = contact_rates(t, force, contacts, transducer.contact_stiffness)
+    e = emf_from_rates(rates, transducer.sensitivity_villari, transducer.dlambda_dapproach)
+    t_daq, v = daq_voltage(circuit, t, e, electronics.sample_rate_hz,
+                           noise=noise_model(electronics),
+                           rng=electronics.seed + seed_offset)
+    return MssRecord(t=t, flux=flux, weighted_force=flux / total if total else flux * np.nan,
+                     emf=e, t_daq=t_daq, voltage=v, circuit=circuit)

@@ -1,0 +1,249 @@
+"""Small sources at the bias point, their incremental potentials and their flux linkage.
+
+Every MsS mechanism is a small source in the linearised (tangent) problem at the bias point,
+K_t a_s = f_s, with K_t the tangent stiffness (incremental permeability):
+
+- Villari: a bead's stress-induced magnetisation ΔM, f = ∫ ν_t μ0 ΔM · B(v) r dr dz
+  (:func:`msens.magnetics.villari.villari_sources`);
+- contact approach: the beads above a contact moving toward the wall, f = -∂R/∂δ_c, the
+  derivative of the bias residual on morphed meshes
+  (:func:`msens.magnetics.approach.approach_residuals`).
+
+The coil is air, so its position and size do not enter a_s: the flux-linkage change of ANY
+coil of N turns on the rectangle [r0, r1] × [z0, z1] is (N/S) ∫∫ 2π r a_s dr dz. One
+factorisation of K_t and one back-substitution per source therefore serve the run's coils
+(exact mesh quadrature over the coil region, :func:`region_linkage`) and every coil of a
+design sweep (a summed-area table, :func:`linkage_table` and :func:`rect_integral`). Because
+K_t is symmetric, this equals the adjoint reading ΔΛ = μ0 ∫ h1 · ΔM dV with the coil's own
+incremental field h1 (the check in :mod:`msens.magnetics.transducer`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import matplotlib.tri as mtri
+import numpy as np
+import scipy.sparse as sp
+
+from msens.errors import require
+from msens.field.assembly import assemble_matrix, assemble_vector, factorize
+from msens.field.constitutive import reluctivities, tangent
+from msens.field.forms import element_stiffness, flux_density_qp
+from msens.field.solve import FieldSolution
+from msens.units import TWO_PI
+
+
+class TangentOperator:
+    """The factorised tangent stiffness K_t at a bias point, for many right-hand sides.
+
+    Parameters
+    ----------
+    sol : FieldSolution
+        Nonlinear bias solution.
+    """
+
+    def __init__(self, sol: FieldSolution):
+        d = sol.disc
+        b0 = flux_density_qp(d.quad, sol.a)
+        nu, nu_d = reluctivities(d.materials, b0)
+        self.sol = sol
+        #: tangent reluctivity at the quadrature points, shape (n_el, n_qp, 2, 2), m/H
+        self.nu_t = tangent(b0, nu, nu_d)
+        _, ff = assemble_matrix(d.pattern, element_stiffness(d.quad, self.nu_t))
+        self._lu = factorize(ff)
+
+    def magnetisation_rhs(self, elements: np.ndarray, mu0_dm: np.ndarray) -> np.ndarray:
+        """Load vector ∫ ν_t μ0 ΔM · B(v) r dr dz (per radian) of a magnetisation source.
+
+        Parameters
+        ----------
+        elements : ndarray of int, shape (k,)
+        mu0_dm : ndarray, shape (k, n_qp, 2)
+            μ0 ΔM at the elements' quadrature points, T (per unit of the source's scale).
+
+        Returns
+        -------
+        ndarray, shape (n_dofs,)
+        """
+        d = self.sol.disc
+        q = d.quad
+        src = np.einsum("eqcd,eqd->eqc", self.nu_t[elements], mu0_dm)
+        fe = np.einsum("eqic,eqc->ei", q.g[elements], src * q.w[elements][..., None])
+        return assemble_vector(q.dofs[:, elements], fe, d.basis.N)
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """Potentials of load vectors, A = 0 on the Dirichlet boundary.
+
+        Parameters
+        ----------
+        rhs : ndarray, shape (n_src, n_dofs)
+
+        Returns
+        -------
+        ndarray, shape (n_src, n_dofs)
+            A_φ dofs, T m per unit source.
+        """
+        rhs = np.atleast_2d(rhs)
+        free = self.sol.disc.pattern.free
+        out = np.zeros_like(rhs, dtype=float)
+        if free.size and rhs.shape[0]:
+            out[:, free] = self._lu.solve(np.ascontiguousarray(rhs[:, free].T)).T
+        return out
+
+    def solve_magnetisation(self, elements: np.ndarray, mu0_dm: np.ndarray) -> np.ndarray:
+        """Dofs of the linearised field of one magnetisation source, shape (n_dofs,)."""
+        return self.solve(self.magnetisation_rhs(elements, mu0_dm))[0]
+
+
+def region_linkage(sol: FieldSolution, potentials: np.ndarray, region: str, turns: int,
+                   area: float) -> np.ndarray:
+    """(N/S) ∫_region 2π r A dS for each potential, exact mesh quadrature, Wb per unit.
+
+    Parameters
+    ----------
+    sol : FieldSolution
+        Gives the mesh, its subdomains and the quadrature.
+    potentials : ndarray, shape (n, n_dofs) or (n_dofs,)
+    region : str
+        Mesh subdomain of the winding (``coil_<particle>``).
+    turns : int
+    area : float
+        Winding cross-section S, m².
+
+    Returns
+    -------
+    ndarray, shape (n,) (a float for one potential)
+    """
+    el = sol.problem.mesh.subdomains[region]
+    q = sol.disc.quad
+    pot = np.atleast_2d(potentials)
+    a = np.einsum("eqi,nie->neq", q.phi[el], pot[:, q.dofs[:, el]])
+    out = turns / area * TWO_PI * np.sum(a * q.w[el], axis=(1, 2))
+    return out if np.ndim(potentials) == 2 else float(out[0])
+
+
+def adjoint_linkage(h_coil: np.ndarray, elements: np.ndarray, mu0_dm: np.ndarray,
+                    weights: np.ndarray) -> float:
+    """μ0 ∫ h1 · ΔM dV over ``elements`` (the adjoint reading of reciprocity), Wb per unit.
+
+    Parameters
+    ----------
+    h_coil : ndarray, shape (n_el, n_qp, 2)
+        The coil's incremental H per ampere at every quadrature point, 1/m.
+    elements : ndarray of int, shape (k,)
+    mu0_dm : ndarray, shape (k, n_qp, 2)
+        μ0 ΔM, T.
+    weights : ndarray, shape (n_el, n_qp)
+        Quadrature weights (r dr dz included), m³ per radian.
+    """
+    return TWO_PI * float(np.sum(np.einsum("eqc,eqc->eq", h_coil[elements], mu0_dm)
+                                 * weights[elements]))
+
+
+# ----------------------------------------------------------------------------- table
+
+@dataclass(frozen=True)
+class LinkageTable:
+    """Summed-area table of f_s(r, z) = 2π r A_s(r, z) on a regular grid.
+
+    Attributes
+    ----------
+    r, z : ndarray, shapes (nr,), (nz,)
+        Grid lines, m.
+    cumulative : ndarray, shape (n_sources, nr, nz)
+        I_s(r_j, z_k) = ∫_{r_0}^{r_j} ∫_{z_0}^{z_k} f_s dz dr (trapezoidal), Wb per unit.
+    """
+
+    r: np.ndarray
+    z: np.ndarray
+    cumulative: np.ndarray
+
+
+def _cumtrapz(f: np.ndarray, h: float, axis: int) -> np.ndarray:
+    f = np.moveaxis(f, axis, -1)
+    out = np.zeros_like(f)
+    out[..., 1:] = np.cumsum(0.5 * h * (f[..., 1:] + f[..., :-1]), axis=-1)
+    return np.moveaxis(out, -1, axis)
+
+
+def p2_probes(basis, r: np.ndarray, z: np.ndarray) -> sp.csr_matrix:
+    """Sparse evaluation matrix of a P2 field on straight triangles at points, (n_pts, N).
+
+    Point location by matplotlib's trapezoid-map finder (fast for many points); P2 shape
+    functions in barycentric coordinates λ: λ_i(2λ_i − 1) at the vertices, 4 λ_i λ_j on the
+    edges (0,1), (1,2), (0,2) — scikit-fem's local dof order for ElementTriP2 (checked against
+    ``basis.probes`` in the tests).
+    """
+    mesh = basis.mesh
+    tri = mtri.Triangulation(mesh.p[0], mesh.p[1], mesh.t.T)
+    e = tri.get_trifinder()(r, z)
+    require(bool(np.all(e >= 0)), "internal: linkage-table points outside the field mesh")
+    p0, p1, p2 = (mesh.p[:, mesh.t[k, e]] for k in range(3))
+    det = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1])
+    l1 = ((r - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (z - p0[1])) / det
+    l2 = ((p1[0] - p0[0]) * (z - p0[1]) - (r - p0[0]) * (p1[1] - p0[1])) / det
+    l0 = 1.0 - l1 - l2
+    shape = np.stack([l0 * (2 * l0 - 1), l1 * (2 * l1 - 1), l2 * (2 * l2 - 1),
+                      4 * l0 * l1, 4 * l1 * l2, 4 * l0 * l2])
+    rows = np.broadcast_to(np.arange(r.size), shape.shape)
+    return sp.csr_matrix((shape.ravel(), (rows.ravel(), basis.element_dofs[:, e].ravel())),
+                         shape=(r.size, basis.N))
+
+
+def linkage_table(sol: FieldSolution, potentials: np.ndarray, r_range: tuple[float, float],
+                  z_range: tuple[float, float], spacing: float = 0.1e-3) -> LinkageTable:
+    """Tabulate the potentials' flux per unit area over a rectangle of the (r, z) plane.
+
+    Parameters
+    ----------
+    sol : FieldSolution
+        Gives the mesh and basis of ``potentials``.
+    potentials : ndarray, shape (n_sources, n_dofs)
+    r_range, z_range : (float, float)
+        Region every coil design lies in, m (inside the mesh).
+    spacing : float
+        Grid spacing, m (the rectangle integrals converge as spacing²).
+    """
+    (r0, r1), (z0, z1) = r_range, z_range
+    require(0 <= r0 < r1 and z0 < z1, f"internal: bad table ranges r {r_range}, z {z_range}")
+    nr = max(2, int(np.ceil((r1 - r0) / spacing)) + 1)
+    nz = max(2, int(np.ceil((z1 - z0) / spacing)) + 1)
+    r = np.linspace(r0, r1, nr)
+    z = np.linspace(z0, z1, nz)
+    rr, zz = np.meshgrid(r, z, indexing="ij")
+    probe = p2_probes(sol.basis, rr.ravel(), zz.ravel())
+    a = (probe @ potentials.T).T.reshape(len(potentials), nr, nz)
+    f = TWO_PI * rr[None] * a
+    cum = _cumtrapz(_cumtrapz(f, r[1] - r[0], 1), z[1] - z[0], 2)
+    return LinkageTable(r=r, z=z, cumulative=cum)
+
+
+def _interp_weights(grid: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    h = grid[1] - grid[0]
+    t = (np.asarray(x, dtype=float) - grid[0]) / h
+    require(bool(np.all((t >= -1e-9) & (t <= grid.size - 1 + 1e-9))),
+            f"internal: coil edge outside the linkage table {grid[0]:.4g}..{grid[-1]:.4g} m")
+    i = np.clip(np.floor(t).astype(int), 0, grid.size - 2)
+    return i, np.clip(t - i, 0.0, 1.0)
+
+
+def rect_integral(table: LinkageTable, r0: np.ndarray, r1: np.ndarray, z0: np.ndarray,
+                  z1: np.ndarray) -> np.ndarray:
+    """∫_{r0}^{r1} ∫_{z0}^{z1} 2π r A_s dz dr for many rectangles, shape (n_rect, n_sources).
+
+    Bilinear interpolation of the summed-area table at the four corners.
+    """
+    c = table.cumulative
+
+    def corner(rv, zv):
+        i, u = _interp_weights(table.r, rv)
+        j, v = _interp_weights(table.z, zv)
+        return ((1 - u) * (1 - v) * c[:, i, j] + u * (1 - v) * c[:, i + 1, j]
+                + (1 - u) * v * c[:, i, j + 1] + u * v * c[:, i + 1, j + 1]).T
+
+    return corner(r1, z1) - corner(r0, z1) - corner(r1, z0) + corner(r0, z0)
+
+
+__all__ = ["LinkageTable", "TangentOperator", "adjoint_linkage", "linkage_table",
+           "p2_probes", "rect_integral", "region_linkage"]

@@ -103,3 +103,54 @@ def test_compare_mss_data_against_bead_study_exit_2(tmp_path, capsys):
     assert "mss@13, mss@18 of the data have no sensor" in err
     assert "bead (bead@13, bead@18)" in err
     assert "Traceback" not in err and err.count("\n") == 1
+
+
+def _flat_waveform(path, kind, units="V"):
+    """A silent two-channel record at particles 13 and 18 (the channels are what matters)."""
+    from msens.io.read import write_waveform
+    from msens.io.waveform import Channel, Waveform
+
+    write_waveform(Waveform(time=np.arange(200) * 1e-7, data=np.zeros((200, 2)),
+                            channels=(Channel(kind, 13), Channel(kind, 18)),
+                            metadata={"units": units}), path)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("study", "kind", "units", "fragment"),
+    [
+        # the physics study's run: ~1 s with the transducer cache in meshes/, 10-40 s cold
+        ("paper-mss", "bead", "V", "bead@13, bead@18 of the data have no sensor in study "
+                                   "'paper-mss'; data has bead@13, bead@18; study setups: "
+                                   "paper-mss (mss@13, mss@18)"),
+        ("bead-only", "mss", "V", "mss@13, mss@18 of the data have no sensor in study "
+                                  "'paper-table2'"),
+        ("paper-mss", "mss", "mV", "the data's metadata say units: mV"),
+    ],
+)
+def test_compare_bad_data_fails_before_the_run(tmp_path, capsys, monkeypatch, study, kind,
+                                               units, fragment):
+    """Data that cannot match the study are rejected from the study file, before anything
+    is simulated: exit 2 and one line, in well under the run's time."""
+    import time
+
+    from msens import api
+    from msens.study import default_study_path
+
+    def no_run(*args, **kwargs):  # a warm cache makes the run fast: timing alone can't tell
+        raise AssertionError("compare ran the study before checking the data")
+
+    monkeypatch.setattr(api, "run_study", no_run)
+
+    path = (default_study_path() if study == "paper-mss"
+            else _study(tmp_path, GOOD.split('[[setup]]\nname = "rod"')[0]))
+    data = _flat_waveform(tmp_path / "data.csv", kind, units)
+    start = time.perf_counter()
+    code = main(["compare", str(path), str(data), "--out", str(tmp_path / "cmp")])
+    elapsed = time.perf_counter() - start
+    err = capsys.readouterr().err
+    assert code == 2
+    assert fragment in err
+    assert "Traceback" not in err and err.count("\n") == 1
+    assert elapsed < 5.0, f"compare took {elapsed:.1f} s to reject the data"
+    assert not (tmp_path / "cmp" / "compare.json").exists()

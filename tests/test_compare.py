@@ -100,3 +100,13 @@ def test_gain_unit_and_truncated_record(result, name, unit):
     cut = Waveform(waveform.time[:2500], waveform.data[:2500], waveform.channels)
     with pytest.raises(InputError, match="no reflected pulse in the record"):
         compare(result, cut)
+
+
+@pytest.mark.parametrize("unit", ["N/V", "N/(V s)", "V/V"])
+def test_format_comparison_shows_gain_unit(unit):
+    stat = {"mean": 1.5, "std": 0.0}
+    report = {"setup": "s", "shots": 1, "channels": [{
+        "channel": "mss@13", "gain_unit": unit, "model": {"tof_us": 288.0, "ar": 0.7},
+        "measured": {k: stat for k in ("gain", "tof_us", "ar", "nrmse", "correlation")}}]}
+    row = api.format_comparison(report).splitlines()[3]
+    assert row.startswith(f"mss@13     {1.5:>10} {unit:<7} ")

@@ -239,15 +239,28 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
 
 def compare(study: Study, data: Path, out: Path) -> tuple[dict, list[Path]]:
     """Compare measured ``data`` with the model of ``study``; write ``compare.json`` and an
-    overlay figure into ``out``."""
+    overlay figure into ``out``.
+
+    The data's unit and channels are checked against the study file before anything is
+    simulated, so mismatched data fail in about a second instead of after the study's run.
+
+    Raises
+    ------
+    InputError
+        If ``out`` holds user files of the same names, the data's metadata give a unit
+        other than V, no setup of the study has exactly the data's sensors, or a record
+        has no pulse to compare.
+    """
     from msens import plots
+    from msens.compare import check_units, match_setup, match_setup_spec, shot_records
     from msens.compare import compare as compare_records
-    from msens.compare import match_setup, shot_records
     from msens.io.read import read_waveform
 
     target = OutputDir(out)
     target.check(["compare.json", "overlay.png"])
     waveform = read_waveform(data)
+    check_units(waveform)
+    match_setup_spec(study, waveform)
     result = run_study(study)
     report = compare_records(result, waveform)
     report["data"] = str(data)
@@ -260,13 +273,20 @@ def compare(study: Study, data: Path, out: Path) -> tuple[dict, list[Path]]:
 
 
 def format_comparison(report: dict) -> str:
-    """Plain-text table of a comparison report."""
-    head = f"{'channel':<10} {'K':>10} {'TOF us':>16} {'AR':>14} {'nRMSE':>7} {'corr':>6}"
+    """Plain-text table of a comparison report (the content of ``compare.json``).
+
+    The conversion factor K is printed with its unit (``gain_unit``): N/V for bead and rod
+    channels, N/(V s) for a four-contact MsS, V/V for a physics MsS. TOF and AR are those
+    of the compared records (for a physics MsS, of its integrated DAQ voltage).
+    """
+    # K's unit follows its value in a column of its own: a channel's K is one quantity
+    head = (f"{'channel':<10} {'K':>10} {'':<7} {'TOF us':>16} {'AR':>14} "
+            f"{'nRMSE':>7} {'corr':>6}")
     lines = [f"setup {report['setup']}, {report['shots']} shot(s)", head, "-" * len(head)]
     for ch in report["channels"]:
         m, s = ch["model"], ch["measured"]
         lines.append(
-            f"{ch['channel']:<10} {s['gain']['mean']:>10.4g} "
+            f"{ch['channel']:<10} {s['gain']['mean']:>10.4g} {ch.get('gain_unit', '?'):<7} "
             f"{s['tof_us']['mean']:>7.1f} ({m['tof_us']:>6.1f}) "
             f"{s['ar']['mean']:>6.3f} ({m['ar']:>5.3f}) {s['nrmse']['mean']:>7.4f} "
             f"{s['correlation']['mean']:>6.3f}")

@@ -164,7 +164,7 @@ def _positions(sensors: tuple[SensorSpec, ...]) -> list[str]:
 def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static: np.ndarray,
                  transducers: dict, study: Study, index: int) -> SensorResult:
     from msens.fieldsetup import coil_geometry
-    from msens.magnetics.mss import mss_record, readout
+    from msens.magnetics.mss import mss_record, readout, voltage_on
     from msens.study import CoilSpec
 
     tr = transducers[sensor.particle]
@@ -172,7 +172,7 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
     circuit = readout(coil, tr.resistance_ohm, tr.inductance_H, study.electronics)
     rec = mss_record(tr, circuit, history.t, history.force, study.electronics,
                      static=static, seed_offset=index)
-    voltage = np.interp(history.t, rec.t_daq, rec.voltage)
+    voltage = voltage_on(rec)
     return SensorResult(sensor=sensor, position=position, force=rec.weighted_force,
                         voltage_shape=voltage,
                         features=pulse_features(rec.weighted_force, history.t), mss=rec)

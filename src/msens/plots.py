@@ -8,6 +8,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.legend_handler import HandlerTuple
 
 from msens.pipeline import SetupResult, StudyResult
 
@@ -122,36 +123,103 @@ def close(fig: Figure) -> None:
     plt.close(fig)
 
 
+def _overlay_quantity(sensor) -> tuple[str, float, str]:
+    """Axis quantity of a compared channel: (name, scale to plotted units, unit).
+
+    A physics MsS is compared as its integrated DAQ voltage, ~1e-5 V s: plotted in µV s so
+    the axis needs no offset exponent. Bead, rod and four-contact MsS records are forces, N.
+    """
+    from msens.synth import is_physics_mss
+
+    if is_physics_mss(sensor):
+        return "integrated DAQ voltage", 1e6, "µV s"
+    return "force", 1.0, "N"
+
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _overlay_number(x: float) -> str:
+    """Four significant digits, as 6.966×10⁵ rather than 6.966e+05 outside 1e-3 .. 1e4."""
+    if x == 0 or not np.isfinite(x) or 1e-3 <= abs(x) < 1e4:
+        return f"{x:#.4g}"
+    exp = int(np.floor(np.log10(abs(x))))
+    mant = f"{x / 10.0**exp:#.4g}"
+    if mant.lstrip("-").startswith("10."):  # rounding reached the next decade
+        exp, mant = exp + 1, f"{x / 10.0**(exp + 1):#.4g}"
+    return f"{mant}×10{str(exp).translate(_SUPERSCRIPT)}"
+
+
 def overlay(setup: SetupResult, shots: list, t_max_s: float | None = None) -> Figure:
-    """Calibrated measurement (first shot, and the shot mean) over the model, per channel,
-    like the paper's Fig. 7(b, d, f).
+    """Calibrated measurement over the model, one panel per channel, like the paper's
+    Fig. 7(b, d, f).
+
+    Each panel shows the measured record (the mean over shots, with a ±1 standard deviation
+    band when there are several) and the model record it was compared with, processed the
+    same way (:func:`msens.compare.model_record`): force in N for bead, rod and four-contact
+    MsS channels; the integrated DAQ voltage in µV s for a physics MsS.
 
     Parameters
     ----------
     setup : SetupResult
+        The setup the data were matched to.
     shots : list of list of msens.compare.ShotRecord
+        Aligned and calibrated records, per shot and channel (:func:`msens.compare.shot_records`).
+    t_max_s : float, optional
+        Last time shown, s after impact (default: the whole model record).
+
+    Returns
+    -------
+    Figure
     """
+    from msens.compare import gain_unit, model_record
+
     sensors = setup.sensors
-    fig, axes = plt.subplots(len(sensors), 1, figsize=(7, 2.6 * len(sensors)), sharex=True,
-                             squeeze=False)
+    fig, axes = plt.subplots(len(sensors), 1, figsize=(7, 2.5 * len(sensors) + 0.6),
+                             sharex=True, squeeze=False)
     t = setup.history.t
     m = np.ones(t.size, bool) if t_max_s is None else t <= t_max_s
+    t_us = t[m] * _US
+    handles: dict = {}  # legend label -> artist(s), first panel's wins
     for ax, sensor in zip(axes[:, 0], sensors, strict=True):
+        name = f"{sensor.sensor.kind.value}@{sensor.sensor.particle}"
         recs = [r for shot in shots for r in shot
                 if r.channel.kind == sensor.sensor.kind.value
                 and r.channel.particle == sensor.sensor.particle]
-        stack = np.array([r.force for r in recs])
-        covered = np.all(np.isfinite(stack), axis=0)  # samples every shot covers
-        ax.plot(t[m] * _US, recs[0].force[m], color="0.7", lw=0.8, label="measured, shot 1")
-        if len(recs) > 1:
-            ax.plot(t[m] * _US, np.where(covered, stack.mean(axis=0), np.nan)[m], "k", lw=1.2,
-                    label=f"measured, mean of {len(recs)}")
-        ax.plot(t[m] * _US, sensor.force[m], "r--", lw=1.2, label="model")
-        ax.set_ylabel(f"{sensor.sensor.kind.value}@{sensor.sensor.particle} (N)")
+        quantity, scale, unit = _overlay_quantity(sensor)
+        # the record the measurement was calibrated against, not the chain force: for a
+        # physics MsS these differ in unit (V s against N)
+        model = next((r.model for r in recs if r.model is not None), None)
+        if model is None:
+            model = model_record(sensor, t)
+        if recs:
+            stack = np.array([r.force for r in recs]) * scale
+            # samples every shot covers: a mean over fewer shots would jump at the edges
+            covered = np.all(np.isfinite(stack), axis=0)
+            mean = np.where(covered, stack.mean(axis=0), np.nan)[m]
+            (line,) = ax.plot(t_us, mean, color="k", lw=0.9, gid="measured")
+            handle, label = line, "measured"
+            if len(recs) > 1:
+                std = np.where(covered, stack.std(axis=0, ddof=1), np.nan)[m]
+                band = ax.fill_between(t_us, mean - std, mean + std, color="0.7", lw=0,
+                                       gid="measured scatter")
+                # one legend entry: the band drawn under the mean line
+                handle, label = (band, line), f"measured, mean ± 1 s.d. of {len(recs)} shots"
+            handles.setdefault(label, handle)
+            gain = float(np.mean([r.gain for r in recs]))
+            ax.set_title(f"K = {_overlay_number(gain)} {gain_unit(sensor)}", loc="right",
+                         fontsize=9)
+        (line,) = ax.plot(t_us, model[m] * scale, color="C3", ls="--", lw=1.1, gid="model")
+        handles.setdefault("model", line)
+        ax.set_ylabel(f"{quantity} ({unit})")
+        ax.set_title(name, loc="left", fontsize=9)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right")
+    axes[0, 0].legend(list(handles.values()), list(handles), fontsize=8, loc="upper right",
+                      handler_map={tuple: HandlerTuple(ndivide=1)})
     axes[-1, 0].set_xlabel("time since impact (µs)")
-    fig.suptitle(f"Measured (calibrated, aligned) vs model: setup {setup.setup.name}")
+    axes[-1, 0].set_xlim(t_us[0], t_us[-1])
+    fig.suptitle(f"Measured (aligned, calibrated) and model records: setup "
+                 f"{setup.setup.name}", fontsize=10)
     fig.tight_layout()
     return fig
 

@@ -11,12 +11,20 @@ from msens.assemble import build_chain
 from msens.chain.model import DampingLaw
 from msens.diagnose.effects import NAMES, Context, FirstOrderLowpass, get, registry
 from msens.diagnose.predict import _sim_key, baseline_state
-from msens.study import PAPER_TABLE2, builtin_study_path, load_study
+from msens.study import PAPER_TABLE2, builtin_study_path, default_study_path, load_study
+
+#: Effects of a physics MsS (its field model): tried on the main study.
+PHYSICS_EFFECTS = ("magnet_remanence", "coil_position", "cable_capacitance")
 
 
 @pytest.fixture(scope="module")
 def study():
     return load_study(builtin_study_path(PAPER_TABLE2))
+
+
+@pytest.fixture(scope="module")
+def mss_study():
+    return load_study(default_study_path())
 
 
 def _base(study, setup):
@@ -25,7 +33,7 @@ def _base(study, setup):
 
 
 def _fingerprint(state):
-    return (_sim_key(state), state.particles, state.post)
+    return (_sim_key(state), state.particles, state.post, state.physics)
 
 
 def test_registry_holds_the_fixed_names_in_order():
@@ -33,20 +41,37 @@ def test_registry_holds_the_fixed_names_in_order():
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_every_effect_has_bounded_si_parameters_and_a_baseline(study, name):
-    ctx, base = _base(study, "mss")
+def test_every_effect_has_bounded_si_parameters_and_a_baseline(study, mss_study, name):
+    ctx, base = (_base(mss_study, mss_study.setups[0].name) if name in PHYSICS_EFFECTS
+                 else _base(study, "mss"))
     effect = get(name)
+    assert effect.applies(ctx)
     space = effect.space(ctx, base)
     assert space and all(p.lower < p.upper for p in space)
     baseline = effect.baseline(ctx, base)
     assert set(baseline) == {p.name for p in space}
     # applying any in-bounds value gives a new, valid state (chains validate themselves)
-    mid = {p.name: (p.lower * p.upper) ** 0.5 if p.log else 0.5 * (p.lower + p.upper)
+    # a point off the middle (a symmetric range has its baseline there)
+    mid = {p.name: p.lower ** 0.7 * p.upper ** 0.3 if p.log else p.lower + 0.3 * (p.upper -
+                                                                                    p.lower)
            for p in space}
     if all(p.integer for p in space):
         mid = {p.name: int(p.upper) for p in space}  # the middle would be the nominal
     state = effect.apply(ctx, base, mid)
     assert _fingerprint(state) != _fingerprint(base)
+    # at its baseline values an effect changes nothing (where the baseline is exactly a value
+    # of the parameters: not a zero-width filter, nor forces rebuilt in floating point)
+    if name in ("wall_dissipation", "wall_stiffness", "striker_velocity", "coil_position",
+                "cable_capacitance"):
+        same = effect.apply(ctx, base, baseline)
+        assert _fingerprint(same) == _fingerprint(base)
+
+
+@pytest.mark.parametrize("name", PHYSICS_EFFECTS)
+def test_physics_effects_apply_to_physics_mss_only(study, mss_study, name):
+    assert get(name).applies(Context(mss_study, mss_study.setups[0]))
+    assert not get(name).applies(Context(study, study.setup("mss")))
+    assert not get("sensor_position").applies(Context(mss_study, mss_study.setups[0]))
 
 
 def test_unknown_effect_is_an_input_error():

@@ -16,7 +16,10 @@ Plausible ranges (paper setup: 0.376 m/s striker, steel wall, gamma_c ~ 2.2 kg/s
 - ``contact_damping_law``: gamma_HKK log-uniform in [1000, 4000] kg/(s m^0.5) (the linear
   gamma_c ~ 2.2 kg/s at a ~1.2 um approach);
 - ``daq_lowpass``: tau log-uniform in [0.5, 3] us (cut-off 53-320 kHz);
-- ``sensor_position``: one sensor (random) displaced by 1 or 2 particles (random sign).
+- ``sensor_position``: one sensor (random) displaced by 1 or 2 particles (random sign);
+- ``magnet_remanence``: nominal x (1 +- u), u uniform in [0.1, 0.4] (another grade or batch);
+- ``coil_position``: one physics MsS coil (random) off by 0.5-2 mm (random sign);
+- ``cable_capacitance``: log-uniform in [0.3, 3] nF (3-30 m of RG-58).
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from msens.diagnose.effects import Context, ModelState, get
+from msens.diagnose.effects.coil_position import names as coil_names
 from msens.diagnose.effects.sensor_position import names as position_names
 from msens.diagnose.predict import Predictor, setup_result
 from msens.io.waveform import Waveform
@@ -54,6 +58,16 @@ def draw(effect: str, ctx: Context, base: ModelState, rng: np.random.Generator) 
         return {"gamma_hkk_kg_per_s_m05": _log_uniform(rng, 1000.0, 4000.0)}
     if effect == "daq_lowpass":
         return {"lowpass_tau_s": _log_uniform(rng, 0.5e-6, 3e-6)}
+    if effect == "magnet_remanence":
+        return {"remanence_factor": float(1.0 + rng.choice([-1.0, 1.0])
+                                          * rng.uniform(0.1, 0.4))}
+    if effect == "coil_position":
+        params = dict.fromkeys(coil_names(ctx), 0.0)
+        key = str(rng.choice(sorted(params)))
+        params[key] = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.5e-3, 2e-3))
+        return params
+    if effect == "cable_capacitance":
+        return {"cable_capacitance_f": _log_uniform(rng, 0.3e-9, 3e-9)}
     if effect == "sensor_position":
         params = dict(zip(position_names(ctx), (int(p) for p in base.particles), strict=True))
         space = {p.name: p for p in get(effect).space(ctx, base)}
@@ -103,6 +117,16 @@ def hidden_case(ctx: Context, base: ModelState, predictor: Predictor,
         state = get(name).apply(ctx, state, params)
     rig = rig if rig is not None else RigEffects(seed=seed)
     return synthesize(setup_result(ctx, state, predictor), rig), truth
+
+
+def parameters_recovered(found: Mapping[str, float], truth: Mapping[str, float],
+                         tolerance: float) -> bool:
+    """Whether every true parameter is recovered within ``tolerance`` (relative); a
+    parameter whose truth is 0 (e.g. the offset of a coil that did not move) within
+    ``tolerance`` of the largest true value instead."""
+    scale = max((abs(v) for v in truth.values()), default=0.0)
+    return all(k in found and abs(found[k] - v) <= tolerance * (abs(v) if v else scale)
+               for k, v in truth.items())
 
 
 def without_precompression(study: Study) -> Study:

@@ -27,12 +27,12 @@ from scipy import fft
 from scipy.optimize import minimize_scalar
 
 from msens.compare import align_shot
-from msens.diagnose.predict import model_features_of, signal
+from msens.diagnose.predict import feature_records, model_features_of, signal
 from msens.errors import InputError
 from msens.io.waveform import Channel, Waveform
 from msens.pipeline import SetupResult
 from msens.sensors import SensorKind
-from msens.study import ReferenceRow, SetupSpec
+from msens.study import MssModel, ReferenceRow, SetupSpec
 
 #: Largest change of the impact-to-trigger offset searched per candidate model, s. A 3x
 #: faster striker moves the first arrival by less than this.
@@ -125,6 +125,8 @@ class WaveformObjective:
     def __init__(self, waveform: Waveform, baseline: SetupResult) -> None:
         setup = baseline.setup
         self.kinds = tuple(s.kind for s in setup.sensors)
+        #: Whether each sensor is a physics MsS (its model record is the DAQ voltage).
+        self.physics = tuple(s.model is MssModel.PHYSICS for s in setup.sensors)
         self.t = baseline.history.t
         self.dt = float(self.t[1] - self.t[0])
         t_end = float(self.t[-1])
@@ -169,8 +171,9 @@ class WaveformObjective:
     # ---------------------------------------------------------------- evaluation
 
     def signals(self, records: np.ndarray) -> np.ndarray:
-        """Model signals (sensors, nt) of force records (sensors, nt)."""
-        return np.array([signal(k, r, self.t) for k, r in zip(self.kinds, records, strict=True)])
+        """Model signals (sensors, nt) of model records (sensors, nt)."""
+        return np.array([signal(k, r, self.t, ph) for k, r, ph
+                         in zip(self.kinds, records, self.physics, strict=True)])
 
     def _rss_at(self, shot: Shot, sig: np.ndarray, delay: float) -> Alignment:
         m = np.array([np.interp(shot.tau + delay, self.t, s, left=0.0, right=0.0)
@@ -255,6 +258,7 @@ class FeatureObjective:
 
     def __init__(self, setup: SetupSpec, rows: dict[str, ReferenceRow],
                  positions: list[str], t: np.ndarray) -> None:
+        self.physics = tuple(s.model is MssModel.PHYSICS for s in setup.sensors)
         missing = [p for p in positions if p not in rows]
         if missing:
             raise InputError(f"setup {setup.name!r}: the study has no [reference] row for "
@@ -266,7 +270,7 @@ class FeatureObjective:
 
     def residuals(self, records: np.ndarray) -> np.ndarray:
         """Normalised residuals (sensors, 2): (TOF, AR) model minus measured over std."""
-        f = model_features_of(records, self.t)
+        f = model_features_of(feature_records(records, self.physics, self.t), self.t)
         out = np.empty((len(self.rows), 2))
         for j, r in enumerate(self.rows):
             out[j, 0] = (float(f.tof[j]) * 1e6 - r.tof_us) / r.tof_std_us

@@ -13,12 +13,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.integrate import cumulative_trapezoid
 
 from msens.assemble import build_chain
 from msens.chain.equilibrium import static_contact_forces
 from msens.chain.integrate import ChainResult, simulate_batch
 from msens.compare import smoothed_features as model_features_of
+from msens.diagnose import physics
 from msens.diagnose.effects.base import Context, ModelState
+from msens.features import pulse_features
+from msens.magnetics.mss import mss_signals, voltage_on
 from msens.pipeline import SensorResult, SetupResult
 from msens.sensors import SensorKind, observe, read_contacts, time_derivative
 
@@ -105,18 +109,35 @@ class Predictor:
 
 
 def _read_contacts(states: list[ModelState]) -> np.ndarray:
-    # The contacts that the sensors of states of one chain read (sorted).
-    return read_contacts([(kind, p) for s in states
-                          for kind, p in zip(s.kinds, s.particles, strict=True)],
-                         states[0].chain.n_particles)
+    # The 0-based contacts that the sensors of states of one chain read (sorted); a physics
+    # MsS reads every contact its transducer covers (1-based numbers there).
+    n = states[0].chain.n_particles
+    pairs = [(kind, p) for s in states
+             for kind, p, ph in zip(s.kinds, s.particles, _physics(s), strict=True)
+             if ph is None]
+    coils = [physics.sensor(ph).transducer.contacts - 1 for s in states
+             for ph in _physics(s) if ph is not None]
+    parts = ([read_contacts(pairs, n)] if pairs else []) + coils
+    both = np.unique(np.concatenate(parts))
+    return both[(both >= 0) & (both < n)].astype(int)
+
+
+def _physics(state: ModelState) -> tuple:
+    return state.physics or (None,) * len(state.particles)
 
 
 def observe_state(state: ModelState, force: np.ndarray, contacts: np.ndarray | None,
                   dt: float) -> np.ndarray:
-    """Sensor records (sensors, nt) of a state, N, from contact forces (nt, c): column j is
-    contact ``contacts[j]``, or contact j if ``contacts`` is None."""
-    out = np.array([observe(kind, force, p, contacts=contacts)
-                    for kind, p in zip(state.kinds, state.particles, strict=True)])
+    """Sensor records (sensors, nt) of a state from contact forces (nt, c): column j is the
+    0-based contact ``contacts[j]``, or contact j if ``contacts`` is None. Bead, rod and
+    four-contact MsS records are forces (N); a physics MsS record is its DAQ voltage (V)."""
+    t = np.arange(force.shape[0]) * dt
+    cols = None if contacts is None else np.asarray(contacts) + 1  # 1-based contact numbers
+    out = np.array([
+        observe(kind, force, p, contacts=contacts) if ph is None else
+        voltage_on(mss_signals(physics.sensor(ph), t, force, ph.electronics.sample_rate_hz,
+                               columns=cols))
+        for kind, p, ph in zip(state.kinds, state.particles, _physics(state), strict=True)])
     for op in state.post:
         out = op(out, dt)
     return out
@@ -129,17 +150,34 @@ def _sim_key(state: ModelState) -> tuple:
 
 
 def baseline_state(ctx: Context, gamma_contact: float, gamma_wall: float) -> ModelState:
-    """The study's model of the setup with the given (calibrated) dissipation."""
+    """The study's model of the setup with the given (calibrated) dissipation: for physics
+    MsS sensors with their magnets' pull on the beads, as :func:`msens.pipeline.run_study`."""
+    ph = physics.setup_physics(ctx)
     chain = build_chain(ctx.study, ctx.setup, gamma_contact=gamma_contact,
-                        gamma_wall=gamma_wall)
+                        gamma_wall=gamma_wall, static_force=physics.magnetic_force(ph))
     return ModelState(chain=chain, velocity=float(ctx.study.striker.velocity_m_per_s),
                       particles=tuple(s.particle for s in ctx.setup.sensors),
-                      kinds=tuple(s.kind for s in ctx.setup.sensors))
+                      kinds=tuple(s.kind for s in ctx.setup.sensors), physics=ph)
 
 
-def signal(kind: SensorKind, force: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """What a channel's voltage is proportional to: force (bead, rod) or dF/dt (MsS, Eq. 5)."""
+def signal(kind: SensorKind, force: np.ndarray, t: np.ndarray, physics: bool = False
+           ) -> np.ndarray:
+    """What a channel's voltage is proportional to: force (bead, rod), dF/dt (four-contact
+    MsS, Eq. 5), or the record itself (a physics MsS record is its DAQ voltage)."""
+    if physics:
+        return force
     return time_derivative(force, t) if kind is SensorKind.MSS else force
+
+
+def feature_records(records: np.ndarray, physics: Sequence[bool], t: np.ndarray
+                    ) -> np.ndarray:
+    """Records whose pulse features are read: forces as they are, a physics MsS voltage
+    integrated from impact (V s; as :func:`msens.compare.model_record`)."""
+    out = np.array(records, dtype=float, copy=True)
+    for j, ph in enumerate(physics):
+        if ph:
+            out[..., j, :] = cumulative_trapezoid(records[..., j, :], t, initial=0.0, axis=-1)
+    return out
 
 
 def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> SetupResult:
@@ -151,17 +189,26 @@ def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> Setup
     """
     res, _ = predictor._simulate([state])[0]
     t = predictor.t
-    forces = observe_state(state, res, None, float(t[1] - t[0]))
+    records = observe_state(state, res, None, float(t[1] - t[0]))
+    static = static_contact_forces(state.chain)
     sensors = []
     where = positions([s.particle for s in ctx.setup.sensors])
-    for spec, pos, f in zip(ctx.setup.sensors, where, forces, strict=True):
-        shape = time_derivative(f, t) if spec.kind is SensorKind.MSS else None
-        sr = SensorResult(sensor=spec, position=pos, force=f, voltage_shape=shape,
-                          features=model_features_of(f, t))
-        sensors.append(sr)
+    for spec, pos, rec, ph in zip(ctx.setup.sensors, where, records, _physics(state),
+                                  strict=True):
+        if ph is not None:  # the record is the DAQ voltage; force: the weighted force
+            mss = mss_signals(physics.sensor(ph), t, res, ph.electronics.sample_rate_hz,
+                              static=static)
+            sensors.append(SensorResult(sensor=spec, position=pos, force=mss.weighted_force,
+                                        voltage_shape=rec,
+                                        features=pulse_features(mss.weighted_force, t),
+                                        mss=mss))
+            continue
+        shape = time_derivative(rec, t) if spec.kind is SensorKind.MSS else None
+        sensors.append(SensorResult(sensor=spec, position=pos, force=rec, voltage_shape=shape,
+                                    features=model_features_of(rec, t)))
     return SetupResult(setup=ctx.setup, chain=state.chain,
                        history=ChainResult(t=t, force=res, approach=np.zeros_like(res)),
-                       static_force=static_contact_forces(state.chain), sensors=tuple(sensors),
+                       static_force=static, sensors=tuple(sensors),
                        speed_incident=float("nan"), speed_reflected=float("nan"))
 
 

@@ -49,7 +49,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from msens.calibrate import DissipationFit
-from msens.compare import setup_spec_channels, shot_records, smooth
+from msens.compare import model_record, setup_spec_channels, shot_records, smooth
 from msens.diagnose.effects import Context, Effect, ModelState, registry
 from msens.diagnose.effects import get as get_effect
 from msens.diagnose.fit import EffectFit, fit_effect, refit_jointly
@@ -57,6 +57,7 @@ from msens.diagnose.objective import FeatureObjective, WaveformObjective, check_
 from msens.diagnose.predict import (
     Predictor,
     baseline_state,
+    feature_records,
     model_features_of,
     positions,
     setup_result,
@@ -301,7 +302,7 @@ def _feature_residuals(result, waveform: Waveform) -> dict:
                 if (r.channel.kind, r.channel.particle)
                 == (sensor.sensor.kind.value, sensor.sensor.particle)]
         meas = [_features(r.force, t) for r in recs]
-        model = _features(sensor.force, t)
+        model = _features(model_record(sensor, t), t)
         row = {"channel": name}
         for k in model:
             vals = np.array([m[k] for m in meas])
@@ -324,7 +325,8 @@ def _feature_residuals(result, waveform: Waveform) -> dict:
 def _windows(objective: WaveformObjective, records_before: np.ndarray,
              records_after: np.ndarray, result, sigma: np.ndarray) -> list[dict]:
     """chi^2 per sample in the incident and reflected window of each sensor, and elsewhere."""
-    feats = model_features_of(records_before, objective.t)
+    feats = model_features_of(feature_records(records_before, objective.physics, objective.t),
+                              objective.t)
     rows = []
     per = []
     for records in (records_before, records_after):
@@ -522,7 +524,8 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
 
 def _feature_table(objective: FeatureObjective, records0: np.ndarray, records1: np.ndarray,
                    setup: SetupSpec, where: list[str]) -> list[dict]:
-    f0, f1 = (model_features_of(r, objective.t) for r in (records0, records1))
+    f0, f1 = (model_features_of(feature_records(r, objective.physics, objective.t),
+                                objective.t) for r in (records0, records1))
     r0, r1 = objective.residuals(records0), objective.residuals(records1)
     out = []
     for j, (s, pos, row) in enumerate(zip(setup.sensors, where, objective.rows, strict=True)):

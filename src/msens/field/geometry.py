@@ -319,9 +319,12 @@ class BiasMagnet:
     """
 
     particle: int = 13
-    grade: str = "ceramic8"
-    remanence: float = MAGNET_GRADES["ceramic8"].remanence
-    recoil_permeability: float = MAGNET_GRADES["ceramic8"].recoil_permeability
+    # materials, not geometry: the mesh does not depend on them (the transducer key does)
+    grade: str = field(default="ceramic8", metadata={"mesh": False})
+    remanence: float = field(default=MAGNET_GRADES["ceramic8"].remanence,
+                             metadata={"mesh": False})
+    recoil_permeability: float = field(
+        default=MAGNET_GRADES["ceramic8"].recoil_permeability, metadata={"mesh": False})
     inner_radius: float = 12.5e-3
     outer_radius: float = 20.0e-3
     length: float = 16.0e-3

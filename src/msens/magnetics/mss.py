@@ -19,7 +19,12 @@ import numpy as np
 from msens.coil import Winding, winding_capacitance, winding_from_coil
 from msens.electronics import NoiseModel, ReadoutCircuit, daq_voltage, noise_rms
 from msens.field.geometry import Coil
-from msens.magnetics.transducer import Transducer, contact_rates, emf_from_rates
+from msens.magnetics.transducer import (
+    Transducer,
+    contact_forces_of,
+    contact_rates,
+    emf_from_rates,
+)
 from msens.study import ElectronicsSpec
 
 
@@ -90,10 +95,70 @@ def figure_noise_rms(circuit: ReadoutCircuit, electronics: ElectronicsSpec) -> f
     return noise_rms(circuit, noise, sample_rate=electronics.sample_rate_hz)
 
 
+@dataclass(frozen=True)
+class MssSensor:
+    """A physics MsS as an observation operator: its transducer and read-out circuit.
+
+    Attributes
+    ----------
+    transducer : Transducer
+    circuit : ReadoutCircuit
+    """
+
+    transducer: Transducer
+    circuit: ReadoutCircuit
+
+
+def mss_signals(sensor: MssSensor, t: np.ndarray, force: np.ndarray, sample_rate: float, *,
+                static: np.ndarray | None = None, columns: np.ndarray | None = None,
+                noise: NoiseModel | None = None, rng: int | None = None) -> MssRecord:
+    """Coil signals of one physics MsS for a chain's contact forces.
+
+    Parameters
+    ----------
+    sensor : MssSensor
+    t : ndarray, shape (nt,)
+        Uniform chain output times, s.
+    force : ndarray, shape (nt, m)
+        Contact forces, N.
+    sample_rate : float
+        DAQ rate, Hz.
+    static : ndarray, shape (n,), optional
+        Static contact forces (column k is contact k + 1), N; default the first sample.
+    columns : ndarray of int, shape (m,), optional
+        Contact number of each column of ``force``; default column k is contact k + 1.
+    noise : NoiseModel, optional
+        Noise of the acquisition (None: noise-free).
+    rng : int, optional
+        Noise seed.
+    """
+    tr = sensor.transducer
+    contacts = np.asarray(tr.contacts, dtype=int)
+    fc = contact_forces_of(force, contacts, columns)
+    base = fc[0] if static is None else contact_forces_of(np.asarray(static)[None, :],
+                                                           contacts)[0]
+    stiff = tr.contact_stiffness
+    delta = (np.clip(fc, 0.0, None) / stiff) ** (2.0 / 3.0)
+    delta0 = (np.clip(base, 0.0, None) / stiff) ** (2.0 / 3.0)
+    flux = (fc - base) @ tr.sensitivity_villari + (delta - delta0) @ tr.dlambda_dapproach
+    total = float(np.sum(tr.sensitivity("both")))
+    rates = contact_rates(t, fc, contacts, stiff, columns=contacts)
+    e = emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach)
+    t_daq, v = daq_voltage(sensor.circuit, t, e, sample_rate, noise=noise, rng=rng)
+    return MssRecord(t=t, flux=flux, weighted_force=flux / total if total else flux * np.nan,
+                     emf=e, t_daq=t_daq, voltage=v, circuit=sensor.circuit)
+
+
+def voltage_on(record: MssRecord) -> np.ndarray:
+    """The DAQ voltage on the chain's time grid, V, shape (nt,) (linear interpolation; exact
+    where the DAQ samples at the chain's rate)."""
+    return np.interp(record.t, record.t_daq, record.voltage)
+
+
 def mss_record(transducer: Transducer, circuit: ReadoutCircuit, t: np.ndarray,
                force: np.ndarray, electronics: ElectronicsSpec, *,
                static: np.ndarray | None = None, seed_offset: int = 0) -> MssRecord:
-    """Coil signals of one physics MsS for contact forces ``force`` (nt, n), N.
+    """Coil signals of one physics MsS of a study for contact forces ``force`` (nt, n), N.
 
     Parameters
     ----------
@@ -102,19 +167,6 @@ def mss_record(transducer: Transducer, circuit: ReadoutCircuit, t: np.ndarray,
     seed_offset : int
         Added to the study's noise seed so that two coils get independent noise.
     """
-    contacts = np.asarray(transducer.contacts, dtype=int)
-    use = contacts <= force.shape[1]
-    base = force[0] if static is None else static
-    cols = contacts[use] - 1
-    delta = (np.clip(force[:, cols], 0.0, None) / transducer.contact_stiffness) ** (2 / 3)
-    delta0 = (np.clip(base[cols], 0.0, None) / transducer.contact_stiffness) ** (2 / 3)
-    flux = ((force[:, cols] - base[cols]) @ transducer.sensitivity_villari[use]
-            + (delta - delta0) @ transducer.dlambda_dapproach[use])
-    total = float(np.sum(transducer.sensitivity("both")[use]))
-    rates = contact_rates(t, force, contacts, transducer.contact_stiffness)
-    e = emf_from_rates(rates, transducer.sensitivity_villari, transducer.dlambda_dapproach)
-    t_daq, v = daq_voltage(circuit, t, e, electronics.sample_rate_hz,
-                           noise=noise_model(electronics),
-                           rng=electronics.seed + seed_offset)
-    return MssRecord(t=t, flux=flux, weighted_force=flux / total if total else flux * np.nan,
-                     emf=e, t_daq=t_daq, voltage=v, circuit=circuit)
+    return mss_signals(MssSensor(transducer, circuit), t, force, electronics.sample_rate_hz,
+                       static=static, noise=noise_model(electronics),
+                       rng=electronics.seed + seed_offset)

@@ -31,7 +31,7 @@ import json
 import math
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Literal
 
@@ -52,7 +52,13 @@ from msens.field.sensor_model import (
 from msens.field.solve import FieldSolution, solve
 from msens.io._files import atomic_write_bytes
 from msens.magnetics.approach import approach_residuals, hertz_approach_rate, hertz_stiffness
-from msens.magnetics.potentials import TangentOperator, adjoint_linkage, region_linkage
+from msens.magnetics.potentials import (
+    TangentOperator,
+    adjoint_linkage,
+    linkage_table,
+    rect_integral,
+    region_linkage,
+)
 from msens.magnetics.villari import (
     StressSampler,
     bead_state,
@@ -66,7 +72,10 @@ from msens.materials import BEAD_STEEL, ElasticMaterial
 from msens.steel_law import law_for_steel
 
 #: Version of what :func:`transducers_for` computes; part of the cache key.
-TRANSDUCER_VERSION = "transducer/2"
+TRANSDUCER_VERSION = "transducer/3"
+#: Coil offsets tabulated per transducer: ±OFFSET_SPAN in steps of OFFSET_STEP, m.
+OFFSET_SPAN = 3e-3
+OFFSET_STEP = 0.1e-3
 
 Mechanism = Literal["villari", "approach", "both"]
 MECHANISMS: tuple[str, ...] = ("villari", "approach", "both")
@@ -101,6 +110,12 @@ class Transducer:
     turns : int
     source : str
         Where the numbers come from (model, cache key).
+    offsets : ndarray, shape (n_o,), optional
+        Axial coil offsets from its position, m (uniform, symmetric about 0).
+    villari_by_offset, approach_by_offset : ndarray, shape (n_o, n_c), optional
+        ``sensitivity_villari`` and ``dlambda_dapproach`` of the same coil moved by each
+        offset (magnets and beads fixed), from the same source potentials
+        (:func:`offset_profiles`); :meth:`shifted` interpolates them.
     """
 
     particle: int
@@ -114,6 +129,9 @@ class Transducer:
     inductance_H: float
     turns: int
     source: str
+    offsets: np.ndarray | None = None
+    villari_by_offset: np.ndarray | None = None
+    approach_by_offset: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.contacts).shape
@@ -127,6 +145,21 @@ class Transducer:
         rate = 2.0 / 3.0 * (self.reference_force / self.contact_stiffness) ** (2.0 / 3.0) \
             / self.reference_force
         return np.asarray(self.dlambda_dapproach) * rate
+
+    def shifted(self, offset: float) -> Transducer:
+        """The same coil moved axially by ``offset`` (m, + toward the striker), magnets and
+        beads fixed: sensitivities by cubic interpolation of the offset profiles. R and L are
+        kept (the coil's inductance changes little over a few mm)."""
+        require(self.offsets is not None, "internal: transducer has no offset profiles")
+        require(self.offsets[0] <= offset <= self.offsets[-1],
+                f"coil offset {offset} m outside the tabulated "
+                f"{self.offsets[0]:g}..{self.offsets[-1]:g} m")
+        from scipy.interpolate import CubicSpline
+
+        vil = CubicSpline(self.offsets, self.villari_by_offset, axis=0)(offset)
+        app = CubicSpline(self.offsets, self.approach_by_offset, axis=0)(offset)
+        return replace(self, sensitivity_villari=np.asarray(vil),
+                       dlambda_dapproach=np.asarray(app))
 
     def sensitivity(self, mechanism: Mechanism = "both") -> np.ndarray:
         """∂Λ/∂F_c of the chosen mechanism(s) at the reference load, Wb/N, shape (n_c,)."""
@@ -164,8 +197,38 @@ class ContactRates:
     approach: np.ndarray
 
 
+def contact_forces_of(force: np.ndarray, contacts: np.ndarray,
+                      columns: np.ndarray | None = None) -> np.ndarray:
+    """The columns of ``contacts`` from a chain's contact forces, zeros where absent.
+
+    Parameters
+    ----------
+    force : ndarray, shape (nt, m)
+        Contact forces, N.
+    contacts : ndarray of int, shape (n_c,)
+        1-based contact numbers wanted.
+    columns : ndarray of int, shape (m,), optional
+        Contact number of each column of ``force`` (sorted); default column k is contact
+        k + 1 (as in :mod:`msens.chain`).
+
+    Returns
+    -------
+    ndarray, shape (nt, n_c)
+    """
+    f = np.asarray(force, dtype=float)
+    contacts = np.asarray(contacts, dtype=int)
+    if columns is None:
+        columns = np.arange(1, f.shape[1] + 1)
+    columns = np.asarray(columns, dtype=int)
+    k = np.clip(np.searchsorted(columns, contacts), 0, max(columns.size - 1, 0))
+    use = (columns.size > 0) & (columns[k] == contacts)
+    out = np.zeros((f.shape[0], contacts.size))
+    out[:, use] = f[:, k[use]]
+    return out
+
+
 def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
-                  stiffness: float) -> ContactRates:
+                  stiffness: float, columns: np.ndarray | None = None) -> ContactRates:
     """Force and approach rates of ``contacts`` from a chain's contact forces.
 
     Parameters
@@ -173,26 +236,25 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
     t : ndarray, shape (nt,)
         Strictly increasing times, s.
     force : ndarray, shape (nt, m)
-        Contact forces, N: column k is contact k + 1 (as in :mod:`msens.chain`).
+        Contact forces, N.
     contacts : ndarray of int, shape (n_c,)
         1-based contact numbers.
     stiffness : float
         Hertz prefactor A, N/m^1.5.
+    columns : ndarray of int, shape (m,), optional
+        Contact number of each column of ``force`` (see :func:`contact_forces_of`).
 
     Notes
     -----
     Rates are :func:`numpy.gradient` (second order, also on non-uniform times).
     """
     t = np.asarray(t, dtype=float)
-    f = np.asarray(force, dtype=float)
     require(t.ndim == 1 and t.size >= 2, "internal: t must be 1-D with at least 2 samples")
     require(bool(np.all(np.diff(t) > 0)), "internal: t must be strictly increasing")
-    require(f.ndim == 2 and f.shape[0] == t.size,
-            f"internal: force must have shape (nt={t.size}, n_contacts), got {f.shape}")
-    contacts = np.asarray(contacts, dtype=int)
-    use = (contacts >= 1) & (contacts <= f.shape[1])
-    fc = np.zeros((t.size, contacts.size))
-    fc[:, use] = f[:, contacts[use] - 1]
+    require(np.ndim(force) == 2 and np.shape(force)[0] == t.size,
+            f"internal: force must have shape (nt={t.size}, n_contacts), got "
+            f"{np.shape(force)}")
+    fc = contact_forces_of(force, contacts, columns)
     delta = (np.clip(fc, 0.0, None) / stiffness) ** (2.0 / 3.0)
     return ContactRates(t=t, force=np.gradient(fc, t, axis=0),
                         approach=np.gradient(delta, t, axis=0))
@@ -409,6 +471,35 @@ def coil_linkage(model: MechanismPotentials, coil: Coil) -> np.ndarray:
                           coil.turns, coil.area)
 
 
+def offset_profiles(model: MechanismPotentials, geometry: SensorGeometry, coil: Coil
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-contact sensitivities of a coil moved axially over ±OFFSET_SPAN.
+
+    A summed-area table of the source potentials over the coil's radial span (the coil is
+    air, so the potentials do not change when it moves) integrated over the moved winding.
+
+    Returns
+    -------
+    offsets : ndarray, shape (n_o,)
+        m.
+    villari, approach : ndarray, shape (n_o, n_c)
+        ∂Λ/∂F_c (Wb/N) and ∂Λ/∂δ_c (Wb/m) at each offset.
+    """
+    rect = geometry.coil_rect(next(u for u in geometry.sensors
+                                   if u.coil.particle == coil.particle))
+    n = round(OFFSET_SPAN / OFFSET_STEP)
+    offsets = np.arange(-n, n + 1) * OFFSET_STEP
+    pad = 2 * OFFSET_STEP
+    table = linkage_table(model.solution, model.potentials, (rect.r0, rect.r1),
+                          (rect.z0 - OFFSET_SPAN - pad, rect.z1 + OFFSET_SPAN + pad),
+                          spacing=OFFSET_STEP / 2)
+    ones = np.ones(offsets.size)
+    link = coil.turns / coil.area * rect_integral(table, rect.r0 * ones, rect.r1 * ones,
+                                                  rect.z0 + offsets, rect.z1 + offsets)
+    _, vil, app = model.contact_profiles(link)
+    return offsets, vil, app
+
+
 def adjoint_check(model: MechanismPotentials, coil: Coil, linkage: np.ndarray
                   ) -> tuple[float, float]:
     """The coil's own incremental field against the source potentials (reciprocity).
@@ -511,12 +602,14 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
         link = coil_linkage(model, coil)
         contacts, s_vil, dl = model.contact_profiles(link)
         inductance, err = adjoint_check(model, coil, link)
+        offsets, vil_o, app_o = offset_profiles(model, geometry, coil)
         timings[f"coil_{coil.particle}"] = time.perf_counter() - t0
         out[coil.particle] = Transducer(
             particle=coil.particle, contacts=contacts, sensitivity_villari=s_vil,
             dlambda_dapproach=dl, contact_stiffness=stiffness, reference_force=force,
             magnetic_particle_force=pforce, resistance_ohm=coil_resistance(coil),
-            inductance_H=inductance, turns=coil.turns, source=src)
+            inductance_H=inductance, turns=coil.turns, source=src, offsets=offsets,
+            villari_by_offset=vil_o, approach_by_offset=app_o)
         details["coils"][str(coil.particle)] = {
             "particles": model.particles.tolist(),
             "bead_sensitivity_Wb_per_N": link[:model.particles.size].tolist(),
@@ -530,12 +623,16 @@ def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
               approach: bool) -> str:
     """Content hash (16 hex digits) of everything a transducer set depends on.
 
-    The mesh key leaves out the steel's B–H curve (a material, not geometry); a curve other
-    than the default 1018 table enters here by its points, so default keys are unchanged.
+    The mesh key leaves out the materials (the steel's B–H curve, the magnets' grade,
+    remanence and recoil permeability); they enter here.
     """
+    magnets = [None if u.magnet is None else
+               [u.magnet.grade, repr(float(u.magnet.remanence)),
+                repr(float(u.magnet.recoil_permeability))] for u in geometry.sensors]
     payload = {"version": TRANSDUCER_VERSION, "mesh": geometry_key(geometry, options),
                "stress_force": repr(float(stress_force)), "law": _canonical(law),
-               "material": _canonical(material), "approach": bool(approach)}
+               "material": _canonical(material), "approach": bool(approach),
+               "magnets": magnets}
     if not geometry.default_steel:
         payload["steel_bh"] = {"b": _canonical(geometry.steel.b),
                                "h": _canonical(geometry.steel.h)}
@@ -554,12 +651,15 @@ def _to_json(report: TransducerReport) -> dict:
             "reference_force_N": tr.reference_force,
             "magnetic_particle_force_N": np.asarray(tr.magnetic_particle_force).tolist(),
             "resistance_ohm": tr.resistance_ohm, "inductance_H": tr.inductance_H,
-            "turns": tr.turns, "source": tr.source}
-    return {"schema": "msens.transducers/2", "transducers": trs, "details": report.details}
+            "turns": tr.turns, "source": tr.source,
+            "offsets_m": _list(tr.offsets),
+            "villari_by_offset_Wb_per_N": _list(tr.villari_by_offset),
+            "approach_by_offset_Wb_per_m": _list(tr.approach_by_offset)}
+    return {"schema": "msens.transducers/3", "transducers": trs, "details": report.details}
 
 
 def _from_json(data: dict) -> TransducerReport:
-    require(data.get("schema") == "msens.transducers/2",
+    require(data.get("schema") == "msens.transducers/3",
             f"not a transducer cache file (schema {data.get('schema')!r})")
     out = {}
     for v in data["transducers"].values():
@@ -571,8 +671,19 @@ def _from_json(data: dict) -> TransducerReport:
             reference_force=float(v["reference_force_N"]),
             magnetic_particle_force=np.array(v["magnetic_particle_force_N"]),
             resistance_ohm=float(v["resistance_ohm"]), inductance_H=float(v["inductance_H"]),
-            turns=int(v["turns"]), source=str(v["source"]))
+            turns=int(v["turns"]), source=str(v["source"]),
+            offsets=_array(v.get("offsets_m")),
+            villari_by_offset=_array(v.get("villari_by_offset_Wb_per_N")),
+            approach_by_offset=_array(v.get("approach_by_offset_Wb_per_m")))
     return TransducerReport(out, data.get("details", {}))
+
+
+def _list(a: np.ndarray | None) -> list | None:
+    return None if a is None else np.asarray(a).tolist()
+
+
+def _array(v: list | None) -> np.ndarray | None:
+    return None if v is None else np.array(v, dtype=float)
 
 
 def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None = None,
@@ -627,9 +738,28 @@ def transducers_for(geometry: SensorGeometry, **kwargs) -> dict[int, Transducer]
 
 
 __all__ = [
-    "MECHANISMS", "TRANSDUCER_VERSION", "ContactRates", "MechanismPotentials", "Transducer",
-    "TransducerReport", "adjoint_check", "bias_solution", "cache_key", "coil_linkage",
-    "compute_transducers", "contact_profiles", "contact_rates", "emf", "emf_from_rates",
-    "magnetic_precompression", "mechanism_potentials", "particle_forces",
-    "transducer_report", "transducers_for",
+    "MECHANISMS",
+    "OFFSET_SPAN",
+    "OFFSET_STEP",
+    "TRANSDUCER_VERSION",
+    "ContactRates",
+    "MechanismPotentials",
+    "Transducer",
+    "TransducerReport",
+    "adjoint_check",
+    "bias_solution",
+    "cache_key",
+    "coil_linkage",
+    "compute_transducers",
+    "contact_forces_of",
+    "contact_profiles",
+    "contact_rates",
+    "emf",
+    "emf_from_rates",
+    "magnetic_precompression",
+    "mechanism_potentials",
+    "offset_profiles",
+    "particle_forces",
+    "transducer_report",
+    "transducers_for",
 ]

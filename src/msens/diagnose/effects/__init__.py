@@ -15,12 +15,18 @@ from msens.diagnose.effects.base import (
     FirstOrderLowpass,
     ModelState,
     Parameter,
+    PhysicsMss,
 )
 from msens.errors import InputError
 
 #: The fixed public names, in the order reports list them.
 NAMES = ("wall_dissipation", "wall_stiffness", "striker_velocity", "magnetic_precompression",
-         "contact_damping_law", "daq_lowpass", "sensor_position")
+         "contact_damping_law", "daq_lowpass", "sensor_position", "magnet_remanence",
+         "coil_position", "cable_capacitance")
+
+
+#: The effects that only a physics MsS (its field model and read-out) has.
+PHYSICS_MSS_NAMES = ("magnet_remanence", "coil_position", "cable_capacitance")
 
 
 def registry() -> dict[str, Effect]:
@@ -45,5 +51,5 @@ def get(name: str) -> Effect:
     return effects[name]
 
 
-__all__ = ["NAMES", "Context", "Effect", "FirstOrderLowpass", "ModelState", "Parameter", "get",
-           "registry"]
+__all__ = ["NAMES", "PHYSICS_MSS_NAMES", "Context", "Effect", "FirstOrderLowpass",
+           "ModelState", "Parameter", "PhysicsMss", "get", "registry"]

@@ -16,8 +16,9 @@ import numpy as np
 from scipy.signal import lfilter
 
 from msens.chain.model import Chain
+from msens.field.geometry import Coil
 from msens.sensors import SensorKind
-from msens.study import SetupSpec, Study
+from msens.study import ElectronicsSpec, SetupSpec, Study
 
 #: A record operation: (records (..., nt), sample interval s) -> records (..., nt).
 RecordOp = Callable[[np.ndarray, float], np.ndarray]
@@ -29,6 +30,35 @@ class Context:
 
     study: Study
     setup: SetupSpec
+
+
+@dataclass(frozen=True)
+class PhysicsMss:
+    """What a diagnosis may change about one physics MsS (see :mod:`msens.diagnose.physics`).
+
+    Attributes
+    ----------
+    model : str
+        Key of the sensor's field model in :mod:`msens.diagnose.physics` (its transducer
+        cache key).
+    particle : int
+        The coil's particle.
+    coil : Coil
+        The coil's geometry (winding capacitance of its circuit).
+    electronics : ElectronicsSpec
+        Cable and DAQ of its read-out.
+    offset_m : float
+        Axial offset of the coil from its nominal position, m (+ toward the striker).
+    remanence_factor : float
+        Remanence of every bias magnet over its nominal value.
+    """
+
+    model: str
+    particle: int
+    coil: Coil
+    electronics: ElectronicsSpec
+    offset_m: float = 0.0
+    remanence_factor: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -45,7 +75,10 @@ class ModelState:
     kinds : tuple of SensorKind
         Observation operator of each sensor.
     post : tuple of RecordOp
-        Operations applied, in order, to the sensor force records after observation.
+        Operations applied, in order, to the sensor records after observation.
+    physics : tuple of (PhysicsMss or None)
+        Per sensor, the physics MsS it is (its record is then its DAQ voltage, V); empty
+        when the setup has none.
     """
 
     chain: Chain
@@ -53,6 +86,7 @@ class ModelState:
     particles: tuple[int, ...]
     kinds: tuple[SensorKind, ...]
     post: tuple[RecordOp, ...] = ()
+    physics: tuple[PhysicsMss | None, ...] = ()
 
 
 @dataclass(frozen=True)

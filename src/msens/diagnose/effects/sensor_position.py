@@ -13,6 +13,7 @@ import dataclasses
 
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 from msens.sensors import SensorKind
+from msens.study import MssModel
 
 NAME = "sensor_position"
 #: Largest displacement searched, particles.
@@ -48,5 +49,9 @@ def _apply(ctx: Context, state: ModelState, params) -> ModelState:
     return dataclasses.replace(state, particles=particles)
 
 
+def _applies(ctx: Context) -> bool:
+    return not any(s.model is MssModel.PHYSICS for s in ctx.setup.sensors)
+
+
 EFFECT = Effect(name=NAME, description="particle each sensor actually reads",
-                space=_space, baseline=_baseline, apply=_apply)
+                space=_space, baseline=_baseline, apply=_apply, applies=_applies)

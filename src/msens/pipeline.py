@@ -171,7 +171,7 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
     coil = coil_geometry(sensor.coil or CoilSpec(), sensor.particle)
     circuit = readout(coil, tr.resistance_ohm, tr.inductance_H, study.electronics)
     rec = mss_record(tr, circuit, history.t, history.force, study.electronics,
-                     static=static, seed_offset=index)
+                     approach=history.approach, static=static, seed_offset=index)
     voltage = voltage_on(rec)
     return SensorResult(sensor=sensor, position=position, force=rec.weighted_force,
                         voltage_shape=voltage,

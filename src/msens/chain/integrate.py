@@ -84,7 +84,9 @@ class ChainResult:
         Total contact forces (static + dynamic), N, compressive positive; contact index as in
         :class:`~msens.chain.model.Chain` (last = wall), or as in ``contacts``.
     approach : ndarray, shape (nt, n) or (runs, nt, c)
-        Contact approach delta >= 0, m.
+        Contact approach delta, m: positive while the contact is closed (the Hertz approach,
+        F = A delta^{3/2} elastically), negative when it is open (minus the gap between the
+        surfaces). It stays smooth where the force has a kink.
     displacement : ndarray, shape (nt, n), or None
         Particle displacements u, m, +x (``simulate(..., states=True)`` and the reference).
     velocity : ndarray, shape (nt, n), or None
@@ -399,5 +401,5 @@ def simulate_reference(chain: Chain, striker_velocity: float, t_out: ArrayLike, 
     u, v = sol.y[:n], sol.y[n:]
     gap = np.concatenate([u[:-1] - u[1:], u[-1:]])
     force = _numpy_forces(chain, u, v)
-    return ChainResult(t=t, force=force.T.copy(), approach=np.maximum(gap, 0.0).T.copy(),
+    return ChainResult(t=t, force=force.T.copy(), approach=gap.T.copy(),
                        displacement=u.T.copy(), velocity=v.T.copy(), steps=int(sol.nfev))

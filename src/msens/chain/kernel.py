@@ -571,7 +571,7 @@ def _sample_gaps(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, s
             w = _hermite_weights(septic, (t_out[j] - t0) * inv_h, h)
             for k in range(m):
                 g, r = _gap_sample(k, w, u0, v0, a0, j0, u1, v1, a1, j1)
-                out_d[j, k] = max(g, 0.0)
+                out_d[j, k] = g
                 out_F[j, k] = _force(g, r, cA[k], cg[k], hkk)
             j += 1
         return j
@@ -581,7 +581,7 @@ def _sample_gaps(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, law, s
         x = (t_out[j] - t0) * inv_h
         for k in range(m):
             g, d = _horner(cs, k, x)
-            out_d[j, k] = max(g, 0.0)
+            out_d[j, k] = g
             out_F[j, k] = _force(g, d * inv_h, cA[k], cg[k], hkk)
         j += 1
     return j
@@ -602,7 +602,7 @@ def _sample_contacts(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, la
             for c in range(cols):
                 k = sel[c]
                 g, r = _gap_sample(k, w, u0, v0, a0, j0, u1, v1, a1, j1)
-                out_d[j, c] = max(g, 0.0)
+                out_d[j, c] = g
                 out_F[j, c] = _force(g, r, cA[k], cg[k], hkk)
             j += 1
         return j
@@ -613,7 +613,7 @@ def _sample_contacts(t_out, j, t0, h, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, la
         for c in range(cols):
             k = sel[c]
             g, d = _horner(cs, c, x)
-            out_d[j, c] = max(g, 0.0)
+            out_d[j, c] = g
             out_F[j, c] = _force(g, d * inv_h, cA[k], cg[k], hkk)
         j += 1
     return j
@@ -738,13 +738,13 @@ def _sample_sqrt(t_out, j, t0, h, mode, u0, v0, a0, j0, u1, v1, a1, j1, cA, cg, 
             for c in range(sel.shape[0]):
                 k = sel[c]
                 g, r = _sqrt_value(cs, c, x, inv_2hs)
-                out_d[j, c] = max(g, 0.0)
+                out_d[j, c] = g
                 out_F[j, c] = _force(g, r, cA[k], cg[k], hkk)
             j += 1
         else:
             for k in range(cols):
                 g, r = _sqrt_value(cs, k, x, inv_2hs)
-                out_d[j, k] = max(g, 0.0)
+                out_d[j, k] = g
                 out_F[j, k] = _force(g, r, cA[k], cg[k], hkk)
             j += 1
     return j
@@ -772,7 +772,7 @@ def _store(j, us, vs, cA, cg, law, store_uv, out_F, out_d, out_u, out_v, Fp, sel
     for c in range(sel.shape[0]):
         k = sel[c]
         out_F[j, c] = Fp[k + 1]
-        out_d[j, c] = max(us[k] - us[k + 1], 0.0)
+        out_d[j, c] = us[k] - us[k + 1]
     if store_uv:
         for k in range(m):
             out_u[j, k] = us[k]

@@ -42,7 +42,8 @@ def study_wave(study: Study, transducers: Mapping[int, Transducer], particle: in
     chain, history = simulate_setup(study, setup, t, gamma_contact=gc, gamma_wall=gw,
                                     transducers=dict(transducers))
     tr = transducers[particle]
-    rates = contact_rates(t, history.force, tr.contacts, tr.contact_stiffness)
+    rates = contact_rates(t, history.force, tr.contacts, tr.contact_stiffness,
+                          approach=history.approach)
     comp = np.cumsum(magnetic_precompression(transducers))  # contact c at index c - 1
     own = slice(max(particle - 3, 0), particle + 1)  # c_{p-2} .. c_{p+1}
     static = static_contact_forces(chain)

@@ -67,13 +67,14 @@ class Predictor:
         dt = float(self.t[1] - self.t[0])
         out = np.empty((len(states), len(states[0].particles), self.t.size))
         for r, (k, s) in enumerate(zip(keys, states, strict=True)):
-            out[r] = observe_state(s, *forces[unique[k]], dt)
+            force, contacts, approach = forces[unique[k]]
+            out[r] = observe_state(s, force, contacts, dt, approach)
         return out
 
     def _simulate(self, states: list[ModelState], needs: list[np.ndarray] | None = None,
-                  ) -> list[tuple[np.ndarray, np.ndarray | None]]:
-        # Contact forces (nt, c) of each state and the contacts of their columns: those in
-        # ``needs`` (the union over a batch), or all (None) without.
+                  ) -> list[tuple[np.ndarray, np.ndarray | None, np.ndarray]]:
+        # Contact forces (nt, c) of each state, the contacts of their columns (those in
+        # ``needs``, the union over a batch, or all: None) and the contact approaches (nt, c).
         result: list = [None] * len(states)
         groups: dict = {}
         for i, s in enumerate(states):
@@ -87,7 +88,7 @@ class Predictor:
                                      contacts=contacts)
                 self.simulations += len(part)
                 for j, i in enumerate(part):
-                    result[i] = (res.force[j], contacts)
+                    result[i] = (res.force[j], contacts, res.approach[j])
                 start += len(part)
         return result
 
@@ -127,16 +128,17 @@ def _physics(state: ModelState) -> tuple:
 
 
 def observe_state(state: ModelState, force: np.ndarray, contacts: np.ndarray | None,
-                  dt: float) -> np.ndarray:
+                  dt: float, approach: np.ndarray | None = None) -> np.ndarray:
     """Sensor records (sensors, nt) of a state from contact forces (nt, c): column j is the
     0-based contact ``contacts[j]``, or contact j if ``contacts`` is None. Bead, rod and
-    four-contact MsS records are forces (N); a physics MsS record is its DAQ voltage (V)."""
+    four-contact MsS records are forces (N); a physics MsS record is its DAQ voltage (V),
+    driven by the contact approaches ``approach`` (nt, c; m) when given."""
     t = np.arange(force.shape[0]) * dt
     cols = None if contacts is None else np.asarray(contacts) + 1  # 1-based contact numbers
     out = np.array([
         observe(kind, force, p, contacts=contacts) if ph is None else
         voltage_on(mss_signals(physics.sensor(ph), t, force, ph.electronics.sample_rate_hz,
-                               columns=cols))
+                               approach=approach, columns=cols))
         for kind, p, ph in zip(state.kinds, state.particles, _physics(state), strict=True)])
     for op in state.post:
         out = op(out, dt)
@@ -187,9 +189,9 @@ def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> Setup
     study says) while their records are read where ``state`` says. The contact-force history
     is that of the state's chain; speeds are not computed (NaN).
     """
-    res, _ = predictor._simulate([state])[0]
+    res, _, approach = predictor._simulate([state])[0]
     t = predictor.t
-    records = observe_state(state, res, None, float(t[1] - t[0]))
+    records = observe_state(state, res, None, float(t[1] - t[0]), approach)
     static = static_contact_forces(state.chain)
     sensors = []
     where = positions([s.particle for s in ctx.setup.sensors])
@@ -197,7 +199,7 @@ def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> Setup
                                   strict=True):
         if ph is not None:  # the record is the DAQ voltage; force: the weighted force
             mss = mss_signals(physics.sensor(ph), t, res, ph.electronics.sample_rate_hz,
-                              static=static)
+                              approach=approach, static=static)
             sensors.append(SensorResult(sensor=spec, position=pos, force=mss.weighted_force,
                                         voltage_shape=rec,
                                         features=pulse_features(mss.weighted_force, t),
@@ -207,7 +209,7 @@ def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> Setup
         sensors.append(SensorResult(sensor=spec, position=pos, force=rec, voltage_shape=shape,
                                     features=model_features_of(rec, t)))
     return SetupResult(setup=ctx.setup, chain=state.chain,
-                       history=ChainResult(t=t, force=res, approach=np.zeros_like(res)),
+                       history=ChainResult(t=t, force=res, approach=approach),
                        static_force=static, sensors=tuple(sensors),
                        speed_incident=float("nan"), speed_reflected=float("nan"))
 

@@ -110,8 +110,9 @@ class MssSensor:
 
 
 def mss_signals(sensor: MssSensor, t: np.ndarray, force: np.ndarray, sample_rate: float, *,
-                static: np.ndarray | None = None, columns: np.ndarray | None = None,
-                noise: NoiseModel | None = None, rng: int | None = None) -> MssRecord:
+                approach: np.ndarray | None = None, static: np.ndarray | None = None,
+                columns: np.ndarray | None = None, noise: NoiseModel | None = None,
+                rng: int | None = None) -> MssRecord:
     """Coil signals of one physics MsS for a chain's contact forces.
 
     Parameters
@@ -123,6 +124,10 @@ def mss_signals(sensor: MssSensor, t: np.ndarray, force: np.ndarray, sample_rate
         Contact forces, N.
     sample_rate : float
         DAQ rate, Hz.
+    approach : ndarray, shape (nt, m), optional
+        The chain's contact approaches, m (negative: open), same columns as ``force``;
+        default the Hertz approach of the forces (see
+        :func:`msens.magnetics.transducer.contact_rates`).
     static : ndarray, shape (n,), optional
         Static contact forces (column k is contact k + 1), N; default the first sample.
     columns : ndarray of int, shape (m,), optional
@@ -138,11 +143,14 @@ def mss_signals(sensor: MssSensor, t: np.ndarray, force: np.ndarray, sample_rate
     base = fc[0] if static is None else contact_forces_of(np.asarray(static)[None, :],
                                                            contacts)[0]
     stiff = tr.contact_stiffness
-    delta = (np.clip(fc, 0.0, None) / stiff) ** (2.0 / 3.0)
     delta0 = (np.clip(base, 0.0, None) / stiff) ** (2.0 / 3.0)
+    if approach is None:
+        delta = (np.clip(fc, 0.0, None) / stiff) ** (2.0 / 3.0)
+    else:
+        delta = contact_forces_of(approach, contacts, columns)
     flux = (fc - base) @ tr.sensitivity_villari + (delta - delta0) @ tr.dlambda_dapproach
     total = float(np.sum(tr.sensitivity("both")))
-    rates = contact_rates(t, fc, contacts, stiff, columns=contacts)
+    rates = contact_rates(t, fc, contacts, stiff, columns=contacts, approach=delta)
     e = emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach)
     t_daq, v = daq_voltage(sensor.circuit, t, e, sample_rate, noise=noise, rng=rng)
     return MssRecord(t=t, flux=flux, weighted_force=flux / total if total else flux * np.nan,
@@ -157,16 +165,19 @@ def voltage_on(record: MssRecord) -> np.ndarray:
 
 def mss_record(transducer: Transducer, circuit: ReadoutCircuit, t: np.ndarray,
                force: np.ndarray, electronics: ElectronicsSpec, *,
-               static: np.ndarray | None = None, seed_offset: int = 0) -> MssRecord:
+               approach: np.ndarray | None = None, static: np.ndarray | None = None,
+               seed_offset: int = 0) -> MssRecord:
     """Coil signals of one physics MsS of a study for contact forces ``force`` (nt, n), N.
 
     Parameters
     ----------
+    approach : ndarray, shape (nt, n), optional
+        The chain's contact approaches, m.
     static : ndarray, shape (n,), optional
         Static contact forces, N; default the first sample.
     seed_offset : int
         Added to the study's noise seed so that two coils get independent noise.
     """
     return mss_signals(MssSensor(transducer, circuit), t, force, electronics.sample_rate_hz,
-                       static=static, noise=noise_model(electronics),
+                       approach=approach, static=static, noise=noise_model(electronics),
                        rng=electronics.seed + seed_offset)

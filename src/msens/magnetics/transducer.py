@@ -228,8 +228,9 @@ def contact_forces_of(force: np.ndarray, contacts: np.ndarray,
 
 
 def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
-                  stiffness: float, columns: np.ndarray | None = None) -> ContactRates:
-    """Force and approach rates of ``contacts`` from a chain's contact forces.
+                  stiffness: float, columns: np.ndarray | None = None,
+                  approach: np.ndarray | None = None) -> ContactRates:
+    """Force and approach rates of ``contacts`` from a chain's contact states.
 
     Parameters
     ----------
@@ -243,6 +244,10 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
         Hertz prefactor A, N/m^1.5.
     columns : ndarray of int, shape (m,), optional
         Contact number of each column of ``force`` (see :func:`contact_forces_of`).
+    approach : ndarray, shape (nt, m), optional
+        The chain's contact approaches δ_c(t), m (negative: open), same columns as
+        ``force``. Without it δ_c = ([F_c]_+/A)^{2/3}, whose slope in F is infinite at
+        F = 0: a contact that unloads or opens between two samples then gives a spike.
 
     Notes
     -----
@@ -255,7 +260,8 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
             f"internal: force must have shape (nt={t.size}, n_contacts), got "
             f"{np.shape(force)}")
     fc = contact_forces_of(force, contacts, columns)
-    delta = (np.clip(fc, 0.0, None) / stiffness) ** (2.0 / 3.0)
+    delta = (np.clip(fc, 0.0, None) / stiffness) ** (2.0 / 3.0) if approach is None else \
+        contact_forces_of(approach, contacts, columns)
     return ContactRates(t=t, force=np.gradient(fc, t, axis=0),
                         approach=np.gradient(delta, t, axis=0))
 
@@ -286,7 +292,7 @@ def emf_from_rates(rates: ContactRates, sensitivity_villari: np.ndarray,
 
 
 def emf(transducer: Transducer, t: np.ndarray, force: np.ndarray,
-        mechanism: Mechanism = "both") -> np.ndarray:
+        mechanism: Mechanism = "both", approach: np.ndarray | None = None) -> np.ndarray:
     """Open-circuit coil EMF of one transducer for a chain's contact forces, V.
 
     Parameters
@@ -297,12 +303,15 @@ def emf(transducer: Transducer, t: np.ndarray, force: np.ndarray,
     force : ndarray, shape (nt, m)
         Contact forces, N (column k is contact k + 1).
     mechanism : {"villari", "approach", "both"}
+    approach : ndarray, shape (nt, m), optional
+        The chain's contact approaches, m (see :func:`contact_rates`).
 
     Returns
     -------
     ndarray, shape (nt,)
     """
-    rates = contact_rates(t, force, transducer.contacts, transducer.contact_stiffness)
+    rates = contact_rates(t, force, transducer.contacts, transducer.contact_stiffness,
+                          approach=approach)
     return emf_from_rates(rates, transducer.sensitivity_villari, transducer.dlambda_dapproach,
                           mechanism)
 

@@ -263,12 +263,13 @@ def mss_integrated(result: StudyResult, t_max_s: float = 600e-6) -> Figure:
         four = mss_four_contact(s.history.force, r.sensor.particle)
         ax.plot(t[keep] * _US, four[keep], "k--", lw=1.0, label="four-contact mean (paper)")
         ax.plot(t[keep] * _US, r.force[keep], "C3", lw=1.2,
-                label="physics: ΔΛ / Σ ∂Λ/∂F (integrated voltage)")
-        ax.set_ylabel(f"@{r.sensor.particle} (N)")
+                label="physics: flux change ΔΛ / Σ_c ∂Λ/∂F_c (both mechanisms)")
+        ax.set_ylabel(f"coil @{r.sensor.particle}: force or\nforce equivalent (N)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper right")
     axes[-1, 0].set_xlabel("time since impact (µs)")
-    fig.suptitle("Integrated MsS signal vs the paper's four-contact hypothesis")
+    fig.suptitle("Integrated MsS signal (coil flux change in newtons at the static-load "
+                 "sensitivity)\nvs the paper's four-contact mean force")
     fig.tight_layout()
     return fig
 

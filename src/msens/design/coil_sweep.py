@@ -208,7 +208,8 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
     fresh = sum(len(c) for c, (key, _) in zip(chunks, tasks, strict=True)
                 if cache.get(key) is None)
     results, _ = run_cached(evaluate_chunk, tasks, cache, scheduler=scheduler, workers=1,
-                            progress=progress, description="coil chunks")
+                            progress=progress, description="coil designs",
+                            unit="chunk")
     rows: list[dict] = []
     for chunk, res in zip(chunks, results, strict=True):
         if res["status"] == "ok":

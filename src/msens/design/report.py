@@ -142,11 +142,16 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
 
     ok = [i for i, r in enumerate(rows) if r["status"] == "ok"]
     s = np.array([abs(rows[i][objective]) for i in ok])
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), constrained_layout=True)
-    for ax, key, better, label in (
-            (axes[0], "precompression_N", "min", "magnetic precompression (N)"),
-            (axes[1], "bandwidth_Hz", "max", "bandwidth (Hz)")):
-        x = np.array([rows[i][key] for i in ok])
+    # trade-offs worth showing: those that vary (a coil sweep leaves the precompression alone)
+    axes_keys = [a for a in (("precompression_N", "min", "magnetic precompression (N)", 1.0),
+                             ("bandwidth_Hz", "max", "bandwidth (kHz)", 1e-3),
+                             ("resonance_Hz", "max", "read-out resonance (kHz)", 1e-3))
+                 if len({rows[i][a[0]] for i in ok}) > 1][:2] or \
+        [("bandwidth_Hz", "max", "bandwidth (kHz)", 1e-3)]
+    fig, axes = plt.subplots(1, len(axes_keys), figsize=(5 * len(axes_keys), 4.2),
+                             constrained_layout=True, squeeze=False)
+    for ax, (key, better, label, unit) in zip(axes[0], axes_keys, strict=True):
+        x = np.array([rows[i][key] for i in ok]) * unit
         if x.size:
             front = pareto_mask(x, s, better)
             ax.scatter(x[~front], s[~front], s=8, c="0.6", label="design")

@@ -42,7 +42,8 @@ class _Guarded:
 def run_cached(fn: Callable[[Any], dict], tasks: Sequence[tuple[str, Any]],
                cache: ResultCache, *, scheduler: str | None = None,
                workers: int | None = None, progress: bool = True,
-               description: str = "designs") -> tuple[list[dict], int]:
+               description: str = "designs", unit: str = "design"
+               ) -> tuple[list[dict], int]:
     """Results of all tasks, in task order, and how many were computed (not cached).
 
     Parameters
@@ -56,11 +57,13 @@ def run_cached(fn: Callable[[Any], dict], tasks: Sequence[tuple[str, Any]],
         See :func:`msens.parallel.run_tasks`.
     progress : bool
         Show a tqdm bar on stderr.
+    description, unit : str
+        The bar's label and the name of one task.
     """
     results: list[dict | None] = [cache.get(key) for key, _ in tasks]
     todo = [i for i, r in enumerate(results) if r is None]
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=description,
-               unit="design", disable=not progress)
+               unit=unit, disable=not progress)
     try:
         for j, result in run_tasks(_Guarded(fn), [tasks[i][1] for i in todo],
                                    scheduler=scheduler, workers=workers):

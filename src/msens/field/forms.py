@@ -97,6 +97,22 @@ def element_load(q: QuadratureData, j_phi: np.ndarray, h_c: np.ndarray) -> np.nd
             + np.einsum("eqi,eq->ei", q.g[..., 1], q.w * h_c[:, None]))
 
 
+def element_mass(q: QuadratureData, coef: np.ndarray) -> np.ndarray:
+    """Element matrices ∫ c φ_i φ_j r (per radian), shape (n_elements, n_bfun, n_bfun).
+
+    With c = σ this is the conductivity mass matrix M_σ of the eddy-current term jω M_σ
+    (:mod:`.eddy`); the same quadrature as the stiffness (degree 2·order, i.e. 4 for P2
+    against the integrand's degree 5 — consistent, and P2's optimal order is kept).
+
+    Parameters
+    ----------
+    coef : ndarray, shape (n_elements,) or (n_elements, n_qp)
+        Coefficient c per element or per quadrature point (σ in S/m gives S m²).
+    """
+    c = coef[:, None] if coef.ndim == 1 else coef
+    return np.einsum("eqi,eqj,eq->eij", q.phi, q.phi, c * q.w, optimize=True)
+
+
 def element_internal_force(q: QuadratureData, h: np.ndarray) -> np.ndarray:
     """Element vectors ∫ H · B(φ_i) r for H at quadrature points (shape (n_e, n_qp, 2))."""
     return np.einsum("eqic,eqc->ei", q.g, h * q.w[..., None])

@@ -244,7 +244,8 @@ def mss_voltages(result: StudyResult, t_max_s: float = 600e-6) -> Figure:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper right")
     axes[-1, 0].set_xlabel("time since impact (µs)")
-    fig.suptitle("Predicted MsS voltage (field model + Villari + chain + read-out)")
+    fig.suptitle("Predicted MsS voltage: contact approach + Villari (field model), chain, "
+                 "read-out")
     fig.tight_layout()
     return fig
 

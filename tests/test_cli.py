@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -154,3 +155,59 @@ def test_compare_bad_data_fails_before_the_run(tmp_path, capsys, monkeypatch, st
     assert "Traceback" not in err and err.count("\n") == 1
     assert elapsed < 5.0, f"compare took {elapsed:.1f} s to reject the data"
     assert not (tmp_path / "cmp" / "compare.json").exists()
+
+
+def test_bare_msens_prints_help_and_version_is_known(capsys):
+    from msens.cli import main, version
+
+    assert main([]) == 0
+    out = capsys.readouterr().out
+    assert "usage: msens" in out and "check-waveform" in out
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.strip() == f"msens {version()}"
+
+
+def test_usage_errors_have_one_prefix(capsys):
+    from msens.cli import main
+
+    assert main(["synth"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("msens: error: synth: ") and err.count("msens") == 1
+
+
+def test_check_waveform_and_convert(tmp_path, capsys):
+    from msens.cli import main
+
+    src = tmp_path / "a.csv"
+    src.write_text("# msens-waveform: 1\ntime_s,bead@13\n0.0,0.0\n1e-6,1.0\n2e-6,0.5\n")
+    assert main(["check-waveform", str(src)]) == 0
+    assert "ok, 3 samples" in capsys.readouterr().out
+    target = tmp_path / "a.npz"
+    assert main(["convert", str(src), str(target)]) == 0
+    assert main(["check-waveform", str(target)]) == 0
+    # never overwritten
+    assert main(["convert", str(src), str(target)]) == 2
+    assert "exists" in capsys.readouterr().err
+    assert main(["check-waveform", str(tmp_path / "missing.csv")]) == 2
+    assert capsys.readouterr().err.startswith("msens: error: ")
+
+
+def test_result_files_record_the_version_and_the_study_hash(tmp_path):
+    from msens import api
+    from msens.cli import version
+
+    root = Path(__file__).resolve().parents[1]
+    study = api.load(root / "studies" / "paper-mss.toml")
+    p = api.provenance(study)
+    assert p["msens_version"] == version() and len(p["study_sha256"]) == 64
+    # the hash is the study's content, not its file's name
+    copy = tmp_path / "copy.toml"
+    copy.write_text((root / "studies" / "paper-mss.toml").read_text())
+    assert api.provenance(api.load(copy)) == p
+    changed = tmp_path / "changed.toml"
+    changed.write_text(copy.read_text().replace("drop_height_m = 7.2e-3",
+                                                "drop_height_m = 7.3e-3"))
+    assert api.provenance(api.load(changed))["study_sha256"] != p["study_sha256"]
+    assert api.summary(api.run(study))["provenance"] == p

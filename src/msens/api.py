@@ -11,6 +11,7 @@ exactly the numbers the terminal prints::
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +41,21 @@ def run(study: Study) -> StudyResult:
     return run_study(study)
 
 
+def provenance(study: Study) -> dict:
+    """What made a result file: the msens version and the study's content hash (SHA-256 of
+    its canonical JSON form, so the same study gives the same hash wherever its file is)."""
+    import hashlib
+    import json
+
+    from msens.cli import version
+    from msens.design.cache import canonical
+
+    text = json.dumps(canonical(dataclasses.replace(study, source="")), sort_keys=True,
+                      separators=(",", ":"))
+    return {"msens_version": version(),
+            "study_sha256": hashlib.sha256(text.encode()).hexdigest()}
+
+
 def summary(result: StudyResult) -> dict:
     """The content of ``summary.json``: study, calibrated parameters, Table-2 rows."""
     fit = result.fit
@@ -67,6 +83,7 @@ def summary(result: StudyResult) -> dict:
     out = {
         "study": result.study.name,
         "source": result.study.source,
+        "provenance": provenance(result.study),
         "striker_velocity_m_per_s": result.study.striker.velocity_m_per_s,
         "calibration": calibration,
         "setups": static,
@@ -88,8 +105,9 @@ def _trough(record) -> dict:
 
 
 def physics_summary(result: StudyResult) -> dict:
-    """Physics-MsS part of ``summary.json``: per-coil voltage and sensitivity profile, the
-    magnet's precompression per contact and the dominant transduction mechanism."""
+    """Physics-MsS part of ``summary.json``: per-coil voltage, each mechanism's share of the
+    signal and sensitivity profile, the magnet's precompression per contact and the
+    dominant transduction mechanism."""
     coils, villari, approach = [], 0.0, 0.0
     precompression = []
     for s in result.setups:
@@ -117,6 +135,7 @@ def physics_summary(result: StudyResult) -> dict:
                 "resistance_ohm": tr.resistance_ohm, "inductance_H": tr.inductance_H,
                 "resonance_Hz": f0, "quality_factor": q,
                 "pre_peak_trough": _trough(r.mss),
+                "mechanism_share": mechanism_share(tr, s.history),
                 "sensitivity_profile": [
                     {"contact": int(c), "dLambda_dF_Wb_per_N": float(v + g),
                      "villari_Wb_per_N": float(v), "approach_Wb_per_N": float(g)}
@@ -128,6 +147,22 @@ def physics_summary(result: StudyResult) -> dict:
     return {"coils": coils, "magnetic_precompression_N": precompression,
             "dominant_mechanism": "villari" if villari >= approach else "contact approach",
             "mechanism_magnitude_Wb_per_N": {"villari": villari, "approach": approach}}
+
+
+def mechanism_share(tr, history) -> dict:
+    """Each mechanism's open-circuit EMF alone: its peak (V) and its share of the summed
+    signal energy ∫EMF_m² dt / Σ_m ∫EMF_m² dt (the two are not orthogonal: their cross term
+    is left out, so the shares add to 1)."""
+    from msens.magnetics.transducer import contact_rates, emf_from_rates
+
+    rates = contact_rates(history.t, history.force, tr.contacts, tr.contact_stiffness,
+                          approach=history.approach)
+    emfs = {m: emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach, m)
+            for m in ("villari", "approach")}
+    energy = {m: float(np.trapezoid(e**2, history.t)) for m, e in emfs.items()}
+    total = sum(energy.values()) or 1.0
+    return {m: {"peak_emf_V": float(np.max(np.abs(e))), "energy_share": energy[m] / total}
+            for m, e in emfs.items()}
 
 
 FIGURES = ("contact_forces.png", "sensor_profiles.png", "sensor_records.png", "table2.png")
@@ -264,6 +299,7 @@ def compare(study: Study, data: Path, out: Path) -> tuple[dict, list[Path]]:
     result = run_study(study)
     report = compare_records(result, waveform)
     report["data"] = str(data)
+    report["provenance"] = provenance(study)
     written = [target.write_json("compare.json", report)]
     setup = match_setup(result, waveform)
     fig = plots.overlay(setup, shot_records(setup, waveform))
@@ -345,7 +381,7 @@ def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str |
     from msens.design import load_sweep, run_design
 
     return run_design(study, load_sweep(sweep), out, scheduler=scheduler, workers=workers,
-                      progress=progress)
+                      progress=progress, provenance=provenance(study))
 
 
 def format_design(result) -> str:
@@ -388,7 +424,7 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
             if d.effect == "none":
                 break
             added.append((d.effect, d.parameters))
-    written = write_diagnosis(results, target)
+    written = write_diagnosis(results, target, provenance=provenance(study))
     report = json.loads(written[0].read_text())
     return report, written
 

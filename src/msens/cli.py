@@ -22,12 +22,32 @@ class _Parser(argparse.ArgumentParser):
     """argparse that reports usage errors as InputError (exit 2, one line)."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        raise InputError(f"{self.prog}: {message}")
+        # "msens: error: run: ..." (the sub-command, not the program name twice)
+        command = self.prog.removeprefix("msens").strip()
+        raise InputError(f"{command}: {message}" if command else message)
+
+
+def version() -> str:
+    """The installed msens version (from the package metadata)."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as _version
+
+    try:
+        return _version("msens")
+    except PackageNotFoundError:  # pragma: no cover - run from a source tree
+        return "unknown"
 
 
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(prog="msens", description="Magnetostrictive sensors on granular chains.")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    p.add_argument("--version", action="version", version=f"msens {version()}")
+    sub = p.add_subparsers(dest="command", parser_class=_Parser)
+
+    check = sub.add_parser("check-waveform", help="validate waveform files (CSV, NPZ, TDMS)")
+    check.add_argument("files", nargs="+", help="waveform files")
+    conv = sub.add_parser("convert", help="convert a waveform file between CSV, NPZ and TDMS")
+    conv.add_argument("source", help="waveform file to read")
+    conv.add_argument("target", help="file to write (.csv, .npz or .tdms; never overwritten)")
 
     run = sub.add_parser("run", help="run a study (default: the built-in default study)")
     run.add_argument("study", nargs="?", help="study .toml file (default: built-in)")
@@ -148,15 +168,35 @@ def _design(args: argparse.Namespace) -> int:
     return 0
 
 
-_COMMANDS = {"run": _run, "field": _field, "verify": _verify, "synth": _synth,
-             "compare": _compare, "diagnose": _diagnose, "design": _design}
+def _check_waveform(args: argparse.Namespace) -> int:
+    from msens.io.read import main_check
+
+    return main_check(args.files)
+
+
+def _convert(args: argparse.Namespace) -> int:
+    from msens.io.read import describe, read_waveform, write_waveform
+
+    waveform = read_waveform(args.source)
+    path = write_waveform(waveform, args.target)
+    print(f"wrote {path}: {describe(waveform)}")
+    return 0
+
+
+_COMMANDS = {"check-waveform": _check_waveform, "convert": _convert, "run": _run,
+             "field": _field, "verify": _verify, "synth": _synth, "compare": _compare,
+             "diagnose": _diagnose, "design": _design}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``msens`` console script; returns the exit status."""
     os.environ.setdefault("MPLBACKEND", "Agg")
     try:
-        args = _parser().parse_args(argv)
+        parser = _parser()
+        args = parser.parse_args(argv)
+        if args.command is None:  # bare "msens": say what it can do
+            parser.print_help()
+            return 0
         return _COMMANDS[args.command](args)
     except InputError as exc:
         print(f"msens: error: {exc}", file=sys.stderr)

@@ -50,7 +50,8 @@ class DesignResult:
 
 def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
                scheduler: str | None = None, workers: int | None = None,
-               progress: bool = True, cache_dir: str | Path | None = None) -> DesignResult:
+               progress: bool = True, cache_dir: str | Path | None = None,
+               provenance: dict | None = None) -> DesignResult:
     """Run a sweep and write designs.csv, pareto.png and recommendation.json into ``out``.
 
     Parameters
@@ -69,6 +70,8 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
     progress : bool
     cache_dir : str or Path, optional
         Cache location (default ``out/cache``).
+    provenance : dict, optional
+        Recorded in ``recommendation.json`` (msens version, study hash).
     """
     from msens.design.coil_sweep import run_coil_sweep
     from msens.design.magnet_sweep import MagnetTask, evaluate_design
@@ -98,13 +101,16 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         rows, computed = run_cached(evaluate_design, tasks, cache, scheduler=scheduler,
                                     workers=workers, progress=progress,
                                     description="magnet designs")
-    return write_results(spec, designs, rows, target, computed=computed)
+    return write_results(spec, designs, rows, target, computed=computed,
+                         provenance=provenance)
 
 
-def write_results(spec: SweepSpec, designs, rows, out: OutputDir, *, computed: int
-                  ) -> DesignResult:
+def write_results(spec: SweepSpec, designs, rows, out: OutputDir, *, computed: int,
+                  provenance: dict | None = None) -> DesignResult:
     """Write the three output files (atomically, only over msens' own) and the summary."""
     rec = recommend(designs, rows, spec.recommend)
+    if provenance:
+        rec = {**rec, "provenance": provenance}
     paths = [out.target(f) for f in FILES]
     for f in FILES:
         out.record(f)

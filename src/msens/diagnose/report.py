@@ -85,10 +85,14 @@ def figure(d: Diagnosis) -> Figure:
     return fig
 
 
-def write(passes: Sequence[Diagnosis], out: str | Path | OutputDir) -> list[Path]:
-    """Write ``diagnosis.json`` and ``diagnosis.png`` (atomically, never over a user's file)."""
+def write(passes: Sequence[Diagnosis], out: str | Path | OutputDir, *,
+          provenance: dict | None = None) -> list[Path]:
+    """Write ``diagnosis.json`` and ``diagnosis.png`` (atomically, never over a user's file);
+    ``provenance`` (msens version, study hash) is recorded in the JSON."""
     d = out if isinstance(out, OutputDir) else OutputDir(out)
-    written = [d.write_json("diagnosis.json", report(passes))]
+    written = [d.write_json("diagnosis.json",
+                            {**report(passes), **({"provenance": provenance}
+                                                  if provenance else {})})]
     fig = figure(passes[0])
     written.append(d.savefig("diagnosis.png", fig, dpi=130))
     plt.close(fig)

@@ -124,7 +124,7 @@ def main_check(argv: Sequence[str]) -> int:
         try:
             waveform = check_waveform_file(arg)
         except InputError as exc:
-            print(f"error: {exc}", file=sys.stderr)
+            print(f"msens: error: {exc}", file=sys.stderr)
             status = 2
         else:
             print(f"{arg}: ok, {describe(waveform)}")

@@ -1,0 +1,38 @@
+"""The physics-MsS part of summary.json on the main study: mechanisms and their shares."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from msens import api
+from msens.magnetics.transducer import contact_rates, emf_from_rates
+from msens.study import default_study_path
+
+
+@pytest.fixture(scope="module")
+def result():
+    return api.run(api.load(default_study_path()))
+
+
+def test_mechanism_shares_add_up_and_the_mechanisms_add_to_the_emf(result):
+    summary = api.physics_summary(result)
+    assert summary["dominant_mechanism"] == "contact approach"
+    setup = result.setups[0]
+    for coil, sensor in zip(summary["coils"], setup.sensors, strict=True):
+        share = coil["mechanism_share"]
+        assert share["villari"]["energy_share"] + share["approach"]["energy_share"] == \
+            pytest.approx(1.0, rel=1e-12)
+        assert share["approach"]["energy_share"] > 0.99
+        tr = setup.transducers[sensor.sensor.particle]
+        h = setup.history
+        rates = contact_rates(h.t, h.force, tr.contacts, tr.contact_stiffness,
+                              approach=h.approach)
+        parts = [emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach, m)
+                 for m in ("villari", "approach")]
+        np.testing.assert_allclose(parts[0] + parts[1], sensor.mss.emf, rtol=0,
+                                   atol=1e-12 * np.max(np.abs(sensor.mss.emf)))
+        # the pulse's EMF: smooth, no one-sample spike above its neighbours
+        e = np.abs(sensor.mss.emf)
+        k = int(np.argmax(e))
+        assert e[k] - max(e[k - 1], e[k + 1]) < 1e-3 * e[k]

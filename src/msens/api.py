@@ -36,6 +36,12 @@ def load_paper_table2() -> Study:
     return load_study(builtin_study_path(PAPER_TABLE2))
 
 
+def replace(study: Study, changes: dict | None = None, /, **more) -> Study:
+    """``study`` with keys changed by their dotted names, validated like a study file
+    (:meth:`msens.study.Study.replace`): ``replace(study, {"sensor[1].coil.turns": 900})``."""
+    return study.replace(changes, **more)
+
+
 def run(study: Study) -> StudyResult:
     """Calibrate, simulate and observe every setup of ``study``."""
     return run_study(study)
@@ -167,13 +173,36 @@ def mechanism_share(tr, history) -> dict:
 
 FIGURES = ("contact_forces.png", "sensor_profiles.png", "sensor_records.png", "table2.png")
 PHYSICS_FIGURES = ("mss_voltage.png", "mss_integrated.png", "sensitivity_profile.png",
-                   "field_B.png")
+                   "magnetic_precompression.png", "field_B.png")
 
 
-def prepare_outputs(out: str | Path, *, figures: bool = True) -> OutputDir:
-    """Open ``out`` and check, before any work, that no user file would be overwritten."""
+def _check_format(fig_format: str) -> str:
+    """``fig_format`` if msens can write figures in it (:data:`msens.plots.FORMATS`)."""
+    from msens.errors import InputError
+    from msens.plots import FORMATS
+
+    if fig_format not in FORMATS:
+        raise InputError(f"--format must be one of {', '.join(FORMATS)}, got {fig_format!r}")
+    return fig_format
+
+
+def _figure_names(names, fig_format: str) -> list[str]:
+    """Figure file names (listed as .png) in ``fig_format``."""
+    from msens.output import figure_name
+
+    return [figure_name(n, fig_format) if n.endswith(".png") else n for n in names]
+
+
+def prepare_outputs(out: str | Path, *, figures: bool = True,
+                    fig_format: str = "png") -> OutputDir:
+    """Open ``out`` and check, before any work, that no user file would be overwritten.
+
+    ``fig_format`` ("png", "pdf" or "svg") names the figures to check.
+    """
+    _check_format(fig_format)
     d = OutputDir(out)
-    d.check(["summary.json", *(FIGURES + PHYSICS_FIGURES if figures else ())])
+    d.check(["summary.json",
+             *(_figure_names(FIGURES + PHYSICS_FIGURES, fig_format) if figures else ())])
     return d
 
 
@@ -192,10 +221,11 @@ def _figure_makers(result: StudyResult) -> dict:
         makers["mss_voltage.png"] = lambda: plots.mss_voltages(result)
         makers["mss_integrated.png"] = lambda: plots.mss_integrated(result)
         makers["sensitivity_profile.png"] = lambda: plots.sensitivity_profile(result)
+        makers["magnetic_precompression.png"] = lambda: plots.magnetic_precompression(result)
     return makers
 
 
-def _field_map(result: StudyResult, d: OutputDir) -> Path | None:
+def _field_map(result: StudyResult, d: OutputDir, fig_format: str = "png") -> Path | None:
     """The bias-field map of the first physics setup (re-solves the cached field model)."""
     from msens.field.report import plot_field_map
     from msens.field.sensor_model import run_field_model
@@ -205,22 +235,25 @@ def _field_map(result: StudyResult, d: OutputDir) -> Path | None:
     if setup is None:
         return None
     report = run_field_model(geometry_from_study(result.study, setup), inductance=False)
-    return d.write("field_B.png", lambda p: plot_field_map(report, p))
+    return d.write(f"field_B.{fig_format}", lambda p: plot_field_map(report, p, fig_format))
 
 
 def write_outputs(result: StudyResult, out: str | Path | OutputDir, *,
-                  figures: bool = True) -> list[Path]:
-    """Write ``summary.json`` and the figures into ``out``; returns the written paths."""
+                  figures: bool = True, fig_format: str = "png") -> list[Path]:
+    """Write ``summary.json`` and the figures (in ``fig_format``: "png", "pdf" or "svg")
+    into ``out``; returns the written paths."""
     from msens import plots
 
-    d = out if isinstance(out, OutputDir) else prepare_outputs(out, figures=figures)
+    _check_format(fig_format)
+    d = out if isinstance(out, OutputDir) else prepare_outputs(out, figures=figures,
+                                                               fig_format=fig_format)
     written = [d.write_json("summary.json", summary(result))]
     if figures:
         for name, make in _figure_makers(result).items():
             fig = make()
-            written.append(d.savefig(name, fig, dpi=150))
+            written.append(d.savefig(name, fig, fmt=fig_format, dpi=plots.DPI))
             plots.close(fig)
-        field_map = _field_map(result, d)
+        field_map = _field_map(result, d, fig_format)
         if field_map is not None:
             written.append(field_map)
     return written
@@ -272,9 +305,10 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
     return out
 
 
-def compare(study: Study, data: Path, out: Path) -> tuple[dict, list[Path]]:
+def compare(study: Study, data: Path, out: Path, *,
+            fig_format: str = "png") -> tuple[dict, list[Path]]:
     """Compare measured ``data`` with the model of ``study``; write ``compare.json`` and an
-    overlay figure into ``out``.
+    overlay figure (``overlay.<fig_format>``: png, pdf or svg) into ``out``.
 
     The data's unit and channels are checked against the study file before anything is
     simulated, so mismatched data fail in about a second instead of after the study's run.
@@ -292,7 +326,7 @@ def compare(study: Study, data: Path, out: Path) -> tuple[dict, list[Path]]:
     from msens.io.read import read_waveform
 
     target = OutputDir(out)
-    target.check(["compare.json", "overlay.png"])
+    target.check(["compare.json", f"overlay.{_check_format(fig_format)}"])
     waveform = read_waveform(data)
     check_units(waveform)
     match_setup_spec(study, waveform)
@@ -303,7 +337,7 @@ def compare(study: Study, data: Path, out: Path) -> tuple[dict, list[Path]]:
     written = [target.write_json("compare.json", report)]
     setup = match_setup(result, waveform)
     fig = plots.overlay(setup, shot_records(setup, waveform))
-    written.append(target.savefig("overlay.png", fig, dpi=150))
+    written.append(target.savefig("overlay.png", fig, fmt=fig_format, dpi=plots.DPI))
     plots.close(fig)
     return report, written
 
@@ -333,18 +367,20 @@ def format_comparison(report: dict) -> str:
 FIELD_OUTPUTS = ("field.json", "field.vtu", "field_B.png", "field_3d.png")
 
 
-def field(study: Study, out: Path) -> str:
+def field(study: Study, out: Path, *, fig_format: str = "png") -> str:
     """Solve the field model of the study's MsS sensors; write ``field.json``, ``field.vtu``
-    and figures into ``out``; return a short text report."""
+    and figures (the field map in ``fig_format``: png, pdf or svg; the 3-D view is always
+    PNG) into ``out``; return a short text report."""
     from msens.field.report import write_field_outputs
     from msens.field.sensor_model import run_field_model
     from msens.fieldsetup import geometry_from_study
 
     geometry = geometry_from_study(study)
     target = OutputDir(out)
-    target.check(list(FIELD_OUTPUTS))
+    target.check([f"field_B.{_check_format(fig_format)}" if n == "field_B.png" else n
+                  for n in FIELD_OUTPUTS])
     report = run_field_model(geometry)
-    written = write_field_outputs(report, out)
+    written = write_field_outputs(report, out, fig_format=fig_format)
     for name, path in written.items():
         if not path.startswith("skipped"):
             target.record(name)
@@ -375,13 +411,14 @@ def format_field(report, written: dict[str, str]) -> str:
 
 
 def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str | None = None,
-           workers: int | None = None, progress: bool = True):
+           workers: int | None = None, progress: bool = True, fig_format: str = "png"):
     """Sweep coil/magnet designs of the study's MsS (:mod:`msens.design`); writes
-    ``designs.csv``, ``pareto.png`` and ``recommendation.json`` into ``out``."""
+    ``designs.csv``, ``pareto.<fig_format>`` and ``recommendation.json`` into ``out``."""
     from msens.design import load_sweep, run_design
 
     return run_design(study, load_sweep(sweep), out, scheduler=scheduler, workers=workers,
-                      progress=progress, provenance=provenance(study))
+                      progress=progress, provenance=provenance(study),
+                      fig_format=_check_format(fig_format))
 
 
 def format_design(result) -> str:
@@ -392,9 +429,9 @@ def format_design(result) -> str:
 
 
 def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | None = None,
-             passes: int = 1) -> tuple[dict, list[Path]]:
+             passes: int = 1, fig_format: str = "png") -> tuple[dict, list[Path]]:
     """Name the effect the model of ``study`` misses; write ``diagnosis.json`` and
-    ``diagnosis.png`` into ``out``.
+    ``diagnosis.<fig_format>`` (png, pdf or svg) into ``out``.
 
     Either ``data`` (a measured waveform; its sensors choose the study's setup) or
     ``reference`` (a setup name: its ``[reference]`` rows are the measurement) is given.
@@ -413,7 +450,7 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
     if not 1 <= passes <= 7:
         raise InputError(f"--passes must be from 1 to 7, got {passes}")
     target = OutputDir(out)
-    target.check(list(FILES))
+    target.check(_figure_names(FILES, _check_format(fig_format)))
     if data is not None:
         results = diagnose_passes(read_waveform(data), study, passes=passes)
     else:
@@ -424,7 +461,8 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
             if d.effect == "none":
                 break
             added.append((d.effect, d.parameters))
-    written = write_diagnosis(results, target, provenance=provenance(study))
+    written = write_diagnosis(results, target, provenance=provenance(study),
+                              fig_format=fig_format)
     report = json.loads(written[0].read_text())
     return report, written
 

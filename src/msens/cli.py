@@ -3,11 +3,17 @@
 Each sub-command is a thin wrapper over the public Python API (:mod:`msens.api`), so a
 script or notebook gets the same numbers as the terminal. Bad input ends with one message
 on stderr and exit status 2, never a traceback.
+
+Feedback: the library logs its stages through :mod:`logging` (loggers ``msens.*``) and
+shows tqdm bars only while those loggers are at INFO; the command sends them to stderr as
+``msens: <message>`` lines. ``-q``/``--quiet`` (before or after the sub-command) sets them to
+WARNING, which also hides the bars.
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import sys
 from collections.abc import Sequence
@@ -27,6 +33,40 @@ class _Parser(argparse.ArgumentParser):
         raise InputError(f"{command}: {message}" if command else message)
 
 
+class _StderrHandler(logging.Handler):
+    """Log records as ``msens: <message>`` on the current stderr, above any tqdm bar."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            from tqdm import tqdm
+
+            # tqdm.write clears and redraws an active bar instead of breaking it
+            tqdm.write(self.format(record), file=sys.stderr)
+        except Exception:  # pragma: no cover - logging must never crash the command
+            self.handleError(record)
+
+
+def _configure_logging(quiet: bool) -> tuple[logging.Handler, int]:
+    """Send the ``msens`` loggers to stderr (INFO, or WARNING when quiet).
+
+    Returns the handler and the logger's previous level, for :func:`_restore_logging`.
+    """
+    log = logging.getLogger("msens")
+    handler = _StderrHandler()
+    handler.setFormatter(logging.Formatter("msens: %(message)s"))
+    log.addHandler(handler)
+    previous = log.level
+    log.setLevel(logging.WARNING if quiet else logging.INFO)
+    return handler, previous
+
+
+def _restore_logging(handler: logging.Handler, level: int) -> None:
+    """Undo :func:`_configure_logging` (main() may run many times in one process)."""
+    log = logging.getLogger("msens")
+    log.removeHandler(handler)
+    log.setLevel(level)
+
+
 def version() -> str:
     """The installed msens version (from the package metadata)."""
     from importlib.metadata import PackageNotFoundError
@@ -41,6 +81,8 @@ def version() -> str:
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(prog="msens", description="Magnetostrictive sensors on granular chains.")
     p.add_argument("--version", action="version", version=f"msens {version()}")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress messages or bars on stderr (warnings and errors only)")
     sub = p.add_subparsers(dest="command", parser_class=_Parser)
 
     check = sub.add_parser("check-waveform", help="validate waveform files (CSV, NPZ, TDMS)")
@@ -85,6 +127,10 @@ def _parser() -> argparse.ArgumentParser:
                            "(e.g. the paper's Table 2) are the measurement; no DATA")
     diag.add_argument("--passes", type=int, default=1,
                       help="diagnosis passes, each adding the previous winner (default 1)")
+    for reader in (check, conv, comp, diag):  # an instrument's export: README "Instrument exports"
+        reader.add_argument("--columns", metavar="MAP", default=None,
+                            help="column map of an oscilloscope/DAQ text export, inline "
+                                 "('time=Time:ms,mss@13=CH1:mV,...') or a .toml file")
     des = sub.add_parser("design", help="sweep coil and magnet designs of a study's MsS")
     des.add_argument("study", help="study .toml file with an mss sensor")
     des.add_argument("--sweep", required=True, help="sweep .toml file (schema msens.sweep/1)")
@@ -93,6 +139,14 @@ def _parser() -> argparse.ArgumentParser:
                      help="Dask distributed scheduler address (default: local processes)")
     des.add_argument("--workers", type=int, default=None,
                      help="local worker processes (default: all CPUs)")
+    for command in (run, field, comp, diag, des):
+        # the same choices as msens.plots.FORMATS (not imported here: matplotlib is slow)
+        command.add_argument("--format", dest="fig_format", choices=("png", "pdf", "svg"),
+                             default="png", help="figure file format (default png)")
+    for command in sub.choices.values():  # also after the sub-command: "msens run -q"
+        # SUPPRESS: an absent sub-command flag must not reset "msens -q run" to False
+        command.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS,
+                             help="no progress messages or bars on stderr")
     return p
 
 
@@ -101,9 +155,10 @@ def _run(args: argparse.Namespace) -> int:
 
     study = api.load(args.study) if args.study else api.load_default()
     out = Path(args.out) if args.out else Path("out") / study.name
-    target = api.prepare_outputs(out, figures=not args.no_figures)
+    target = api.prepare_outputs(out, figures=not args.no_figures, fig_format=args.fig_format)
     result = api.run(study)
-    written = api.write_outputs(result, target, figures=not args.no_figures)
+    written = api.write_outputs(result, target, figures=not args.no_figures,
+                                fig_format=args.fig_format)
     print(api.format_summary(result))
     print(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
     return 0
@@ -113,7 +168,7 @@ def _field(args: argparse.Namespace) -> int:
     from msens import api
 
     study = api.load(args.study)
-    report = api.field(study, Path(args.out))
+    report = api.field(study, Path(args.out), fig_format=args.fig_format)
     print(report)
     return 0
 
@@ -136,11 +191,19 @@ def _synth(args: argparse.Namespace) -> int:
     return 0
 
 
+def _data(path: str, columns: str | None):
+    """A data file as the readers take it: with its column map (checked now) if given."""
+    from msens.io.columns import mapped
+
+    return mapped(path, columns)
+
+
 def _compare(args: argparse.Namespace) -> int:
     from msens import api
 
     study = api.load(args.study)
-    report, written = api.compare(study, Path(args.data), Path(args.out))
+    report, written = api.compare(study, _data(args.data, args.columns), Path(args.out),
+                                  fig_format=args.fig_format)
     print(api.format_comparison(report))
     print(f"\nwrote {', '.join(str(p) for p in written)}")
     return 0
@@ -150,9 +213,11 @@ def _diagnose(args: argparse.Namespace) -> int:
     from msens import api
 
     study = api.load(args.study) if args.study else api.load_paper_table2()
-    data = Path(args.data) if args.data else None
+    if args.columns is not None and args.data is None:
+        raise InputError("diagnose: --columns maps the columns of DATA; give DATA")
+    data = _data(args.data, args.columns) if args.data else None
     report, written = api.diagnose(study, data, Path(args.out), reference=args.reference,
-                                   passes=args.passes)
+                                   passes=args.passes, fig_format=args.fig_format)
     print(api.format_diagnosis(report))
     print(f"\nwrote {', '.join(str(p) for p in written)}")
     return 0
@@ -163,21 +228,23 @@ def _design(args: argparse.Namespace) -> int:
 
     study = api.load(args.study)
     result = api.design(study, Path(args.sweep), Path(args.out), scheduler=args.scheduler,
-                        workers=args.workers)
+                        workers=args.workers, progress=not args.quiet,
+                        fig_format=args.fig_format)
     print(api.format_design(result))
     return 0
 
 
 def _check_waveform(args: argparse.Namespace) -> int:
+    from msens.io.columns import column_map
     from msens.io.read import main_check
 
-    return main_check(args.files)
+    return main_check(args.files, None if args.columns is None else column_map(args.columns))
 
 
 def _convert(args: argparse.Namespace) -> int:
     from msens.io.read import describe, read_waveform, write_waveform
 
-    waveform = read_waveform(args.source)
+    waveform = read_waveform(_data(args.source, args.columns))
     path = write_waveform(waveform, args.target)
     print(f"wrote {path}: {describe(waveform)}")
     return 0
@@ -191,12 +258,14 @@ _COMMANDS = {"check-waveform": _check_waveform, "convert": _convert, "run": _run
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``msens`` console script; returns the exit status."""
     os.environ.setdefault("MPLBACKEND", "Agg")
+    logging_state = None
     try:
         parser = _parser()
         args = parser.parse_args(argv)
         if args.command is None:  # bare "msens": say what it can do
             parser.print_help()
             return 0
+        logging_state = _configure_logging(args.quiet)
         return _COMMANDS[args.command](args)
     except InputError as exc:
         print(f"msens: error: {exc}", file=sys.stderr)
@@ -204,6 +273,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("msens: interrupted", file=sys.stderr)
         return 130
+    finally:
+        if logging_state is not None:
+            _restore_logging(*logging_state)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -110,7 +110,30 @@ class OutputDir:
         text = to_json(data)
         return self.write_text(name, text + "\n")
 
-    def savefig(self, name: str, fig: Any, **kwargs: Any) -> Path:
-        """Save a matplotlib figure atomically (format from ``name``'s suffix)."""
+    def savefig(self, name: str, fig: Any, fmt: str | None = None, **kwargs: Any) -> Path:
+        """Save a matplotlib figure atomically.
+
+        Parameters
+        ----------
+        name : str
+            File name; with ``fmt`` its suffix is replaced (``"a.png"`` -> ``"a.pdf"``).
+        fig : matplotlib.figure.Figure
+        fmt : {"png", "pdf", "svg"}, optional
+            File format (default: ``name``'s suffix, else PNG).
+        **kwargs
+            Passed to ``Figure.savefig`` (e.g. ``dpi``).
+
+        Returns
+        -------
+        Path
+        """
+        if fmt is not None:
+            name = figure_name(name, fmt)
         fmt = Path(name).suffix.lstrip(".") or "png"
         return self.write(name, lambda p: fig.savefig(p, format=fmt, **kwargs))
+
+
+def figure_name(name: str, fmt: str) -> str:
+    """``name`` with the suffix of figure format ``fmt``: ``figure_name("a.png", "svg")`` is
+    ``"a.svg"``."""
+    return str(Path(name).with_suffix(f".{fmt}"))

@@ -10,6 +10,7 @@ interrupted run loses at most the tasks in flight.
   calling process itself when ``workers == 1`` (no pickling, easiest to debug).
 - ``scheduler="tcp://host:port"``: a running ``dask.distributed`` scheduler; tasks are
   submitted with ``pure=False`` so Dask never merges or reorders them by its own hashing.
+  Dask is optional (``pip install "msens[cluster]"``); without it this is an InputError.
 
 Results do not depend on where a task ran: each task is a pure function of its argument.
 """
@@ -85,8 +86,9 @@ def _run_dask(fn: Callable[[Any], Any], args: Sequence[Any],
               scheduler: str) -> Iterator[tuple[int, Any]]:
     try:
         from distributed import Client, as_completed
-    except ImportError as exc:  # pragma: no cover - dask is a dependency
-        raise InputError("--scheduler needs dask.distributed installed") from exc
+    except ImportError as exc:  # an optional extra: the base install has no dask
+        raise InputError('--scheduler needs dask.distributed, which is not installed: '
+                         'pip install "msens[cluster]"') from exc
     try:
         client = Client(scheduler, timeout="10s")
     except OSError as exc:

@@ -7,9 +7,12 @@ extract pulse features -> compare with the study's reference rows.
 
 from __future__ import annotations
 
+import logging
+import time
 from dataclasses import dataclass
 
 import numpy as np
+from tqdm import tqdm
 
 from msens.assemble import build_chain
 from msens.calibrate import DissipationFit, fit_dissipation
@@ -19,6 +22,8 @@ from msens.chain.model import Chain
 from msens.features import PulseFeatures, centre_distance, pulse_features, wave_speed
 from msens.sensors import SensorKind, observe, time_derivative
 from msens.study import MssModel, ReferenceRow, SensorSpec, SetupSpec, Study
+
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -49,6 +54,14 @@ class SensorResult:
     features: PulseFeatures
     mss: object | None = None
 
+    def __repr__(self) -> str:
+        # the arrays' full reprs (thousands of samples) bury what a notebook user looks for
+        model = f" {self.sensor.model.value}" if self.sensor.model is not None else ""
+        return (f"SensorResult({_label(self.sensor)}{model} {self.position}: "
+                f"{_features_text(self.features)}; force {_shape(self.force)}, "
+                f"voltage_shape {_shape(self.voltage_shape)}"
+                + (", mss record" if self.mss is not None else "") + ")")
+
 
 @dataclass(frozen=True)
 class SetupResult:
@@ -78,6 +91,14 @@ class SetupResult:
     speed_reflected: float
     transducers: dict | None = None
 
+    def __repr__(self) -> str:
+        coils = (f", transducers at {', '.join(map(str, sorted(self.transducers)))}"
+                 if self.transducers else "")
+        return (f"SetupResult({self.setup.name!r}, {self.chain.n_particles} particles, "
+                f"sensors {', '.join(f'{_label(s.sensor)} {s.position}' for s in self.sensors)}"
+                f", speed {self.speed_incident:.1f} m/s, history force "
+                f"{_shape(self.history.force)}{coils})")
+
 
 @dataclass(frozen=True)
 class StudyResult:
@@ -97,6 +118,74 @@ class StudyResult:
     gamma_wall: float
     fit: DissipationFit | None
     setups: tuple[SetupResult, ...]
+
+    def __repr__(self) -> str:
+        how = "Eq. 10 fit" if self.fit is not None else "from the study"
+        lines = [f"StudyResult({self.study.name!r}, gamma_c = {self.gamma_contact:.3g} kg/s, "
+                 f"gamma_w = {self.gamma_wall:.3g} kg/s ({how}), {len(self.setups)} setup(s):"]
+        for s in self.setups:
+            sensors = "; ".join(f"{_label(r.sensor)} {r.position} {_features_text(r.features)}"
+                                for r in s.sensors)
+            lines.append(f"  {s.setup.name}: {sensors}; speed {s.speed_incident:.1f} m/s")
+        lines.append("  .rows(), .rows_frame(), .records_frame(), .setups[i].sensors[j])")
+        return "\n".join(lines)
+
+    def rows_frame(self):
+        """The Table-2 rows (:meth:`rows`) as a pandas DataFrame, one row per sensor.
+
+        The published comparison of a row (``reference``) is spread into columns of its own
+        (``experiment_tof_us``, ``tof_error_pct``, ...; NaN where a row has none).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Times in µs, forces in N, speeds in m/s (the units are in the column names).
+
+        Raises
+        ------
+        ImportError
+            If pandas is not installed (``pip install "msens[notebook]"``).
+        """
+        pd = _pandas()
+        flat = [{**{k: v for k, v in row.items() if k != "reference"},
+                 **row.get("reference", {})} for row in self.rows()]
+        return pd.DataFrame(flat)
+
+    def records_frame(self):
+        """Every sensor's modelled records as one long-format pandas DataFrame.
+
+        Columns ``time_s``, ``setup``, ``sensor`` (``kind@particle``), ``quantity`` and
+        ``value``. Quantities carry their unit in the name: ``force_N`` for every sensor
+        (for a physics MsS the sensitivity-weighted force), ``dforce_dt_N_per_s`` for a
+        four-contact MsS, and ``voltage_V`` (DAQ voltage), ``emf_V`` and ``flux_Wb`` (flux
+        change) for a physics MsS. Select with, e.g.,
+        ``df[df.quantity == "voltage_V"].pivot(index="time_s", columns="sensor",
+        values="value")``.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per sample; ``setup``, ``sensor`` and ``quantity`` are categorical.
+
+        Raises
+        ------
+        ImportError
+            If pandas is not installed (``pip install "msens[notebook]"``).
+        """
+        pd = _pandas()
+        parts = []
+        for s in self.setups:
+            t = s.history.t
+            for r in s.sensors:
+                for quantity, values in _records(r):
+                    parts.append((s.setup.name, _label(r.sensor), quantity, t, values))
+        n = [p[3].size for p in parts]
+        cat = [pd.Categorical(np.repeat([p[i] for p in parts], n)) for i in range(3)]
+        return pd.DataFrame({
+            "time_s": np.concatenate([p[3] for p in parts]),
+            "setup": cat[0], "sensor": cat[1], "quantity": cat[2],
+            "value": np.concatenate([np.asarray(p[4], dtype=float) for p in parts]),
+        })
 
     def rows(self) -> list[dict]:
         """Table-2 rows, one per sensor: model features and, where the study has them,
@@ -124,6 +213,40 @@ class StudyResult:
                     row["reference"] = _compare(row, ref)
                 out.append(row)
         return out
+
+
+def _label(sensor: SensorSpec) -> str:
+    """A sensor as a waveform channel names it, ``kind@particle``."""
+    return f"{sensor.kind.value}@{sensor.particle}"
+
+
+def _shape(array: np.ndarray | None) -> str:
+    return "None" if array is None else f"array{tuple(np.shape(array))}"
+
+
+def _features_text(f: PulseFeatures) -> str:
+    return (f"TOF {float(f.tof) * 1e6:.1f} us, AR {float(f.ar):.3f}, "
+            f"peak {float(f.f_incident):.3g} N")
+
+
+def _records(r: SensorResult) -> list[tuple[str, np.ndarray]]:
+    """A sensor's records on the chain's time grid, named with their units."""
+    out = [("force_N", r.force)]
+    if r.mss is not None:
+        out += [("voltage_V", r.voltage_shape), ("emf_V", r.mss.emf), ("flux_Wb", r.mss.flux)]
+    elif r.voltage_shape is not None:
+        out.append(("dforce_dt_N_per_s", r.voltage_shape))
+    return out
+
+
+def _pandas():
+    """pandas, imported on first use: an optional dependency (the ``notebook`` extra)."""
+    try:
+        import pandas
+    except ImportError:
+        raise ImportError('DataFrames need pandas, an optional dependency of msens: '
+                          'pip install "msens[notebook]" (or pip install "pandas>=2")') from None
+    return pandas
 
 
 def _compare(row: dict, ref: ReferenceRow) -> dict:
@@ -186,6 +309,9 @@ def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
     """
     t = history.t
     static = static_contact_forces(chain)
+    if any(s.model is MssModel.PHYSICS for s in setup.sensors):  # a few s on a first run
+        _log.info("setup %s: coil EMF and DAQ voltage through the read-out circuit",
+                  setup.name)
     results = []
     for i, (sensor, position) in enumerate(zip(setup.sensors, _positions(setup.sensors),
                                                strict=True)):
@@ -219,10 +345,22 @@ def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:
     setup = study.setup(spec.setup)
     particles = sorted(s.particle for s in setup.sensors)
     kind = next(s.kind for s in setup.sensors if s.particle == particles[0])
-    return fit_dissipation(
-        lambda gc, gw: build_chain(study, setup, gamma_contact=gc, gamma_wall=gw),
-        sensors=(particles[0], particles[-1]), ar_top=spec.ar_top, ar_bottom=spec.ar_bottom,
-        velocity=study.striker.velocity_m_per_s, t_out=t, kind=kind)
+    _log.info("calibrating the dissipation (paper Eq. 10) on setup %s", setup.name)
+    start = time.perf_counter()
+    # one tick per chain built (the grid, then each refinement step): the count is open-ended
+    with tqdm(desc="Eq. 10 calibration", unit=" chains", leave=False,
+              disable=not _log.isEnabledFor(logging.INFO)) as bar:
+        def make_chain(gc: float, gw: float) -> Chain:
+            bar.update(1)
+            return build_chain(study, setup, gamma_contact=gc, gamma_wall=gw)
+
+        fit = fit_dissipation(
+            make_chain,
+            sensors=(particles[0], particles[-1]), ar_top=spec.ar_top, ar_bottom=spec.ar_bottom,
+            velocity=study.striker.velocity_m_per_s, t_out=t, kind=kind)
+    _log.info("calibrated gamma_c = %.3g kg/s, gamma_w = %.3g kg/s (%d chain runs, %.1f s)",
+              fit.gamma_c, fit.gamma_w, fit.n_simulations, time.perf_counter() - start)
+    return fit
 
 
 def setup_transducers(study: Study, setup: SetupSpec) -> dict | None:
@@ -232,6 +370,9 @@ def setup_transducers(study: Study, setup: SetupSpec) -> dict | None:
     from msens.fieldsetup import geometry_from_study
     from msens.magnetics.transducer import transducers_for
 
+    coils = ", ".join(str(s.particle) for s in setup.sensors if s.model is MssModel.PHYSICS)
+    _log.info("setup %s: field model and transducers of the coils at particles %s",
+              setup.name, coils)
     return transducers_for(geometry_from_study(study, setup))
 
 
@@ -261,7 +402,14 @@ def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_conta
         extra = magnetic if extra is None else extra + magnetic
     chain = build_chain(study, setup, gamma_contact=gamma_contact, gamma_wall=gamma_wall,
                         static_force=extra)
-    return chain, simulate(chain, study.striker.velocity_m_per_s, t, dt=study.simulation.dt_s)
+    # the silent wait of a first run: numba compiles the kernel once per install (~0.5-1.5 min)
+    _log.info("setup %s: simulating the chain (%d particles, %.3g ms; the first run after "
+              "installing also compiles the chain kernel, about a minute)", setup.name,
+              chain.n_particles, t[-1] * 1e3)
+    start = time.perf_counter()
+    history = simulate(chain, study.striker.velocity_m_per_s, t, dt=study.simulation.dt_s)
+    _log.info("setup %s: simulated in %.1f s", setup.name, time.perf_counter() - start)
+    return chain, history
 
 
 def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = None,

@@ -9,33 +9,82 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.legend_handler import HandlerTuple
+from matplotlib.ticker import MultipleLocator
 
 from msens.pipeline import SetupResult, StudyResult
 
 _US = 1e6
 
+#: Resolution of every raster figure msens writes (PNG; also the raster parts of PDF/SVG).
+DPI = 200
+#: Figure file formats the commands can write (``--format``).
+FORMATS = ("png", "pdf", "svg")
 
-def contact_profiles(result: StudyResult, contacts: tuple[int, ...] = (8, 11, 12, 13),
-                     t_max_s: float = 400e-6) -> Figure:
-    """Dynamic force at some contacts for every setup (like the paper's Fig. 4).
+
+def _read_contacts(result: StudyResult) -> dict[int, list[int]]:
+    """1-based contacts each sensor position reads, by sensor particle, over all setups.
+
+    Bead and rod sensors read the two contacts of their particle, an MsS (four-contact or
+    physics) the four around its coil, c_{p-2} .. c_{p+1} (:func:`msens.sensors.sensor_contacts`).
+    """
+    from msens.sensors import sensor_contacts
+
+    out: dict[int, set[int]] = {}
+    for s in result.setups:
+        n = s.history.force.shape[1]
+        for r in s.sensors:
+            k = sensor_contacts(r.sensor.kind, r.sensor.particle, n)
+            out.setdefault(r.sensor.particle, set()).update(int(c) + 1 for c in k)
+    return {p: sorted(out[p]) for p in sorted(out)}
+
+
+def contact_profiles(result: StudyResult, contacts: tuple[int, ...] | None = None,
+                     t_max_s: float | None = None) -> Figure:
+    """Dynamic force F_c - F_c,static at the contacts around the study's sensors (those each
+    sensor kind averages), every setup (like the paper's Fig. 4), over the whole record.
 
     Parameters
     ----------
-    contacts : tuple of int
-        1-based contact numbers (c_i joins particles i and i+1).
+    result : StudyResult
+    contacts : tuple of int, optional
+        1-based contact numbers (c_i joins particles i and i+1), shown in one column.
+        Default: one column per sensor position with the contacts its sensors read.
+    t_max_s : float, optional
+        Last time shown, s after impact (default: the whole record, reflected pulse included).
+
+    Returns
+    -------
+    Figure
     """
-    fig, axes = plt.subplots(len(contacts), 1, figsize=(7, 2.0 * len(contacts)), sharex=True)
-    for ax, c in zip(np.atleast_1d(axes), contacts, strict=True):
-        for s in result.setups:
-            t = s.history.t
-            m = t <= t_max_s
-            f = s.history.force[:, c - 1] - s.static_force[c - 1]
-            ax.plot(t[m] * _US, f[m], label=s.setup.name, lw=1.1)
-        ax.set_ylabel(f"c{c} force (N)")
-        ax.grid(alpha=0.3)
-    axes[0].legend(loc="upper right", fontsize=8)
-    axes[-1].set_xlabel("time (µs)")
-    fig.suptitle("Dynamic contact forces")
+    columns = ({0: list(contacts)} if contacts is not None else _read_contacts(result))
+    n_rows = max(len(c) for c in columns.values())
+    fig, axes = plt.subplots(n_rows, len(columns), figsize=(4.2 * len(columns) + 1.2,
+                                                           1.45 * n_rows + 1.0),
+                             sharex=True, sharey=True, squeeze=False)
+    for j, (particle, cs) in enumerate(columns.items()):
+        for i in range(n_rows):
+            ax = axes[i, j]
+            if i >= len(cs):
+                ax.set_visible(False)
+                continue
+            c = cs[i]
+            for s in result.setups:
+                t = s.history.t
+                m = np.ones(t.size, bool) if t_max_s is None else t <= t_max_s
+                f = s.history.force[:, c - 1] - s.static_force[c - 1]
+                ax.plot(t[m] * _US, f[m], label=s.setup.name, lw=0.9)
+            ax.text(0.99, 0.92, f"c{c}  (particles {c}–{c + 1})", transform=ax.transAxes,
+                    ha="right", va="top", fontsize=8)
+            ax.grid(alpha=0.3)
+        if contacts is None:
+            axes[0, j].set_title(f"contacts around the sensors at particle {particle}",
+                                 fontsize=9)
+        axes[len(cs) - 1, j].set_xlabel("time since impact (µs)")
+        axes[len(cs) - 1, j].xaxis.set_tick_params(labelbottom=True)
+    if len(result.setups) > 1:
+        axes[0, -1].legend(fontsize=7, loc="center right", title="setup", title_fontsize=7)
+    fig.supylabel(r"dynamic contact force $F_c - F_{c,\mathrm{static}}$ (N)", fontsize=10)
+    fig.suptitle(f"Contact forces at the sensors, study {result.study.name}", fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -71,23 +120,69 @@ def sensor_profiles(result: StudyResult, particle: int = 13,
     return fig
 
 
+def _record_quantity(r) -> tuple[str, np.ndarray, str]:
+    """What a sensor's record is, per kind: (axis label with unit, values, kind of marks).
+
+    A physics MsS records its coil's DAQ voltage (plotted in mV; its TOF and AR are read
+    from the integrated signal, so its peak times are marked, not values); a four-contact
+    MsS is the paper's mean force of its four contacts; bead and rod sensors read a force.
+    """
+    from msens.sensors import SensorKind
+    from msens.study import MssModel
+
+    if r.sensor.kind is SensorKind.MSS and r.sensor.model is MssModel.PHYSICS:
+        return "DAQ voltage (mV)", np.asarray(r.voltage_shape) * 1e3, "times"
+    if r.sensor.kind is SensorKind.MSS:
+        return "four-contact mean force (N)", r.force, "peaks"
+    return f"{r.sensor.kind.value} sensor force (N)", r.force, "peaks"
+
+
 def sensor_records(result: StudyResult) -> Figure:
-    """Full records of every sensor, with the incident and reflected peaks marked."""
-    fig, axes = plt.subplots(len(result.setups), 1, figsize=(7, 2.4 * len(result.setups)),
-                             sharex=True, squeeze=False)
-    for ax, s in zip(axes[:, 0], result.setups, strict=True):
-        t = s.history.t * _US
+    """Full records of every sensor, in each kind's quantity, with the incident and
+    reflected peaks (or, for a physics MsS, their times) marked.
+
+    One panel per setup and quantity: a physics MsS record is a voltage (mV), bead, rod and
+    four-contact MsS records are forces (N).
+    """
+    from matplotlib.lines import Line2D
+
+    panels = []  # (setup, label, [(sensor, values, marks)])
+    for s in result.setups:
+        groups: dict[str, list] = {}
         for r in s.sensors:
-            (line,) = ax.plot(t, r.force, lw=1.0,
+            label, values, marks = _record_quantity(r)
+            groups.setdefault(label, []).append((r, values, marks))
+        panels += [(s, label, rs) for label, rs in groups.items()]
+    fig, axes = plt.subplots(len(panels), 1, figsize=(7, 2.3 * len(panels) + 0.5),
+                             sharex=True, squeeze=False)
+    for ax, (s, label, rs) in zip(axes[:, 0], panels, strict=True):
+        t = s.history.t * _US
+        times = False
+        for r, values, marks in rs:
+            (line,) = ax.plot(t, values, lw=1.0,
                               label=f"{r.sensor.kind.value}@{r.sensor.particle}")
             f = r.features
-            ax.plot([f.t_incident * _US, f.t_reflected * _US], [f.f_incident, f.f_reflected],
-                    "o", color=line.get_color(), ms=4)
-        ax.set_ylabel("force (N)")
-        ax.set_title(s.setup.name, fontsize=9)
+            if marks == "peaks":
+                ax.plot([f.t_incident * _US, f.t_reflected * _US],
+                        [f.f_incident, f.f_reflected], "o", color=line.get_color(), ms=4)
+            else:
+                # the features belong to the integrated signal, not to this voltage
+                times = True
+                for tk in (f.t_incident, f.t_reflected):
+                    ax.axvline(tk * _US, color=line.get_color(), ls=":", lw=0.9)
+        handles, labels = ax.get_legend_handles_labels()
+        if times:
+            handles.append(Line2D([], [], color="0.3", ls=":", lw=0.9))
+            labels.append("incident / reflected peak time\n(integrated signal)")
+        else:
+            handles.append(Line2D([], [], color="0.3", ls="", marker="o", ms=4))
+            labels.append("incident / reflected peak")
+        ax.legend(handles, labels, fontsize=7, loc="upper right")
+        ax.set_ylabel(label.replace(" (", "\n("), fontsize=9)
+        ax.set_title(f"setup {s.setup.name}", fontsize=9, loc="left")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right")
     axes[-1, 0].set_xlabel("time since impact (µs)")
+    axes[-1, 0].set_xlim(t[0], t[-1])
     fig.tight_layout()
     return fig
 
@@ -97,7 +192,8 @@ def table2(rows: list[dict]) -> Figure:
     labels = [f"{r['setup']} {r['position']}" for r in rows]
     x = np.arange(len(rows))
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 3.6))
-    for ax, key, unit in ((a1, "tof", "µs"), (a2, "ar", "")):
+    for ax, key, unit in ((a1, "tof", "TOF (µs)"),
+                          (a2, "ar", "AR (reflected / incident peak, –)")):
         model = [r[f"{key}_us" if key == "tof" else key] for r in rows]
         ref = [r.get("reference", {}) for r in rows]
         exp = [c.get(f"experiment_{key}_us" if key == "tof" else f"experiment_{key}", np.nan)
@@ -110,8 +206,15 @@ def table2(rows: list[dict]) -> Figure:
         ax.plot(x, paper, "b^", ms=5, label="model (paper)")
         ax.plot(x + 0.15, model, "ro", ms=5, label="model (msens)")
         ax.set_xticks(x, labels, rotation=30, ha="right", fontsize=8)
-        ax.set_ylabel(f"{key.upper()} ({unit})" if unit else key.upper())
+        ax.set_ylabel(unit)
         ax.grid(alpha=0.3)
+        # every setup's rows, each setup on a band of its own
+        setups = [r["setup"] for r in rows]
+        for k, name in enumerate(dict.fromkeys(setups)):
+            idx = [i for i, n in enumerate(setups) if n == name]
+            if k % 2:
+                ax.axvspan(min(idx) - 0.5, max(idx) + 0.5, color="0.93", zorder=0, lw=0)
+        ax.set_xlim(-0.5, len(rows) - 0.5)
     a1.legend(fontsize=7)
     fig.suptitle("Table 2: time of flight and amplitude ratio")
     fig.tight_layout()
@@ -275,21 +378,163 @@ def mss_integrated(result: StudyResult, t_max_s: float = 600e-6) -> Figure:
     return fig
 
 
+def _part_spans(result: StudyResult, setup: SetupResult) -> list[tuple[str, int, float, float]]:
+    """Coils and pole pieces of a setup's MsS on the contact axis.
+
+    Contact c lies (count - c) bead pitches above the wall and particle p's centre at
+    contact coordinate p - 1/2, so a part from z0 to z1 covers count - z1/pitch ..
+    count - z0/pitch.
+
+    Returns
+    -------
+    list of (kind, particle, c0, c1)
+        ``kind`` is "coil" or "pole"; empty when the setup has no field-model geometry.
+    """
+    from msens.errors import InputError
+    from msens.fieldsetup import geometry_from_study
+
+    try:
+        g = geometry_from_study(result.study, setup.setup)
+    except InputError:  # no MsS or no valid geometry: nothing to mark
+        return []
+    b = g.beads
+    pitch = b.pitch
+    z_wall = b.contact_z(b.count)  # the wall contact's plane (0 for touching beads)
+
+    def span(r) -> tuple[float, float]:
+        return (b.count - (r.z1 - z_wall) / pitch, b.count - (r.z0 - z_wall) / pitch)
+
+    out = []
+    for u in g.iter_units():
+        out.append(("coil", u.coil.particle, *span(g.coil_rect(u))))
+        out += [("pole", u.coil.particle, *span(r)) for r in g.magnet_rects(u)
+                if r.name.startswith("pole_")]
+    return out
+
+
+def _mark_parts(ax, spans, colors: dict[int, str], *, label: bool) -> None:
+    """Shade coil windings (in their coil's colour) and pole pieces (grey hatched) on a
+    contact axis; name the coils above the top panel when ``label``."""
+    for kind, particle, c0, c1 in spans:
+        if kind == "coil":
+            ax.axvspan(c0, c1, color=colors.get(particle, "0.5"), alpha=0.12, lw=0)
+            if label:
+                ax.text((c0 + c1) / 2, 1.01, f"coil @{particle}", ha="center", va="bottom",
+                        transform=ax.get_xaxis_transform(), fontsize=7,
+                        color=colors.get(particle, "0.3"))
+        else:
+            ax.axvspan(c0, c1, facecolor="0.85", edgecolor="0.55", hatch="///", lw=0.0,
+                       alpha=0.6, zorder=0)
+
+
+def _parts_legend_handles(spans) -> list:
+    from matplotlib.patches import Patch
+
+    out = []
+    if any(k == "coil" for k, *_ in spans):
+        out.append(Patch(facecolor="0.5", alpha=0.15, label="coil winding"))
+    if any(k == "pole" for k, *_ in spans):
+        out.append(Patch(facecolor="0.85", edgecolor="0.55", hatch="///",
+                         label="magnet pole pieces"))
+    return out
+
+
 def sensitivity_profile(result: StudyResult) -> Figure:
-    """∂Λ/∂F_c along the chain for each physics MsS, by mechanism."""
+    """∂Λ/∂F_c along the chain for each physics MsS: the contact approach and the Villari
+    effect on panels of their own (the Villari sensitivity is ~60 times smaller), coil
+    windings and magnet pole pieces marked along the contact axis.
+
+    The contact approach is linearised at the transducer's static reference load.
+    """
     pairs = _physics(result)
-    fig, ax = plt.subplots(figsize=(7, 3.4))
-    for i, (s, r) in enumerate(pairs):
+    fig, (a_app, a_vil) = plt.subplots(2, 1, figsize=(7, 5.4), sharex=True)
+    colors = {r.sensor.particle: f"C{i}" for i, (_, r) in enumerate(pairs)}
+    sums = {"approach": 0.0, "villari": 0.0}
+    done = set()
+    for s, r in pairs:
         tr = s.transducers[r.sensor.particle]
         c = np.asarray(tr.contacts)
-        ax.plot(c, np.asarray(tr.sensitivity_villari) * 1e9, "o-", color=f"C{i}", ms=3,
-                label=f"coil @{r.sensor.particle}: Villari")
-        ax.plot(c, np.asarray(tr.sensitivity_approach) * 1e9, "s--", color=f"C{i}", ms=3,
-                alpha=0.6, label=f"coil @{r.sensor.particle}: contact approach")
-    ax.axhline(0.0, color="0.5", lw=0.8)
+        col = colors[r.sensor.particle]
+        a_app.plot(c, tr.sensitivity_approach * 1e9, "s-", color=col, ms=3, lw=1.1,
+                   label=f"coil @{r.sensor.particle}")
+        a_vil.plot(c, np.asarray(tr.sensitivity_villari) * 1e9, "o-", color=col, ms=3,
+                   lw=1.1, label=f"coil @{r.sensor.particle}")
+        sums["approach"] += float(np.sum(np.abs(tr.sensitivity_approach)))
+        sums["villari"] += float(np.sum(np.abs(tr.sensitivity_villari)))
+        if s.setup.name not in done:
+            done.add(s.setup.name)
+            spans = _part_spans(result, s)
+            for ax in (a_app, a_vil):
+                _mark_parts(ax, spans, colors, label=ax is a_app)
+    f0 = pairs[0][0].transducers[pairs[0][1].sensor.particle].reference_force if pairs else 0
+    ratio = sums["approach"] / sums["villari"] if sums["villari"] else float("nan")
+    a_app.set_title(f"contact approach (linearised at the static load {f0:.2f} N)",
+                    fontsize=9, loc="left", pad=14)
+    a_vil.set_title(r"Villari effect (own scale: $\Sigma_c\,|\partial\Lambda/\partial F_c|$ is "
+                    f"{ratio:.0f} times smaller)", fontsize=9, loc="left")
+    for ax in (a_app, a_vil):
+        ax.axhline(0.0, color="0.4", lw=0.7)
+        ax.set_ylabel(r"$\partial\Lambda/\partial F_c$ (nWb/N)")
+        ax.grid(alpha=0.3)
+    handles, _ = a_app.get_legend_handles_labels()
+    a_app.legend(handles=handles + _parts_legend_handles(
+        [x for s, _ in pairs[:1] for x in _part_spans(result, s)]), fontsize=7,
+        loc="lower left")
+    a_vil.set_xlabel("contact c (joins particles c and c+1)")
+    a_vil.xaxis.set_minor_locator(MultipleLocator(1))  # one tick per contact
+    fig.tight_layout()
+    return fig
+
+
+#: The paper's guessed magnetic precompression of the four contacts around each coil, N.
+PAPER_PRECOMPRESSION_N = 1.8
+
+
+def magnetic_precompression(result: StudyResult) -> Figure:
+    """Static compression of every contact by the bias magnets, per physics-MsS setup, coil
+    windings and pole pieces marked, against the paper's guessed 1.8 N on the four contacts
+    c_{p-2} .. c_{p+1} around each coil.
+
+    The compression of contact c is the magnets' pull on particles 1..c toward the wall
+    (the same numbers as ``magnetic_precompression_N`` in ``summary.json``).
+    """
+    from msens.magnetics.transducer import magnetic_precompression as particle_forces
+
+    setups = [s for s in result.setups if s.transducers]
+    fig, ax = plt.subplots(figsize=(7, 4.0))
+    width = 0.8 / max(len(setups), 1)
+    colors = {}
+    for i, s in enumerate(setups):
+        force = np.cumsum(particle_forces(s.transducers))[:-1]  # contacts 1 .. n-1
+        c = np.arange(1, force.size + 1)
+        x = c + (i - (len(setups) - 1) / 2) * width
+        ax.bar(x, force, width, color=f"C{i}" if len(setups) > 1 else "C2",
+               label=f"field model (magnets' pull on the beads), setup {s.setup.name}"
+               if len(setups) > 1 else "field model (magnets' pull on the beads)", zorder=2)
+        for xi, fi in zip(x, force, strict=True):
+            if abs(fi) >= 0.1:
+                ax.text(xi, fi, f"{fi:.2f}", ha="center", va="bottom" if fi > 0 else "top",
+                        fontsize=6)
+        for j, r in enumerate(q for q in s.sensors if q.mss is not None):
+            colors.setdefault(r.sensor.particle, f"C{j}")
+            p = r.sensor.particle
+            ax.hlines(PAPER_PRECOMPRESSION_N, p - 2 - 0.45, p + 1 + 0.45, colors="k",
+                      linestyles="--", lw=1.2, zorder=3,
+                      label=f"paper's guess: {PAPER_PRECOMPRESSION_N} N on the four "
+                            "contacts of each coil" if j == 0 and i == 0 else None)
+    spans = _part_spans(result, setups[0]) if setups else []
+    _mark_parts(ax, spans, colors, label=True)
+    ax.axhline(0.0, color="0.4", lw=0.7)
+    ax.set_ylim(top=1.1 * max(ax.get_ylim()[1], PAPER_PRECOMPRESSION_N))  # room for values
+    handles, _ = ax.get_legend_handles_labels()
+    # below the axes: the tallest bars sit in the middle, under any inside corner
+    ax.legend(handles=handles + _parts_legend_handles(spans), fontsize=7, ncol=2,
+              loc="upper center", bbox_to_anchor=(0.5, -0.2), frameon=False)
     ax.set_xlabel("contact c (joins particles c and c+1)")
-    ax.set_ylabel("∂Λ/∂F_c (nWb/N)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.set_ylabel("static magnetic compression (N)")
+    ax.xaxis.set_minor_locator(MultipleLocator(1))
+    ax.set_title("Magnetic precompression of the contacts by the bias magnets", fontsize=9,
+                 loc="left", pad=14)
+    ax.grid(alpha=0.3, axis="y")
     fig.tight_layout()
     return fig

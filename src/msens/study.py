@@ -12,11 +12,16 @@ Units are SI throughout and appear in the key names.
 
 from __future__ import annotations
 
+import copy
 import enum
 import math
+import os
+import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -31,7 +36,7 @@ from msens.materials import (
     BHCurve,
 )
 from msens.sensors import SensorKind
-from msens.tomlreader import Table, read_document
+from msens.tomlreader import Table, document_table, read_document
 from msens.units import G0, MU0
 
 SCHEMA = "msens.study/1"
@@ -288,6 +293,36 @@ class Study:
                 return s
         raise KeyError(name)
 
+    def replace(self, changes: Mapping[str, Any] | None = None, /, **more: Any) -> Study:
+        """This study with some keys of its TOML changed, validated exactly like a file.
+
+        Parameters
+        ----------
+        changes : Mapping[str, Any], optional
+            Dotted key -> new value, the keys spelled as msens's messages name them:
+            ``"striker.drop_height_m"``, ``"sensor[1].coil.turns"`` (``[[...]]`` arrays are
+            indexed from 1: ``sensor[1]`` is the first ``[[sensor]]``),
+            ``"setup[3].sensor[2].coil.turns"``. A value is a number, string, boolean, list
+            or dict (a whole table); None removes the key (e.g. to give
+            ``striker.velocity_m_per_s`` instead of ``striker.drop_height_m``). Tables that
+            are missing are created.
+        **more
+            More changes, e.g. ``**{"striker.drop_height_m": 0.01}``.
+
+        Returns
+        -------
+        Study
+            A new study; this one is unchanged.
+
+        Raises
+        ------
+        InputError
+            For a key that does not fit the document (an index out of range, a value where
+            a table is needed), or, from the validation, an unknown key or a value out of
+            range, each naming the key.
+        """
+        return replace_study(self, {**(changes or {}), **more})
+
 
 # --------------------------------------------------------------------------- parsing
 
@@ -328,7 +363,10 @@ def default_study_path() -> Path:
 
 def parse_study(text: str, *, source: str = "<memory>", base_dir: Path | None = None) -> Study:
     """Validate the TOML ``text`` of a study (see :func:`load_study`)."""
-    root = read_document(text, source=source, schema=SCHEMA)
+    return _study(read_document(text, source=source, schema=SCHEMA), source, base_dir)
+
+
+def _study(root: Table, source: str, base_dir: Path | None) -> Study:
     name = root.string("name", required=True)
     chain_t = root.table("chain", required=True)
     chain = _chain(chain_t)
@@ -344,9 +382,122 @@ def parse_study(text: str, *, source: str = "<memory>", base_dir: Path | None = 
     reference = _reference(root.table("reference"), setups)
     measurement_file = _measurement(root.table("measurement"), base_dir)
     root.finish()
-    return Study(name=name, chain=chain, striker=striker, setups=setups, simulation=simulation,
-                 electronics=electronics, field=field_spec, dissipation_fit=fit,
-                 reference=reference, measurement_file=measurement_file, source=source)
+    study = Study(name=name, chain=chain, striker=striker, setups=setups,
+                  simulation=simulation, electronics=electronics, field=field_spec,
+                  dissipation_fit=fit, reference=reference,
+                  measurement_file=measurement_file, source=source)
+    # The parsed document rides beside the fields, not as one: the content hash and the
+    # design cache keys are of the validated values only. Study.replace re-validates it.
+    object.__setattr__(study, "_document", (root.data, base_dir))
+    return study
+
+
+# --------------------------------------------------------------------------- replace
+
+#: One segment of a dotted key: a name, optionally with a 1-based array index.
+_SEGMENT = re.compile(r"([^.\[\]\s]+)(?:\[(-?[0-9]+)\])?")
+
+
+def replace_study(study: Study, changes: Mapping[str, Any]) -> Study:
+    """``study`` with keys of its TOML document changed (see :meth:`Study.replace`).
+
+    The changes are applied to a copy of the parsed document, which then goes through the
+    same validation as a file, so a replaced study can hold nothing a file could not.
+    """
+    state = getattr(study, "_document", None)
+    if state is None:
+        raise InputError(f"study {study.name!r} was not read from a study file (load_study, "
+                         "parse_study), so it has no keys to replace")
+    document, base_dir = state
+    if not changes:
+        return study
+    doc = copy.deepcopy(document)
+    for key, value in changes.items():
+        _set_key(doc, key, value, study.source)
+    listed = ", ".join(f"{k}={_short(None if v is None else _toml_value(v, k, study.source))}"
+                       for k, v in changes.items())
+    source = f"{study.source} with {listed}"
+    return _study(document_table(doc, source=source, schema=SCHEMA), source, base_dir)
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _set_key(doc: dict, key: object, value: Any, source: str) -> None:
+    """Set (or, for None, remove) the dotted ``key`` in the document ``doc``."""
+    if not isinstance(key, str) or not key:
+        raise InputError(f"{source}: replace key {key!r} must be a dotted key such as "
+                         "'striker.drop_height_m'")
+    segments = []
+    for part in key.split("."):
+        match = _SEGMENT.fullmatch(part)
+        if match is None:
+            raise InputError(f"{source}: replace key {key!r}: bad part {part!r}; keys are "
+                             "names joined by dots, arrays of tables indexed from 1 "
+                             "('sensor[1].coil.turns')")
+        segments.append((match.group(1), None if match.group(2) is None
+                         else int(match.group(2))))
+    node: dict = doc
+    done = ""
+    for n, (name, index) in enumerate(segments):
+        last = n == len(segments) - 1
+        path = f"{done}.{name}" if done else name
+        here = node.get(name)
+        if index is not None:
+            if not isinstance(here, list) or not all(isinstance(t, dict) for t in here):
+                raise InputError(f"{source}: replace key {key!r}: '{path}' is not an array of "
+                                 f"tables ([[{path}]]) in this study")
+            if not 1 <= index <= len(here):
+                hint = (" (indices count from 1, as msens's messages name them: "
+                        f"{path}[1] is the first)" if index == 0 else "")
+                raise InputError(f"{source}: replace key {key!r}: the study has {len(here)} "
+                                 f"[[{path}]] table(s), {path}[1] to {path}[{len(here)}], "
+                                 f"not {path}[{index}]{hint}")
+            if last:
+                if not isinstance(value, Mapping):
+                    raise InputError(f"{source}: replace key {key!r}: a [[{path}]] table is "
+                                     f"replaced by a dict, got {value!r}")
+                here[index - 1] = _toml_value(value, key, source)
+                return
+            node, done = here[index - 1], f"{path}[{index}]"
+            continue
+        if last:
+            if value is None:
+                if name not in node:
+                    raise InputError(f"{source}: replace key {key!r}: nothing to remove, "
+                                     f"'{path}' is not in the study")
+                del node[name]
+            else:
+                node[name] = _toml_value(value, key, source)
+            return
+        if here is None:
+            here = node[name] = {}  # an optional table the file left out
+        if isinstance(here, list):
+            raise InputError(f"{source}: replace key {key!r}: '{path}' is an array of "
+                             f"{len(here)} table(s): give an index, e.g. '{path}[1]'")
+        if not isinstance(here, dict):
+            raise InputError(f"{source}: replace key {key!r}: '{path}' is a value "
+                             f"({here!r}), not a table")
+        node, done = here, path
+
+
+def _toml_value(value: Any, key: str, source: str) -> Any:
+    """``value`` as TOML would give it (numpy scalars and arrays, tuples and paths become
+    Python numbers, lists and strings), for the validation to judge."""
+    if isinstance(value, np.generic | np.ndarray):  # before float: np.float64 is one
+        return _toml_value(value.tolist(), key, source)
+    if isinstance(value, bool | int | float | str):
+        return value
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if isinstance(value, list | tuple):
+        return [_toml_value(v, key, source) for v in value]
+    if isinstance(value, Mapping):
+        return {str(k): _toml_value(v, key, source) for k, v in value.items()}
+    raise InputError(f"{source}: replace key {key!r}: {value!r} is not a TOML value (a "
+                     "number, string, boolean, list or dict)")
 
 
 def _chain(t: Table) -> ChainSpec:

@@ -49,6 +49,11 @@ class Table:
     def has(self, name: str) -> bool:
         return name in self._data
 
+    @property
+    def data(self) -> Mapping[str, Any]:
+        """The parsed table as given (not a copy: do not modify it)."""
+        return self._data
+
     def keys(self) -> list[str]:
         """The keys present in this table."""
         return list(self._data)
@@ -153,6 +158,11 @@ def read_document(text: str, *, source: str, schema: str) -> Table:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{source}: not valid TOML: {exc}") from None
+    return document_table(data, source=source, schema=schema)
+
+
+def document_table(data: Mapping[str, Any], *, source: str, schema: str) -> Table:
+    """The root :class:`Table` of an already parsed document, its ``schema`` key checked."""
     root = Table(data, "", source)
     found = root.string("schema", required=True)
     if found != schema:

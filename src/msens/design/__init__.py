@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import json
+import logging
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,6 +36,13 @@ from msens.study import Study
 FILES = ("designs.csv", "pareto.png", "recommendation.json")
 
 
+def files(fig_format: str = "png") -> tuple[str, ...]:
+    """The output file names, the Pareto figure in ``fig_format`` ("png", "pdf", "svg")."""
+    return ("designs.csv", f"pareto.{fig_format}", "recommendation.json")
+
+_log = logging.getLogger(__name__)
+
+
 @dataclass(frozen=True)
 class DesignResult:
     """Outcome of a sweep: output paths, the recommendation, counts."""
@@ -51,7 +59,7 @@ class DesignResult:
 def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
                scheduler: str | None = None, workers: int | None = None,
                progress: bool = True, cache_dir: str | Path | None = None,
-               provenance: dict | None = None) -> DesignResult:
+               provenance: dict | None = None, fig_format: str = "png") -> DesignResult:
     """Run a sweep and write designs.csv, pareto.png and recommendation.json into ``out``.
 
     Parameters
@@ -72,18 +80,24 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         Cache location (default ``out/cache``).
     provenance : dict, optional
         Recorded in ``recommendation.json`` (msens version, study hash).
+    fig_format : {"png", "pdf", "svg"}
+        Format of the Pareto figure.
     """
     from msens.design.coil_sweep import run_coil_sweep
     from msens.design.magnet_sweep import MagnetTask, evaluate_design
     from msens.design.runner import run_cached
 
     target = OutputDir(out)
-    target.check(list(FILES))  # before any work: never overwrite a user's file
+    target.check(list(files(fig_format)))  # before any work: never overwrite a user's file
     sensor = sweep_sensor(study, spec)
     designs = spec.designs()
     # paths handed to workers are absolute: a Dask worker has its own working folder
     cache = ResultCache((Path(cache_dir) if cache_dir else target.path / "cache").resolve())
+    _log.info("%s sweep of the MsS at particle %d: %d designs (results cached in %s)",
+              spec.kind, sensor.particle, len(designs), cache.directory)
     if spec.kind == "coil":
+        _log.info("coil sweep: the study's field model and source potentials, then the "
+                  "designs in chunks")
         # the run's own field model: a design equal to the study's coil reproduces the run
         full = geometry_from_study(study)
         validate_designs(full, sensor.particle, designs, spec.source)
@@ -101,18 +115,20 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         rows, computed = run_cached(evaluate_design, tasks, cache, scheduler=scheduler,
                                     workers=workers, progress=progress,
                                     description="magnet designs")
+    _log.info("writing %s", ", ".join(files(fig_format)))
     return write_results(spec, designs, rows, target, computed=computed,
-                         provenance=provenance)
+                         provenance=provenance, fig_format=fig_format)
 
 
 def write_results(spec: SweepSpec, designs, rows, out: OutputDir, *, computed: int,
-                  provenance: dict | None = None) -> DesignResult:
+                  provenance: dict | None = None, fig_format: str = "png") -> DesignResult:
     """Write the three output files (atomically, only over msens' own) and the summary."""
     rec = recommend(designs, rows, spec.recommend)
     if provenance:
         rec = {**rec, "provenance": provenance}
-    paths = [out.target(f) for f in FILES]
-    for f in FILES:
+    names = files(fig_format)
+    paths = [out.target(f) for f in names]
+    for f in names:
         out.record(f)
     atomic_write_bytes(paths[0], csv_text(designs, rows).encode())
     pareto_plot(designs, rows, paths[1], rec.get("design"), spec.recommend.objective)
@@ -137,5 +153,5 @@ def format_result(result: DesignResult) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["FILES", "DesignResult", "format_result", "load_sweep", "parse_sweep", "run_design",
-           "write_results"]
+__all__ = ["FILES", "DesignResult", "files", "format_result", "load_sweep", "parse_sweep",
+           "run_design", "write_results"]

@@ -134,11 +134,16 @@ def range_edges(designs: Sequence[Design], best: int) -> list[tuple[str, float, 
 
 def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
                 best: int | None, objective: str = "snr") -> None:
-    """The objective against precompression and against bandwidth, Pareto fronts marked."""
+    """The objective against precompression and against bandwidth, Pareto fronts marked.
+
+    Written in the format of ``path``'s suffix (png, pdf or svg) at :data:`msens.plots.DPI`.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from msens.plots import DPI
 
     ok = [i for i, r in enumerate(rows) if r["status"] == "ok"]
     s = np.array([abs(rows[i][objective]) for i in ok])
@@ -165,7 +170,13 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
         ax.legend(fontsize=8)
     fig.suptitle(f"{len(ok)} designs ({len(rows) - len(ok)} failed)")
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=120, metadata={"Software": None})
+    fmt = Path(path).suffix.lstrip(".") or "png"
+    # no version or date stamp: reruns write identical bytes
+    stamp = {"png": {"Software": None}, "pdf": {"Creator": None, "Producer": None,
+                                                "CreationDate": None},
+             "svg": {"Creator": None, "Date": None}}.get(fmt, {})
+    with plt.rc_context({"svg.hashsalt": "msens"}):  # SVG element ids: fixed, not random
+        fig.savefig(buf, format=fmt, dpi=DPI, metadata=stamp)
     plt.close(fig)
     atomic_write_bytes(path, buf.getvalue())
 

@@ -42,17 +42,34 @@ def _label(d: Diagnosis) -> str:
     return f"{d.effect} ({pars})"
 
 
+def _bars(ax, d: Diagnosis, before: list[float], after: list[float]) -> np.ndarray:
+    """Baseline and corrected bars side by side; the baseline alone when no effect was
+    named (the "after" model is then the baseline)."""
+    x = np.arange(len(before))
+    if d.effect == "none":
+        ax.bar(x, before, 0.5, label="baseline (no effect named)")
+    else:
+        ax.bar(x - 0.2, before, 0.4, label="baseline")
+        ax.bar(x + 0.2, after, 0.4, label=f"with {d.effect}")
+    return x
+
+
+#: Axis names of the features a reference diagnosis compares.
+_FEATURES = {"tof_us": "TOF", "ar": "AR"}
+
+
 def figure(d: Diagnosis) -> Figure:
-    """Where the disagreement sits, and before/after overlays."""
+    """Where the disagreement sits, and before/after overlays (baseline only when no
+    effect was named)."""
     if d.mode == "features":
         fig, ax = plt.subplots(figsize=(7, 3.6))
         table = d.disagreement["features"]
-        x = np.arange(len(table))
-        ax.bar(x - 0.2, [r["residual_before"] for r in table], 0.4, label="baseline")
-        ax.bar(x + 0.2, [r["residual_after"] for r in table], 0.4, label=f"with {d.effect}")
-        ax.set_xticks(x, [f"{r['feature']}\n{r['channel']}" for r in table], fontsize=7)
+        x = _bars(ax, d, [r["residual_before"] for r in table],
+                  [r["residual_after"] for r in table])
+        ax.set_xticks(x, [f"{_FEATURES.get(r['feature'], r['feature'])}\n{r['channel']}"
+                          for r in table], fontsize=7)
         ax.axhline(0, color="k", lw=0.8)
-        ax.set_ylabel("(model - measured) / std")
+        ax.set_ylabel("(model − measured) / std (–)")
         ax.legend(fontsize=8)
         ax.set_title(f"setup {d.setup}: {_label(d)}", fontsize=9)
         fig.tight_layout()
@@ -62,13 +79,12 @@ def figure(d: Diagnosis) -> Figure:
                              squeeze=False)
     ax = axes[0, 0]
     rows = d.disagreement["windows"]
-    x = np.arange(len(rows))
-    ax.bar(x - 0.2, [r["chi2_per_sample_before"] for r in rows], 0.4, label="baseline")
-    ax.bar(x + 0.2, [r["chi2_per_sample_after"] for r in rows], 0.4, label=f"with {d.effect}")
+    x = _bars(ax, d, [r["chi2_per_sample_before"] for r in rows],
+              [r["chi2_per_sample_after"] for r in rows])
     ax.set_xticks(x, [f"{r['window']}\n{r['channel']}" for r in rows], fontsize=7)
     ax.set_yscale("log")
     ax.axhline(1.0, color="k", lw=0.8, ls=":")
-    ax.set_ylabel("chi² per sample")
+    ax.set_ylabel("χ² per sample (–)")
     ax.legend(fontsize=8)
     ax.set_title(f"setup {d.setup}: disagreement mostly at the {d.disagreement['where']}\n"
                  f"{_label(d)}; misfit {d.misfit_before:.3g} -> {d.misfit_after:.3g}",
@@ -76,7 +92,8 @@ def figure(d: Diagnosis) -> Figure:
     for ax, ch in zip(axes[1:, 0], channels, strict=True):
         ax.plot(ch["t_us"], ch["data"], color="0.6", lw=0.7, label="measured (shot 1)")
         ax.plot(ch["t_us"], ch["before"], "b--", lw=1.0, label="baseline")
-        ax.plot(ch["t_us"], ch["after"], "r-", lw=1.0, label=f"with {d.effect}")
+        if d.effect != "none":  # otherwise "after" is the baseline drawn again
+            ax.plot(ch["t_us"], ch["after"], "r-", lw=1.0, label=f"with {d.effect}")
         ax.set_ylabel(f"{ch['channel']} (V)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper right")
@@ -86,14 +103,17 @@ def figure(d: Diagnosis) -> Figure:
 
 
 def write(passes: Sequence[Diagnosis], out: str | Path | OutputDir, *,
-          provenance: dict | None = None) -> list[Path]:
-    """Write ``diagnosis.json`` and ``diagnosis.png`` (atomically, never over a user's file);
-    ``provenance`` (msens version, study hash) is recorded in the JSON."""
+          provenance: dict | None = None, fig_format: str = "png") -> list[Path]:
+    """Write ``diagnosis.json`` and ``diagnosis.<fig_format>`` (png, pdf or svg; atomically,
+    never over a user's file); ``provenance`` (msens version, study hash) is recorded in
+    the JSON."""
+    from msens.plots import DPI
+
     d = out if isinstance(out, OutputDir) else OutputDir(out)
     written = [d.write_json("diagnosis.json",
                             {**report(passes), **({"provenance": provenance}
                                                   if provenance else {})})]
     fig = figure(passes[0])
-    written.append(d.savefig("diagnosis.png", fig, dpi=130))
+    written.append(d.savefig("diagnosis.png", fig, fmt=fig_format, dpi=DPI))
     plt.close(fig)
     return written

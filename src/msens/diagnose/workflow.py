@@ -42,11 +42,13 @@ the noise floor is not applied (the std is given).
 from __future__ import annotations
 
 import dataclasses
+import logging
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from tqdm import tqdm
 
 from msens.calibrate import DissipationFit
 from msens.compare import model_record, setup_spec_channels, shot_records, smooth
@@ -67,6 +69,8 @@ from msens.features import centre_distance
 from msens.io.waveform import Waveform
 from msens.pipeline import calibrate_dissipation, output_times
 from msens.study import SetupSpec, Study
+
+_log = logging.getLogger(__name__)
 
 #: Smallest BIC drop (score) for naming an effect; see the module docstring.
 THRESHOLD = 10.0
@@ -238,6 +242,31 @@ def _candidate_effects(ctx: Context, names: Sequence[str] | None,
             if (names is None or n in names) and n not in done and e.applies(ctx)]
 
 
+def _fit_candidates(effects: Sequence[Effect], ctx: Context, base: ModelState,
+                    predictor: Predictor, objective, weights: np.ndarray) -> list[EffectFit]:
+    """:func:`fit_effect` of every candidate, with a progress bar (the slow step)."""
+    _log.info("fitting %d candidate effects: %s", len(effects),
+              ", ".join(e.name for e in effects))
+    fits = []
+    with tqdm(effects, desc="candidate effects", unit=" effect", leave=False,
+              disable=not _log.isEnabledFor(logging.INFO)) as bar:
+        for e in bar:
+            bar.set_postfix_str(e.name)
+            fits.append(fit_effect(e, ctx, base, predictor, objective, weights))
+    return fits
+
+
+def _log_decision(cands: list[Candidate], winner: Candidate | None, threshold: float) -> None:
+    if winner is not None:
+        _log.info("decision: %s (score %.1f > threshold %g)", winner.effect, winner.score,
+                  threshold)
+    elif cands:
+        _log.info("decision: none (best %s scores %.1f <= threshold %g)", cands[0].effect,
+                  cands[0].score, threshold)
+    else:
+        _log.info("decision: none (no candidate effect applies)")
+
+
 # ------------------------------------------------------------------------ scoring
 
 def _score(fits: list[EffectFit], rss0: np.ndarray, n_obs: np.ndarray, sigma: np.ndarray,
@@ -398,6 +427,9 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     check_channels(waveform)
     ctx = Context(study, setup)
     gc, gw = baseline_dissipation(study, fit)
+    _log.info("diagnosis of setup %s: baseline model (gamma_c = %.3g kg/s, gamma_w = %.3g "
+              "kg/s%s)", setup.name, gc, gw,
+              "".join(f", + {n}" for n, _ in added))
     predictor = Predictor(output_times(study))
     plain = baseline_state(ctx, gc, gw)
     base = _with_added(ctx, plain, added)
@@ -407,11 +439,12 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     rss0 = objective.rss(records0)
     sigma = objective.sigma
     weights = np.where(np.isfinite(sigma), 1.0 / sigma**2, objective.n_obs / rss0)
-    fits = [fit_effect(e, ctx, base, predictor, objective, weights)
-            for e in _candidate_effects(ctx, effects, added)]
+    fits = _fit_candidates(_candidate_effects(ctx, effects, added), ctx, base, predictor,
+                           objective, weights)
     cands, sig, misfit0 = _score(fits, rss0, objective.n_obs,
                                  np.where(np.isfinite(sigma), sigma, np.nan), True, ctx, base)
     winner, wfit = _decide(cands, fits, threshold)
+    _log_decision(cands, winner, threshold)
     after = wfit.state if wfit is not None else base
     refit: tuple[tuple[str, dict], ...] = ()
     if wfit is not None and added:
@@ -493,6 +526,8 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
         raise InputError(f"the study {study.name!r} has no [reference] rows for setup "
                          f"{setup_name!r}")
     gc, gw = baseline_dissipation(study, fit)
+    _log.info("feature diagnosis of setup %s: baseline model (gamma_c = %.3g kg/s, gamma_w = "
+              "%.3g kg/s%s)", setup.name, gc, gw, "".join(f", + {n}" for n, _ in added))
     predictor = Predictor(output_times(study))
     base = _with_added(ctx, baseline_state(ctx, gc, gw), added)
     where = positions([s.particle for s in setup.sensors])
@@ -500,10 +535,11 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
     records0 = predictor.records([base])[0]
     rss0 = objective.rss(records0)
     weights = np.ones(len(where))
-    fits = [fit_effect(e, ctx, base, predictor, objective, weights)
-            for e in _candidate_effects(ctx, effects, added)]
+    fits = _fit_candidates(_candidate_effects(ctx, effects, added), ctx, base, predictor,
+                           objective, weights)
     cands, sig, misfit0 = _score(fits, rss0, objective.n_obs, objective.sigma, False, ctx, base)
     winner, wfit = _decide(cands, fits, threshold)
+    _log_decision(cands, winner, threshold)
     after = wfit.state if wfit is not None else base
     records1 = predictor.records([after])[0]
     n = float(objective.n_obs.sum())

@@ -17,7 +17,9 @@ coils and magnets get their own sizes; the far air grows to ``far_size``.
 
 from __future__ import annotations
 
+import logging
 import math
+import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -25,6 +27,8 @@ import gmsh
 
 from msens.errors import require
 from msens.field.geometry import Rect, SensorGeometry
+
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -203,6 +207,9 @@ def build_mesh(geometry: SensorGeometry, path: str | Path,
     options = options or MeshOptions()
     path = Path(path)
     b = geometry.beads
+    _log.info("meshing the sensor geometry with gmsh (%d beads, %d coil(s); not cached yet)",
+              len(b.particles), len(list(geometry.iter_units())))
+    start = time.perf_counter()
     own = not gmsh.isInitialized()
     if own:
         gmsh.initialize(readConfigFiles=False, interruptible=False)
@@ -278,4 +285,5 @@ def build_mesh(geometry: SensorGeometry, path: str | Path,
             gmsh.model.remove()
         if own:
             gmsh.finalize()
+    _log.info("meshed in %.1f s", time.perf_counter() - start)
     return path

@@ -20,6 +20,7 @@ paper's undocumented bridge magnet.
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from collections.abc import Mapping, Sequence
@@ -40,6 +41,8 @@ from msens.field.regions import Air, NonlinearSoft, PermanentMagnet, Region, Win
 from msens.field.solve import FieldSolution, MagnetostaticProblem, incremental, solve
 from msens.materials import BHCurve
 from msens.units import MU0, RHO_COPPER, TWO_PI
+
+_log = logging.getLogger(__name__)
 
 #: Statement carried into every output that uses the magnet.
 MAGNET_NOTE = ("bias magnet is an axisymmetric EQUIVALENT (axial ring magnet + two 1018-steel "
@@ -469,11 +472,14 @@ def run_field_model(geometry: SensorGeometry, out_dir: str | Path | None = None,
     -------
     FieldReport
     """
+    _log.info("field model: mesh (cached on disk) and nonlinear bias solve")
     t0 = time.perf_counter()
     axi, path = load_mesh(geometry, options, mesh_dir)
     t1 = time.perf_counter()
     sol = solve(bias_problem(geometry, axi))
     t2 = time.perf_counter()
+    _log.info("field model: %d dofs, %d Newton iterations, %.1f s", sol.dofs, sol.iterations,
+              t2 - t0)
     coils = coil_results(sol, geometry) if inductance else tuple(
         CoilResult(u.coil.particle, u.coil.turns, coil_resistance(u.coil), math.nan, math.nan,
                    u.coil.inner_radius, u.coil.outer_radius, u.coil.length)

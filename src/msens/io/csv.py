@@ -148,7 +148,8 @@ def _parse_header(line: str, source: str, lineno: int) -> tuple[Channel, ...]:
     if cells[0] != TIME_NAME:
         raise InputError(
             f"{where}: no time column: the header's first column must be {TIME_NAME!r}, "
-            f"got {cells[0]!r}"
+            f"got {cells[0]!r} (an instrument export such as 'Time,CH1,CH2' is read with a "
+            "column map: --columns, see README 'Instrument exports')"
         )
     if len(cells) < 2:
         raise InputError(f"{where}: the header names no channel after {TIME_NAME!r}")
@@ -203,14 +204,20 @@ def _parse_rows(
 
 
 def _printed_resolution(lines: list[str], line_numbers: list[int]) -> float:
-    """Rounding of a fixed-format time column, s; 0 for any other.
+    """Rounding of the time column (the first cell of each data line), s; see
+    :func:`printed_resolution`."""
+    return printed_resolution([lines[i - 1].split(",", 1)[0] for i in line_numbers])
+
+
+def printed_resolution(cells: list[str]) -> float:
+    """Rounding of a fixed-format column of numbers as printed, in its own unit; 0 for any other.
 
     Instruments print times in a fixed format (e.g. ``-1.00000e-04``: the same number of
     significant digits in every nonzero value, trailing zeros kept); then each value is
     known to half a unit of its last digit, and the largest such half unit is returned.
     Shortest-repr text (msens's own files) has varying digit counts and is exact: 0.
     """
-    cells = [Decimal(lines[i - 1].split(",", 1)[0].strip()).as_tuple() for i in line_numbers]
+    cells = [Decimal(cell.strip()).as_tuple() for cell in cells]
     # inf/nan (non-int exponents) are rejected later; zeros carry no digit count.
     finite = [c for c in cells if isinstance(c.exponent, int) and any(c.digits)]
     if len(finite) < 3 or len({len(c.digits) for c in finite}) != 1:

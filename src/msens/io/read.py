@@ -7,6 +7,9 @@ suffix        format
 ``.npz``      :mod:`msens.io.npz`
 ``.tdms``     :mod:`msens.io.tdms` (LabVIEW, via npTDMS)
 ============  ===========================================
+
+An instrument's own text export (``Time,CH1,CH2``) is read through a column map
+(:mod:`msens.io.columns`): pass ``columns=`` or a :class:`~msens.io.columns.MappedFile`.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from msens.errors import InputError
+from msens.io.columns import ColumnMap, MappedFile, read_mapped
 from msens.io.csv import read_csv, write_csv
 from msens.io.npz import read_npz, write_npz
 from msens.io.tdms import read_tdms, write_tdms
@@ -45,13 +49,18 @@ def _suffix(path: Path) -> str:
     return suffix
 
 
-def read_waveform(path: str | os.PathLike[str]) -> Waveform:
+def read_waveform(path: str | os.PathLike[str],
+                  columns: str | os.PathLike[str] | ColumnMap | None = None) -> Waveform:
     """Read a measured waveform from a ``.csv``, ``.npz`` or ``.tdms`` file.
 
     Parameters
     ----------
     path : path-like
-        File to read; the (case-insensitive) suffix selects the format.
+        File to read; the (case-insensitive) suffix selects the format. A
+        :class:`~msens.io.columns.MappedFile` is read through its column map.
+    columns : str, path-like or ColumnMap, optional
+        Column map of an instrument's text export (inline ``time=Time:ms,bead@13=CH1:mV``
+        or a ``.toml`` file; :mod:`msens.io.columns`); the file is then read as that export.
 
     Returns
     -------
@@ -61,8 +70,12 @@ def read_waveform(path: str | os.PathLike[str]) -> Waveform:
     ------
     InputError
         For an unknown suffix, a missing file or malformed content, naming the file
-        (and line or channel).
+        (and line or channel), or a bad column map, naming its item.
     """
+    if isinstance(path, MappedFile):
+        return read_mapped(path.path, path.columns if columns is None else columns)
+    if columns is not None:
+        return read_mapped(path, columns)
     p = Path(path)
     return _READERS[_suffix(p)](p)
 
@@ -96,9 +109,11 @@ def write_waveform(
     return p
 
 
-def check_waveform_file(path: str | os.PathLike[str]) -> Waveform:
-    """Read and fully validate a waveform file; the waveform if valid, else InputError."""
-    return read_waveform(path)
+def check_waveform_file(path: str | os.PathLike[str],
+                        columns: str | os.PathLike[str] | ColumnMap | None = None) -> Waveform:
+    """Read and fully validate a waveform file (through ``columns``, a column map, if given);
+    the waveform if valid, else InputError."""
+    return read_waveform(path, columns)
 
 
 def describe(waveform: Waveform) -> str:
@@ -110,11 +125,12 @@ def describe(waveform: Waveform) -> str:
     )
 
 
-def main_check(argv: Sequence[str]) -> int:
+def main_check(argv: Sequence[str], columns: ColumnMap | None = None) -> int:
     """Console entry: check waveform files; 0 if all are valid, 2 otherwise.
 
     Prints ``<path>: ok, <summary>`` on stdout for each valid file and the error message
-    on stderr for each invalid one (no traceback).
+    on stderr for each invalid one (no traceback). ``columns`` is the column map every
+    file is read through, if any.
     """
     if not argv:
         print("usage: msens check-waveform FILE [FILE ...]", file=sys.stderr)
@@ -122,7 +138,7 @@ def main_check(argv: Sequence[str]) -> int:
     status = 0
     for arg in argv:
         try:
-            waveform = check_waveform_file(arg)
+            waveform = check_waveform_file(arg, columns)
         except InputError as exc:
             print(f"msens: error: {exc}", file=sys.stderr)
             status = 2

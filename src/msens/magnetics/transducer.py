@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import math
 import time
 from collections.abc import Mapping
@@ -70,6 +71,8 @@ from msens.magnetics.villari import (
 from msens.magnetoelastic import JilesAthertonSablik
 from msens.materials import BEAD_STEEL, ElasticMaterial
 from msens.steel_law import law_for_steel
+
+_log = logging.getLogger(__name__)
 
 #: Version of what :func:`transducers_for` computes; part of the cache key.
 TRANSDUCER_VERSION = "transducer/3"
@@ -585,9 +588,12 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
     require(math.isfinite(force) and force > 0, f"stress_force must be > 0 N, got {force}")
     law = law_for_steel(geometry.steel) if law is None else law
     timings: dict[str, float] = {}
+    _log.info("transducers: field mesh and nonlinear bias solve")
     t0 = time.perf_counter()
     sol, path = bias_solution(geometry, options=options, mesh_dir=mesh_dir, max_iter=max_iter)
     timings["mesh_and_bias_solve"] = time.perf_counter() - t0
+    _log.info("transducers: bead stress, Villari and contact-approach sources, their "
+              "potentials (%d dofs)", sol.dofs)
     model = mechanism_potentials(sol, geometry, stress_force=force, law=law,
                                  material=material, approach=approach, timings=timings)
     t0 = time.perf_counter()
@@ -624,6 +630,8 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
             "bead_sensitivity_Wb_per_N": link[:model.particles.size].tolist(),
             "reciprocity_adjoint_rel_error": err}
     details["timings_s"] = timings
+    _log.info("transducers: computed in %.1f s (%s)", sum(timings.values()),
+              ", ".join(f"{k} {v:.1f} s" for k, v in timings.items()))
     return TransducerReport(out, details)
 
 
@@ -724,17 +732,20 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
         for d in search:
             path = d / name
             if path.is_file():
+                _log.info("transducers %s (cached: yes, %s)", key, path)
                 try:
                     return _from_json(json.loads(path.read_text()))
                 except (ValueError, KeyError) as exc:
                     raise InputError(f"transducer cache {path} is unreadable ({exc}); "
                                      "delete it") from exc
+    _log.info("transducers %s (cached: no): computing them, usually under a minute", key)
     report = compute_transducers(geometry, options=options, mesh_dir=mesh_dir,
                                  stress_force=force, law=law, material=material,
                                  approach=approach)
     directory.mkdir(parents=True, exist_ok=True)
     atomic_write_bytes(directory / name, json.dumps(_to_json(report), indent=1).encode(),
                        overwrite=True)
+    _log.info("transducers %s cached in %s", key, directory / name)
     return report
 
 

@@ -195,3 +195,14 @@ def test_eddy_currents_lower_the_signal(model, static, report):
     dyn = dynamic_signals(static, r, circuit, t, force, 10e6)
     assert np.max(np.abs(dyn.voltage)) < np.max(np.abs(ref.voltage))
     assert np.all(np.isfinite(dyn.voltage))
+
+
+def test_skin_refinement_option_keeps_existing_mesh_keys():
+    from msens.field.cache import canonical, geometry_key
+
+    g = one_sensor()
+    assert "skin_size" not in canonical(MeshOptions())
+    assert geometry_key(g, MeshOptions()) == geometry_key(g)
+    assert geometry_key(g, MeshOptions(skin_size=20e-6)) != geometry_key(g)
+    with pytest.raises(InputError, match="skin_size"):
+        MeshOptions(skin_size=-1.0)

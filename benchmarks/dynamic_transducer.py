@@ -84,7 +84,7 @@ def main(path: str | None = None) -> dict:
             "readout_eddy_Z": _peak(f_fine, coil_transfer_function(circuit, f_fine,
                                                                    r.impedance_at(f_fine))),
             "capacitance_F": circuit.total_capacitance,
-            "max_reciprocity_rel_error": max(chk["reciprocity_rel_error"]),
+            "max_reciprocity_rel_error": max(chk["reciprocity_rel_error"], default=None),
             "max_power_balance_rel_error": max(chk["power_balance_rel_error"])}
     return out
 

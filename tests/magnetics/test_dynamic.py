@@ -59,7 +59,7 @@ def model(tmp_path_factory):
 @pytest.fixture(scope="module")
 def report(model):
     g, m = model
-    return frequency_responses(m, g, FREQS)
+    return frequency_responses(m, g, FREQS, direct=True)
 
 
 @pytest.fixture(scope="module")

@@ -140,9 +140,44 @@ def transfer_function(circuit: ReadoutCircuit, f: ArrayLike) -> np.ndarray:
     """
     f = np.asarray(f, dtype=float)
     s, z_s, y_b = _admittances(circuit, f)
+    return _transfer(circuit, s, z_s, y_b)
+
+
+def _transfer(circuit: ReadoutCircuit, s: np.ndarray, z_s: np.ndarray,
+              y_b: np.ndarray) -> np.ndarray:
+    """1 / ((1 + Z_s Y_p)(1 + R_c Y_B)) for a series coil impedance Z_s (any model)."""
     div = 1.0 + circuit.cable_resistance * y_b
     y_p = s * circuit.winding_capacitance + y_b / div
     return 1.0 / ((1.0 + z_s * y_p) * div)
+
+
+def coil_transfer_function(circuit: ReadoutCircuit, f: ArrayLike,
+                           coil_impedance: ArrayLike) -> np.ndarray:
+    """H(j2πf) = V_daq / EMF with an arbitrary series coil impedance Z(f).
+
+    As :func:`transfer_function` with Z_s = ``coil_impedance`` in place of R + sL (e.g. the
+    eddy-current impedance R_dc + jωΛ(ω)/I of :mod:`msens.magnetics.dynamic`); the
+    circuit's own ``resistance`` and ``inductance`` are not used. The winding capacitance,
+    cable and DAQ input are the circuit's.
+
+    Parameters
+    ----------
+    circuit : ReadoutCircuit
+    f : array_like, shape (n,)
+        Frequencies, Hz (>= 0).
+    coil_impedance : array_like of complex, shape (n,)
+        Z_s at ``f``, Ω.
+
+    Returns
+    -------
+    ndarray of complex, shape (n,)
+    """
+    f = np.asarray(f, dtype=float)
+    z = np.asarray(coil_impedance, dtype=complex)
+    require(z.shape == f.shape, f"coil_impedance must have the shape of f {f.shape}, got "
+            f"{z.shape}")
+    s, _, y_b = _admittances(circuit, f)
+    return _transfer(circuit, s, z, y_b)
 
 
 def _noise_transfers(circuit: ReadoutCircuit, f: np.ndarray):

@@ -29,13 +29,15 @@ def canonical(obj: object) -> object:
     """JSON-ready form of nested frozen dataclasses (floats by repr, exact).
 
     Dataclass fields with ``metadata={"mesh": False}`` (materials, such as
-    :attr:`SensorGeometry.steel`) are left out: the mesh does not depend on them. numpy arrays
-    become nested lists.
+    :attr:`SensorGeometry.steel`) are left out: the mesh does not depend on them. Fields with
+    ``metadata={"omit_if_default": True}`` are left out at their default value (options added
+    later keep the keys of existing meshes). numpy arrays become nested lists.
     """
     if dataclasses.is_dataclass(obj):
         return {"__type__": type(obj).__name__,
                 **{f.name: canonical(getattr(obj, f.name)) for f in dataclasses.fields(obj)
-                   if f.metadata.get("mesh", True)}}
+                   if f.metadata.get("mesh", True) and not (
+                       f.metadata.get("omit_if_default") and getattr(obj, f.name) == f.default)}}
     if isinstance(obj, np.ndarray):
         return canonical(obj.tolist())
     if isinstance(obj, tuple | list):

@@ -20,9 +20,10 @@ responses lag: a lossy body in a field H0 has Im(m/H0) < 0 and absorbs the time-
 P = −(ω μ0/2) Im(m H0*). With the physicists' e^{−iωt} every phasor here is conjugated.
 
 The solver factorises K_t + jω M_σ once per frequency (SuperLU, as the equivalent real
-system of twice the size: see :class:`_HarmonicLU`); K_t and M_σ are assembled once on the
-cached sparsity pattern of :mod:`.assembly` (its ``np.bincount`` assembly is real, so the two
-real matrices are combined on their common pattern).
+system of twice the size: see :class:`_HarmonicLU`; :class:`HarmonicOperator` keeps the
+assembled matrices and solves many right-hand sides per factor); K_t and M_σ are assembled
+once on the cached sparsity pattern of :mod:`.assembly` (its ``np.bincount`` assembly is
+real, so the two real matrices are combined on their common pattern).
 scikit-fem could assemble complex forms directly (``BilinearForm(dtype=np.complex128)``) and
 ``skfem.solve`` wraps ``spsolve``; neither reuses the cached pattern or the factor.
 """
@@ -60,7 +61,7 @@ from msens.units import MU0, TWO_PI
 #: ~5.85 MS/m at 20 °C by linear interpolation; 6.0 MS/m is the round value of design.md §5.
 SIGMA_1018 = 6.0e6
 
-__all__ = ["SIGMA_1018", "HarmonicSolution", "SphereCheck", "conducting_sphere",
+__all__ = ["SIGMA_1018", "HarmonicOperator", "HarmonicSolution", "SphereCheck", "conducting_sphere",
            "conductivity", "conductivity_mass", "dipole_moment", "dissipated_power",
            "flux_linkage", "mean_field_z", "skin_depth", "solve_harmonic",
            "sphere_check", "truncation_factor", "winding_impedance"]
@@ -193,9 +194,108 @@ class _HarmonicLU:
                         panel_size=4, relax=4, options={"SymmetricMode": True})
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        """x with (K + jωM) x = b, shapes (n,) complex."""
-        x = self._lu.solve(np.column_stack([b.real, b.imag]).ravel())
+        """x with (K + jωM) x = b, shapes (n,) or (n, k) complex (k right-hand sides)."""
+        b = np.asarray(b)
+        n = b.shape[0]
+        inter = np.empty((2 * n, *b.shape[1:]))
+        inter[0::2], inter[1::2] = b.real, b.imag
+        x = self._lu.solve(inter)
         return x[0::2] + 1j * x[1::2]
+
+
+class _StaticLU:
+    """LU of K alone (ω = 0), factorised exactly as the magnetostatic solver does."""
+
+    def __init__(self, k_ff: sp.csc_matrix):
+        self._lu = factorize(k_ff)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """x with K x = b (real and imaginary parts separately), shapes (n,) or (n, k)."""
+        b = np.asarray(b)
+        return self._lu.solve(np.ascontiguousarray(b.real)) + 1j * self._lu.solve(
+            np.ascontiguousarray(b.imag))
+
+
+class HarmonicOperator:
+    """K_t and M_σ of a model assembled once; K_t + jωM_σ factorised per frequency.
+
+    For many right-hand sides at once (the sources of a transducer, a coil's winding):
+    :func:`solve_harmonic` solves one load per frequency with the same algebra.
+
+    Parameters
+    ----------
+    model : MagnetostaticProblem or FieldSolution
+        As :func:`solve_harmonic` (a bias state: tangent reluctivity, zero boundary values).
+    sigma : ndarray, shape (n_elements,)
+        Conductivity per element, S/m.
+
+    Attributes
+    ----------
+    disc : Discretisation
+    nu : ndarray, shape (n_elements, n_qp) or (n_elements, n_qp, 2, 2)
+        Reluctivity in K_t, m/H.
+    sigma : ndarray, shape (n_elements,)
+    """
+
+    def __init__(self, model: MagnetostaticProblem | FieldSolution, sigma: np.ndarray):
+        sigma = np.asarray(sigma, dtype=float)
+        d, nu, _, _ = _setup(model, {}, None)
+        require(sigma.shape == (d.quad.w.shape[0],),
+                f"sigma must have shape ({d.quad.w.shape[0]},) (one value per element), got "
+                f"{sigma.shape}")
+        require(bool(np.all(sigma >= 0)), "sigma must be >= 0")
+        self.disc, self.nu, self.sigma = d, nu, sigma
+        self.k_full, self.k_ff = assemble_matrix(d.pattern, element_stiffness(d.quad, nu))
+        self.m_full, self.m_ff = conductivity_mass(d, sigma)
+
+    def factor(self, frequency: float) -> _HarmonicLU | _StaticLU:
+        """Factor of K_t + jωM_σ (free dofs) at ``frequency`` (Hz, >= 0)."""
+        require(frequency >= 0, f"frequency must be >= 0 Hz, got {frequency}")
+        w = TWO_PI * float(frequency)
+        return _StaticLU(self.k_ff) if w == 0.0 else _HarmonicLU(self.k_ff, self.m_ff, w)
+
+    def matrix(self, frequency: float) -> sp.csc_matrix:
+        """K_t + jωM_σ on the free dofs, complex."""
+        w = TWO_PI * float(frequency)
+        # K and M share one pattern, so their data arrays add entry by entry
+        return sp.csc_matrix((self.k_ff.data + 1j * w * self.m_ff.data, self.k_ff.indices,
+                              self.k_ff.indptr), shape=self.k_ff.shape)
+
+    def winding_load(self, region: str, current_density: float) -> np.ndarray:
+        """Load vector ∫ J φ_i r dr dz (per radian) of a uniform J in ``region``, (n_dofs,)."""
+        q, mesh = self.disc.quad, self.disc.basis.mesh
+        require(region in (mesh.subdomains or {}), f"'{region}' is not a mesh subdomain")
+        j = np.zeros(q.w.shape[0])
+        j[mesh.subdomains[region]] = current_density
+        return assemble_vector(q.dofs, element_load(q, j, np.zeros_like(j)), self.disc.basis.N)
+
+    def solve(self, factor: _HarmonicLU | _StaticLU, loads: np.ndarray) -> np.ndarray:
+        """Potentials of load vectors with A = 0 on the Dirichlet boundary.
+
+        Parameters
+        ----------
+        factor : from :meth:`factor`
+        loads : ndarray, shape (n_src, n_dofs)
+            Real or complex, per radian.
+
+        Returns
+        -------
+        ndarray of complex, shape (n_src, n_dofs)
+            A_φ dofs, T m per unit source.
+        """
+        loads = np.atleast_2d(loads)
+        free = self.disc.pattern.free
+        out = np.zeros(loads.shape, dtype=complex)
+        if free.size and loads.shape[0]:
+            out[:, free] = factor.solve(np.ascontiguousarray(loads[:, free].T)).T
+        return out
+
+    def harmonic_solution(self, frequency: float, a: np.ndarray,
+                          j_source: np.ndarray | None = None) -> HarmonicSolution:
+        """Wrap dofs ``a`` (n_dofs,) as a :class:`HarmonicSolution` (for its post-processing)."""
+        j = np.zeros(self.sigma.size, complex) if j_source is None else j_source
+        return HarmonicSolution(frequency=float(frequency), a=a, basis=self.disc.basis,
+                                disc=self.disc, nu=self.nu, sigma=self.sigma, j_source=j)
 
 
 def _setup(model: MagnetostaticProblem | FieldSolution,
@@ -274,44 +374,29 @@ def solve_harmonic(model: MagnetostaticProblem | FieldSolution, sigma: np.ndarra
     """
     freqs = [float(f) for f in frequencies]
     require(all(f >= 0 for f in freqs), f"frequencies must be >= 0 Hz, got {freqs}")
-    sigma = np.asarray(sigma, dtype=float)
-    d, nu, j, lift = _setup(model, sources, background_field)
-    require(sigma.shape == (d.quad.w.shape[0],),
-            f"sigma must have shape ({d.quad.w.shape[0]},) (one value per element), got "
-            f"{sigma.shape}")
-    require(bool(np.all(sigma >= 0)), "sigma must be >= 0")
+    op = HarmonicOperator(model, sigma)
+    d, _, j, lift = _setup(model, sources, background_field)
     q, n, free = d.quad, d.basis.N, d.pattern.free
-    zero = np.zeros_like(sigma)
+    zero = np.zeros_like(op.sigma)
     f_vec = (assemble_vector(q.dofs, element_load(q, j.real, zero), n)
              + 1j * assemble_vector(q.dofs, element_load(q, j.imag, zero), n))
     if load is not None:
         require(np.shape(load) == (n,), f"load must have shape ({n},)")
         f_vec = f_vec + load
-    k_full, k_ff = assemble_matrix(d.pattern, element_stiffness(q, nu))
-    m_full, m_ff = conductivity_mass(d, sigma)
-    k_lift, m_lift = k_full @ lift, m_full @ lift
+    k_lift, m_lift = op.k_full @ lift, op.m_full @ lift
     out = []
     for f in freqs:
         t0 = time.perf_counter()
         w = TWO_PI * f
         rhs = (f_vec - k_lift - 1j * w * m_lift)[free]
         a = lift.copy()
-        if w == 0.0:
-            # the static operator, factorised exactly as the magnetostatic solver does
-            a_ff = k_ff
-            if free.size:
-                lu = factorize(k_ff)
-                a[free] = lu.solve(rhs.real) + 1j * lu.solve(rhs.imag)
-        else:
-            # K and M share one pattern, so their data arrays add entry by entry
-            a_ff = sp.csc_matrix((k_ff.data + 1j * w * m_ff.data, k_ff.indices, k_ff.indptr),
-                                 shape=k_ff.shape)
-            if free.size:
-                a[free] = _HarmonicLU(k_ff, m_ff, w).solve(rhs)
+        if free.size:
+            a[free] = op.factor(f).solve(rhs)
         seconds = time.perf_counter() - t0
+        a_ff = op.matrix(f)
         res = float(np.linalg.norm(a_ff @ a[free] - rhs) / max(np.linalg.norm(rhs), 1e-300))
-        out.append(HarmonicSolution(frequency=f, a=a, basis=d.basis, disc=d, nu=nu,
-                                    sigma=sigma, j_source=j, residual=res, seconds=seconds))
+        out.append(HarmonicSolution(frequency=f, a=a, basis=d.basis, disc=d, nu=op.nu,
+                                    sigma=op.sigma, j_source=j, residual=res, seconds=seconds))
     return tuple(out)
 
 

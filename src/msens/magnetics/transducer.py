@@ -381,6 +381,10 @@ class MechanismPotentials:
         The Villari sources (for the adjoint check).
     approach_rhs : ndarray, shape (n_a, n_dofs)
         -∂R/∂δ_c (for the adjoint check).
+    rhs : ndarray, shape (n_b + n_a, n_dofs), optional
+        The load vectors f_s of all sources, in the order of ``potentials`` (K_t a_s = f_s;
+        the eddy-current model :mod:`msens.magnetics.dynamic` solves the same sources with
+        K_t + jωM_σ).
     """
 
     solution: FieldSolution
@@ -391,6 +395,7 @@ class MechanismPotentials:
     operator: TangentOperator
     villari_sources: list
     approach_rhs: np.ndarray
+    rhs: np.ndarray | None = None
 
     def contact_profiles(self, linkage: np.ndarray) -> tuple[np.ndarray, np.ndarray,
                                                              np.ndarray]:
@@ -474,7 +479,7 @@ def mechanism_potentials(sol: FieldSolution, geometry: SensorGeometry, *,
     timings["source_solves"] = time.perf_counter() - t0
     return MechanismPotentials(solution=sol, particles=particles, contacts=contacts,
                                potentials=pots, count=b.count, operator=operator,
-                               villari_sources=sources, approach_rhs=a_rhs)
+                               villari_sources=sources, approach_rhs=a_rhs, rhs=rhs)
 
 
 def coil_linkage(model: MechanismPotentials, coil: Coil) -> np.ndarray:

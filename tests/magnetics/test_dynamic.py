@@ -1,0 +1,208 @@
+"""Eddy-current (magneto-quasi-static) transducer: msens.magnetics.dynamic.
+
+On the coarse one-sensor model of test_transducer (beads 9..17, coil and magnet on bead 13):
+the 0 Hz solve is the static transducer to round-off, the coil's own harmonic field reads
+every source as the direct solves do (complex symmetric, no conjugate), the coil's loss
+matches Re Z − R_dc, and with σ = 0 the frequency-domain read-out is mss_signals.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from msens.electronics import coil_transfer_function, readout_circuit, transfer_function
+from msens.errors import InputError
+from msens.field.build import MeshOptions
+from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.sensor_model import coil_resistance
+from msens.magnetics.approach import hertz_stiffness
+from msens.magnetics.dynamic import (
+    dynamic_signals,
+    frequency_responses,
+    report_from_json,
+    report_to_json,
+    sensor_conductivity,
+)
+from msens.magnetics.mss import MssSensor, mss_signals
+from msens.magnetics.transducer import (
+    Transducer,
+    adjoint_check,
+    bias_solution,
+    coil_linkage,
+    mechanism_potentials,
+)
+from msens.steel_law import law_for_steel
+
+#: The coarse model of test_transducer (~4k elements, ~2 s with its sources).
+COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)
+FREQS = (0.0, 1e3, 1e4, 3e4, 1e5)
+
+
+def one_sensor() -> SensorGeometry:
+    """Beads 9..17, one MsS centred on particle 13 (as test_transducer)."""
+    return SensorGeometry(beads=BeadChain(first=9, last=17),
+                          sensors=(SensorUnit(Coil(particle=13), BiasMagnet(particle=13)),),
+                          air=AirBox(0.06, 0.05))
+
+
+@pytest.fixture(scope="module")
+def model(tmp_path_factory):
+    g = one_sensor()
+    sol, _ = bias_solution(g, options=COARSE, mesh_dir=tmp_path_factory.mktemp("meshes"))
+    return g, mechanism_potentials(sol, g, stress_force=g.beads.contact_load,
+                                   law=law_for_steel(g.steel))
+
+
+@pytest.fixture(scope="module")
+def report(model):
+    g, m = model
+    return frequency_responses(m, g, FREQS, direct=True)
+
+
+@pytest.fixture(scope="module")
+def static(model):
+    """The static transducer of coil 13 from the same sources (as compute_transducers)."""
+    g, m = model
+    coil = g.sensors[0].coil
+    link = coil_linkage(m, coil)
+    contacts, vil, app = m.contact_profiles(link)
+    inductance, _ = adjoint_check(m, coil, link)
+    return Transducer(particle=13, contacts=contacts, sensitivity_villari=vil,
+                      dlambda_dapproach=app, contact_stiffness=hertz_stiffness(g.beads.radius),
+                      reference_force=g.beads.contact_load,
+                      magnetic_particle_force=np.zeros(g.beads.count),
+                      resistance_ohm=coil_resistance(coil),
+                      inductance_H=inductance, turns=coil.turns, source="test")
+
+
+def test_zero_frequency_is_the_static_transducer(report, static):
+    r = report.responses[13]
+    assert r.contacts.tolist() == static.contacts.tolist()
+    scale_v = np.max(np.abs(static.sensitivity_villari))
+    scale_a = np.max(np.abs(static.dlambda_dapproach))
+    assert np.max(np.abs(r.villari[0] - static.sensitivity_villari)) < 1e-12 * scale_v
+    assert np.max(np.abs(r.approach[0] - static.dlambda_dapproach)) < 1e-12 * scale_a
+    assert r.static_inductance_H == pytest.approx(static.inductance_H, rel=1e-10)
+    assert r.impedance[0] == r.resistance_ohm
+    assert r.inductance[0] == r.static_inductance_H
+
+
+def test_reciprocity_and_power_balance(report):
+    chk = report.details["coils"]["13"]
+    # the coil's own harmonic field against the direct source solves: round-off
+    assert max(chk["reciprocity_rel_error"]) < 1e-12
+    # Re Z − R_dc = ω²∫σ|A|²dV/|I|² (1 % required; Galerkin identity to round-off)
+    assert max(chk["power_balance_rel_error"]) < 1e-2
+    assert max(chk["power_balance_rel_error"]) < 1e-9
+
+
+def test_eddy_currents_screen_and_lag(report):
+    r = report.responses[13]
+    k = np.searchsorted(r.contacts, [12, 13])
+    d = r.approach[:, k] / r.approach[0, k]
+    # the approach sensitivity falls and lags more with frequency
+    assert np.all(np.diff(np.abs(d), axis=0) < 0)
+    assert np.all(np.diff(np.angle(d), axis=0) < 0)
+    assert np.all(np.angle(d[1:]) < 0)
+    # symmetric model: contacts 12 and 13 mirror about bead 13
+    assert np.allclose(d[:, 0], d[:, 1], rtol=0.02)
+    # losses grow, the inductance falls
+    assert np.all(np.diff(r.impedance.real) > 0)
+    assert np.all(np.diff(r.inductance.real) < 0)
+
+
+def test_interpolation(report):
+    r = report.responses[13]
+    f = np.asarray(r.frequencies)
+    np.testing.assert_allclose(r.villari_at(f), r.villari, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(r.approach_at(f), r.approach, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(r.impedance_at(f), r.impedance, rtol=1e-12)
+    # continuous at the first nonzero frequency, static at 0, held beyond the last
+    below, above = r.approach_at([f[1] * (1 - 1e-9), f[1] * (1 + 1e-9)])
+    assert np.max(np.abs(below - above)) < 1e-6 * np.max(np.abs(r.approach[1]))
+    np.testing.assert_allclose(r.approach_at([1e6])[0], r.approach[-1], rtol=1e-12)
+    # smooth between samples: within the hull of the neighbours' magnitudes
+    mid = np.abs(r.approach_at([np.sqrt(f[2] * f[3])])[0])
+    lo = np.minimum(np.abs(r.approach[2]), np.abs(r.approach[3]))
+    hi = np.maximum(np.abs(r.approach[2]), np.abs(r.approach[3]))
+    assert np.all((mid >= lo * 0.999) & (mid <= hi * 1.001))
+
+
+def test_json_round_trip(report):
+    back = report_from_json(json.loads(json.dumps(report_to_json(report))))
+    a, b = report.responses[13], back.responses[13]
+    for name in ("frequencies", "contacts", "villari", "approach", "impedance"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert a.static_inductance_H == b.static_inductance_H
+
+
+def test_conductivity_by_region(model):
+    g, m = model
+    mesh = m.solution.problem.mesh
+    s = sensor_conductivity(mesh, g)
+    assert np.all(s[mesh.subdomains["bead_13"]] == 6e6)
+    assert np.all(s[mesh.subdomains["pole_13_upper"]] == 6e6)
+    assert np.all(s[mesh.subdomains["magnet_13"]] == 0.0)    # ceramic 8: an insulator
+    assert np.all(s[mesh.subdomains["air"]] == 0.0)
+    s2 = sensor_conductivity(mesh, g, magnets={"ceramic8": 1.0})
+    assert np.all(s2[mesh.subdomains["magnet_13"]] == 1.0)
+    with pytest.raises(InputError, match="increase from 0 Hz"):
+        frequency_responses(m, g, (1e3, 1e4))
+
+
+def test_coil_transfer_function_with_r_plus_jwl():
+    c = readout_circuit(90.0, 0.03, 15e-12, cable_resistance=5.0)
+    f = np.geomspace(1.0, 1e6, 50)
+    z = c.resistance + 2j * np.pi * f * c.inductance
+    np.testing.assert_allclose(coil_transfer_function(c, f, z), transfer_function(c, f),
+                               rtol=1e-14)
+
+
+def _history():
+    """Smooth force pulses passing contacts 1..20 (N), 0.1 µs steps over 0.4 ms."""
+    t = np.arange(4001) * 1e-7
+    tc = 20e-6 * np.arange(1, 21)
+    force = 2.0 + 40.0 * np.exp(-(((t[:, None] - tc[None, :]) / 8e-6) ** 2))
+    return t, force
+
+
+def test_zero_conductivity_reproduces_mss_signals(model, static):
+    g, m = model
+    rep = frequency_responses(m, g, FREQS, sigma=np.zeros(m.solution.problem.mesh.n_elements))
+    r = rep.responses[13]
+    np.testing.assert_allclose(r.villari, np.broadcast_to(r.villari[0], r.villari.shape),
+                               rtol=1e-10)
+    circuit = readout_circuit(static.resistance_ohm, static.inductance_H, 15e-12)
+    t, force = _history()
+    ref = mss_signals(MssSensor(static, circuit), t, force, 10e6)
+    dyn = dynamic_signals(static, r, circuit, t, force, 10e6)
+    scale = np.max(np.abs(ref.voltage))
+    assert np.max(np.abs(dyn.emf - ref.emf)) < 1e-9 * np.max(np.abs(ref.emf))
+    # FFT (band-limited EMF) against the exact first-order-hold response: 7.4e-4 here,
+    # ~(ωΔt)²/12 near the circuit's ~80 kHz resonance
+    assert np.max(np.abs(dyn.voltage - ref.voltage)) < 1e-3 * scale
+    np.testing.assert_array_equal(dyn.t_daq, ref.t_daq)
+
+
+def test_eddy_currents_lower_the_signal(model, static, report):
+    t, force = _history()
+    circuit = readout_circuit(static.resistance_ohm, static.inductance_H, 15e-12)
+    r = report.responses[13]
+    ref = mss_signals(MssSensor(static, circuit), t, force, 10e6)
+    dyn = dynamic_signals(static, r, circuit, t, force, 10e6)
+    assert np.max(np.abs(dyn.voltage)) < np.max(np.abs(ref.voltage))
+    assert np.all(np.isfinite(dyn.voltage))
+
+
+def test_skin_refinement_option_keeps_existing_mesh_keys():
+    from msens.field.cache import canonical, geometry_key
+
+    g = one_sensor()
+    assert "skin_size" not in canonical(MeshOptions())
+    assert geometry_key(g, MeshOptions()) == geometry_key(g)
+    assert geometry_key(g, MeshOptions(skin_size=20e-6)) != geometry_key(g)
+    with pytest.raises(InputError, match="skin_size"):
+        MeshOptions(skin_size=-1.0)

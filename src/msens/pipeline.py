@@ -285,7 +285,8 @@ def _positions(sensors: tuple[SensorSpec, ...]) -> list[str]:
 
 
 def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static: np.ndarray,
-                 transducers: dict, study: Study, index: int) -> SensorResult:
+                 transducers: dict, study: Study, index: int,
+                 responses: dict | None = None) -> SensorResult:
     from msens.fieldsetup import coil_geometry
     from msens.magnetics.mss import mss_record, readout, voltage_on
     from msens.study import CoilSpec
@@ -293,8 +294,15 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
     tr = transducers[sensor.particle]
     coil = coil_geometry(sensor.coil or CoilSpec(), sensor.particle)
     circuit = readout(coil, tr.resistance_ohm, tr.inductance_H, study.electronics)
-    rec = mss_record(tr, circuit, history.t, history.force, study.electronics,
-                     approach=history.approach, static=static, seed_offset=index)
+    if responses:
+        from msens.magnetics.dynamic import dynamic_signals
+
+        rec = dynamic_signals(tr, responses[sensor.particle], circuit, history.t,
+                              history.force, study.electronics.sample_rate_hz,
+                              approach=history.approach)
+    else:
+        rec = mss_record(tr, circuit, history.t, history.force, study.electronics,
+                         approach=history.approach, static=static, seed_offset=index)
     voltage = voltage_on(rec)
     return SensorResult(sensor=sensor, position=position, force=rec.weighted_force,
                         voltage_shape=voltage,
@@ -302,10 +310,12 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
 
 
 def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
-                  transducers: dict | None = None, study: Study | None = None) -> SetupResult:
+                  transducers: dict | None = None, study: Study | None = None,
+                  responses: dict | None = None) -> SetupResult:
     """Sensor records, features and speeds of one simulated setup.
 
-    Physics MsS sensors need the setup's ``transducers`` and the ``study`` (electronics).
+    Physics MsS sensors need the setup's ``transducers`` and the ``study`` (electronics);
+    with eddy currents also their ``responses`` (:func:`setup_responses`).
     """
     t = history.t
     static = static_contact_forces(chain)
@@ -317,7 +327,7 @@ def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
                                                strict=True)):
         if sensor.model is MssModel.PHYSICS:
             results.append(_physics_mss(sensor, position, history, static, transducers,
-                                        study, i))
+                                        study, i, responses))
             continue
         force = observe(sensor.kind, history.force, sensor.particle)
         shape = time_derivative(force, t) if sensor.kind is SensorKind.MSS else None
@@ -374,6 +384,28 @@ def setup_transducers(study: Study, setup: SetupSpec) -> dict | None:
     _log.info("setup %s: field model and transducers of the coils at particles %s",
               setup.name, coils)
     return transducers_for(geometry_from_study(study, setup))
+
+
+def setup_responses(study: Study, setup: SetupSpec) -> dict | None:
+    """Eddy-current frequency responses of a setup's physics MsS coils (cached on disk), or
+    None unless the study asks for eddy currents (``[field] eddy_currents = true``)."""
+    if not study.field.eddy_currents or not any(s.model is MssModel.PHYSICS
+                                                for s in setup.sensors):
+        return None
+    from msens.errors import InputError
+    from msens.field.eddy import SIGMA_1018
+    from msens.fieldsetup import geometry_from_study
+    from msens.magnetics.dynamic import dynamic_report
+
+    e = study.electronics
+    if e.johnson_noise or e.adc_bits or e.input_noise_v_per_rthz > 0:
+        raise InputError(f"{study.source}: [field] eddy_currents = true gives noise-free "
+                         "records for now (the coil's thermal noise would need Re Z(f)); "
+                         "turn the [electronics] noise off or eddy_currents off")
+    sigma = study.field.steel_conductivity_s_per_m or SIGMA_1018
+    _log.info("setup %s: eddy-current frequency responses (steel %.3g MS/m)", setup.name,
+              sigma / 1e6)
+    return dynamic_report(geometry_from_study(study, setup), steel=sigma).responses
 
 
 def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_contact: float,
@@ -440,6 +472,6 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
                                         extra=(static_forces or {}).get(setup.name),
                                         transducers=transducers)
         setups.append(observe_setup(setup, chain, history, transducers=transducers,
-                                    study=study))
+                                    study=study, responses=setup_responses(study, setup)))
     return StudyResult(study=study, gamma_contact=gc, gamma_wall=gw, fit=fit,
                        setups=tuple(setups))

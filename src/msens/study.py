@@ -236,6 +236,13 @@ class FieldSpec:
         None means the field model's default, AISI 1018 (FEMM library). The beads'
         magnetoelastic (JAS) anhysteretic is fitted to the same table
         (:func:`msens.steel_law.law_for_steel`).
+    eddy_currents : bool
+        Physics MsS with eddy currents in the conducting beads and pole pieces: frequency
+        dependent sensitivities and coil impedance (:mod:`msens.magnetics.dynamic`) instead
+        of the magnetostatic transducer. Off by default (see the README for its accuracy).
+    steel_conductivity_s_per_m : float or None
+        Electrical conductivity of the beads and pole pieces, S/m; None means
+        :data:`msens.field.eddy.SIGMA_1018` (AISI 1018, 6 MS/m, cited there).
     """
 
     beads: tuple[int, int] | None = None
@@ -245,6 +252,8 @@ class FieldSpec:
     air_radius_m: float | None = None
     air_margin_m: float | None = None
     steel_bh: BHCurve | None = None
+    eddy_currents: bool = False
+    steel_conductivity_s_per_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -753,7 +762,12 @@ def _field(t: Table | None, chain: ChainSpec, source: str) -> FieldSpec:
                      contact_gap_m=opt("contact_gap_m", 1e-3),
                      air_radius_m=opt("air_radius_m", 100.0),
                      air_margin_m=opt("air_margin_m", 100.0),
-                     steel_bh=_steel_bh(t, source))
+                     steel_bh=_steel_bh(t, source),
+                     eddy_currents=t.boolean("eddy_currents", False),
+                     # steels lie between ~1 MS/m (stainless) and ~10 MS/m (pure iron)
+                     steel_conductivity_s_per_m=t.number("steel_conductivity_S_per_m", None,
+                                                         low=1e5, high=2e7,
+                                                         allow_none=True))
     t.finish()
     return spec
 

@@ -104,7 +104,8 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         rows, computed = run_coil_sweep(study, full, sensor.particle, designs, cache,
                                         scheduler=scheduler, progress=progress)
     else:
-        base = base_geometry(study, spec.bead_padding)
+        base = (geometry_from_study(study) if spec.bead_padding is None
+                else base_geometry(study, spec.bead_padding))
         validate_designs(base, sensor.particle, designs, spec.source)
         mesh_dir = str(cache.directory / "meshes")
         tasks = []

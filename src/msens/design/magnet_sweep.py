@@ -7,10 +7,11 @@ inductance, the magnets' pull on the beads), the study's wave with that pull
 (:func:`msens.design.physics.study_wave`) and the figures of merit of
 :mod:`msens.design.metrics` — the same chain of functions as ``msens run``.
 
-Model size: the field model holds every MsS sensor of the study (the other sensor's magnet
-changes the forces near this one) but only ``bead_padding`` beads beyond the outermost
-sensors (:func:`msens.design.sweep.base_geometry`); beads outside it carry no magnetic force
-and no sensitivity.
+Model size: by default the study's whole field model (every MsS sensor: the other sensor's
+magnet changes the forces near this one; every bead), as ``msens run``. ``[model]
+bead_padding`` keeps only that many beads beyond the outermost sensors
+(:func:`msens.design.sweep.base_geometry`): faster, but the truncated column's end beads carry
+the field's ends, and with strong magnets their pull can put an end contact in tension.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ one varying fastest)::
     [magnet]                     # any [magnet] entry makes it a magnet sweep
     grade = ["ceramic8", "N38"]
     radial_gap_m = [0.15e-3, 1e-3]
-    [model]                      # magnet sweeps: the per-design field model
+    [model]                      # magnet sweeps: optional, a smaller per-design field model
     bead_padding = 4
     [recommend]
     objective = "snr"            # or "peak_emf_V"
@@ -115,8 +115,11 @@ class SweepSpec:
         Particle of the varied MsS sensor.
     axes : tuple of (str, tuple)
         ``("coil.turns", (600, 1100))`` ... in design order.
-    bead_padding : int
-        Beads modelled on either side of the outermost sensor in a magnet sweep's model.
+    bead_padding : int or None
+        Beads modelled on either side of the outermost sensor in a magnet sweep's model;
+        None (default): the study's whole field model, as ``msens run``. A padded model is
+        faster but its end beads carry the field's ends: with strong magnets their pull can
+        put an end contact in tension that the whole chain does not have.
     recommend : Recommend
     """
 
@@ -124,7 +127,7 @@ class SweepSpec:
     source: str
     sensor: int
     axes: tuple[tuple[str, tuple[Any, ...]], ...]
-    bead_padding: int = 4
+    bead_padding: int | None = None
     recommend: Recommend = Recommend()
 
     @property
@@ -183,9 +186,10 @@ def parse_sweep(text: str, *, source: str = "<memory>") -> SweepSpec:
     if count > MAX_DESIGNS:
         raise InputError(f"{source}: the sweep has {count} designs, more than {MAX_DESIGNS}")
     model = root.table("model")
-    padding = 4
+    padding = None
     if model is not None:
-        padding = model.integer("bead_padding", 4, low=1, high=30)
+        if model.raw("bead_padding") is not None:
+            padding = model.integer("bead_padding", low=1, high=30)
         model.finish()
     rec = _recommend(root.table("recommend"))
     root.finish()

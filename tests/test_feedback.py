@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import sys
+from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
@@ -146,23 +147,7 @@ def test_scheduler_without_dask_is_an_input_error(monkeypatch):
 
 def test_design_scheduler_without_dask_exits_2(tmp_path, monkeypatch, capsys):
     study, sweep = tmp_path / "study.toml", tmp_path / "sweep.toml"
-    study.write_text("""
-schema = "msens.study/1"
-name = "tiny-mss"
-[chain]
-beads = 10
-damping = "linear-loading"
-gamma_contact_kg_per_s = 4.7
-[striker]
-drop_height_m = 7.2e-3
-[simulation]
-t_end_s = 2.0e-4
-sample_rate_hz = 5e6
-[[sensor]]
-kind = "mss"
-particle = 6
-model = "physics"
-""")
+    study.write_text((Path(__file__).parent / "data" / "tiny-mss.toml").read_text())
     sweep.write_text("""
 schema = "msens.sweep/1"
 name = "tiny-magnet"

@@ -4,6 +4,7 @@ and `design`, at one resolution (:data:`msens.plots.DPI`); ``summary.json`` is u
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -77,22 +78,7 @@ def test_design_writes_the_chosen_format(tmp_path):
 
     assert files("svg") == ("designs.csv", "pareto.svg", "recommendation.json")
     study = tmp_path / "study.toml"
-    study.write_text("""schema = "msens.study/1"
-name = "tiny-mss"
-[chain]
-beads = 10
-damping = "linear-loading"
-gamma_contact_kg_per_s = 4.7
-[striker]
-drop_height_m = 7.2e-3
-[simulation]
-t_end_s = 2.0e-4
-sample_rate_hz = 5e6
-[[sensor]]
-kind = "mss"
-particle = 6
-model = "physics"
-""")
+    study.write_text((Path(__file__).parent / "data" / "tiny-mss.toml").read_text())
     sweep = tmp_path / "sweep.toml"
     sweep.write_text('schema = "msens.sweep/1"\nname = "t"\n[coil]\nturns = [600, 1100]\n')
     out = tmp_path / "o"

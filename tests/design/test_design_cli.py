@@ -17,23 +17,7 @@ from msens.study import load_study
 
 ROOT = Path(__file__).resolve().parents[2]
 
-TINY_STUDY = """
-schema = "msens.study/1"
-name = "tiny-mss"
-[chain]
-beads = 10
-damping = "linear-loading"
-gamma_contact_kg_per_s = 4.7
-[striker]
-drop_height_m = 7.2e-3
-[simulation]
-t_end_s = 2.0e-4
-sample_rate_hz = 5e6
-[[sensor]]
-kind = "mss"
-particle = 6
-model = "physics"
-"""
+TINY_STUDY = (ROOT / "tests" / "data" / "tiny-mss.toml").read_text()
 
 TINY_COIL = """
 schema = "msens.sweep/1"

@@ -7,6 +7,8 @@ later; the study key is validated like every other.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -14,25 +16,8 @@ from msens import api
 from msens.cli import main
 from msens.errors import InputError
 
-TINY = """
-schema = "msens.study/1"
-name = "tiny-mss"
-[chain]
-beads = 10
-damping = "linear-loading"
-gamma_contact_kg_per_s = 4.7
-[striker]
-drop_height_m = 7.2e-3
-[simulation]
-t_end_s = 2.0e-4
-sample_rate_hz = 5e6
-[electronics]
-sample_rate_hz = 5e6
-[[sensor]]
-kind = "mss"
-particle = 6
-model = "physics"
-"""
+TINY = (Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text().replace(
+    "[[sensor]]", "[electronics]\nsample_rate_hz = 5e6\n[[sensor]]")
 
 
 def _study(tmp_path, extra: str = ""):
@@ -62,8 +47,7 @@ def test_eddy_currents_key_is_validated(tmp_path, capsys):
         _study(tmp_path, "[field]\neddy_currents = 1\n")
     with pytest.raises(InputError, match="steel_conductivity_S_per_m"):
         _study(tmp_path, "[field]\nsteel_conductivity_S_per_m = 1e12\n")
-    noisy = TINY.replace("sample_rate_hz = 5e6\n[[sensor]]",
-                         "sample_rate_hz = 5e6\njohnson_noise = true\n[[sensor]]")
+    noisy = TINY.replace("[electronics]\n", "[electronics]\njohnson_noise = true\n")
     path = tmp_path / "noisy.toml"
     path.write_text(noisy + "[field]\neddy_currents = true\n")
     assert main(["run", str(path), "--out", str(tmp_path / "o"), "-q"]) == 2

@@ -23,24 +23,14 @@ import numpy as np
 import skfem
 
 from msens.errors import require
-from msens.field.assembly import assemble_matrix, assemble_vector, factorize
-from msens.field.constitutive import reluctivities, tangent
-from msens.field.forms import element_stiffness, flux_density_qp, quadrature_data
+from msens.field.forms import quadrature_data
 from msens.field.geometry import Coil, SensorGeometry
 from msens.field.mesh import from_arrays
 from msens.field.sensor_model import shell_function
 from msens.field.solve import FieldSolution
+from msens.magnetics.potentials import bias_residual, nonlinear_resolve
 from msens.magnetics.villari import coil_flux_linkage
 from msens.materials import BEAD_STEEL, ElasticMaterial
-
-
-def _residual(q, mat, a: np.ndarray, n: int) -> np.ndarray:
-    """Bias residual ∫ (ν(B) B - H_c e_z)·B(v) r (per radian) at dofs ``a``, shape (n,)."""
-    b = flux_density_qp(q, a)
-    nu, _ = reluctivities(mat, b)
-    h = nu[..., None] * b
-    h[..., 1] -= mat.hc[:, None]
-    return assemble_vector(q.dofs, np.einsum("eqic,eqc->ei", q.g, h * q.w[..., None]), n)
 
 
 def _morphed_quadrature(sol: FieldSolution, points: np.ndarray):
@@ -69,7 +59,6 @@ def approach_residuals(sol: FieldSolution, geometry: SensorGeometry,
     require(step > 0, f"step must be > 0 m, got {step}")
     b = geometry.beads
     p0 = sol.problem.mesh.mesh.p
-    mat = sol.disc.materials
     out = {}
     for c in contacts:
         require(b.first <= c <= b.last, f"contact {c} is not below a modelled bead")
@@ -78,7 +67,7 @@ def approach_residuals(sol: FieldSolution, geometry: SensorGeometry,
         for s in (step, -step):
             p = p0.copy()
             p[1] -= s * phi
-            res.append(_residual(_morphed_quadrature(sol, p), mat, sol.a, sol.basis.N))
+            res.append(bias_residual(sol, _morphed_quadrature(sol, p), sol.a))
         out[int(c)] = (res[0] - res[1]) / (2 * step)
     return out
 
@@ -112,26 +101,11 @@ def approach_flux_change(sol: FieldSolution, geometry: SensorGeometry, contact: 
     b = geometry.beads
     phi = shell_function(sol, [f"bead_{p}" for p in range(b.first, contact + 1)], layers=0)
     p0 = sol.problem.mesh.mesh.p
-    d = sol.disc
-    free = d.pattern.free
     lam = []
     for s in (step, -step):
         p = p0.copy()
         p[1] -= s * phi
-        q = _morphed_quadrature(sol, p)
-        a = sol.a.copy()
-        for _ in range(max_iter):
-            bq = flux_density_qp(q, a)
-            nu, nu_d = reluctivities(d.materials, bq)
-            h = nu[..., None] * bq
-            h[..., 1] -= d.materials.hc[:, None]
-            r = assemble_vector(q.dofs, np.einsum("eqic,eqc->ei", q.g, h * q.w[..., None]),
-                                d.basis.N)[free]
-            _, ff = assemble_matrix(d.pattern, element_stiffness(q, tangent(bq, nu, nu_d)))
-            da = factorize(ff).solve(-r)
-            a[free] += da
-            if np.linalg.norm(da) <= tol * np.linalg.norm(a[free]):
-                break
+        a = nonlinear_resolve(sol, _morphed_quadrature(sol, p), tol=tol, max_iter=max_iter)
         # the coil does not move: its quadrature on the morphed mesh is the original one
         lam.append(coil_flux_linkage(sol, a, coil))
     return (lam[0] - lam[1]) / (2 * step)

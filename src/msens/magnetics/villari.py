@@ -34,13 +34,10 @@ from matplotlib.tri import Triangulation
 
 from msens.beadstress import BeadStress, solve_bead_stress, stress_at
 from msens.errors import require
-from msens.field.assembly import assemble_matrix, assemble_vector, factorize
-from msens.field.constitutive import reluctivities, tangent
-from msens.field.forms import element_stiffness, flux_density_qp
 from msens.field.geometry import Coil, SensorGeometry
 from msens.field.regions import Winding
 from msens.field.solve import FieldSolution, incremental, internal_field_strength
-from msens.magnetics.potentials import region_linkage
+from msens.magnetics.potentials import nonlinear_resolve, region_linkage
 from msens.magnetoelastic import (
     JilesAthertonSablik,
     equivalent_uniaxial_stress,
@@ -252,27 +249,12 @@ def nonlinear_flux_change(sol: FieldSolution, elements: np.ndarray, mu0_dm: np.n
     float
         Wb per unit of the source's scale (Wb/N for a source per newton).
     """
-    d = sol.disc
-    q = d.quad
-    free = d.pattern.free
-    mat = d.materials
+    q = sol.disc.quad
     lam = []
     for eps in (scale, -scale):
         shift = np.zeros((*q.w.shape, 2))
         shift[elements] = eps * mu0_dm
-        a = sol.a.copy()
-        for _ in range(max_iter):
-            b = flux_density_qp(q, a) - shift
-            nu, nu_d = reluctivities(mat, b)
-            h = nu[..., None] * b
-            h[..., 1] -= mat.hc[:, None]
-            fe = np.einsum("eqic,eqc->ei", q.g, h * q.w[..., None])
-            res = assemble_vector(q.dofs, fe, d.basis.N)[free]
-            _, ff = assemble_matrix(d.pattern, element_stiffness(q, tangent(b, nu, nu_d)))
-            da = factorize(ff).solve(-res)
-            a[free] += da
-            if np.linalg.norm(da) <= tol * np.linalg.norm(a[free]):
-                break
+        a = nonlinear_resolve(sol, q, shift, tol=tol, max_iter=max_iter)
         lam.append(coil_flux_linkage(sol, a, coil))
     return (lam[0] - lam[1]) / (2 * scale)
 

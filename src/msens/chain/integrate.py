@@ -33,8 +33,10 @@ from msens.chain.model import Chain, DampingLaw
 #: 15.6 us, 1 ms, 10 MHz samples), as peak-force / whole-waveform errors relative to the peak:
 #: LINEAR 4.8e-9 / 2.6e-8, 4.9e-8 / 1.6e-7, 2.4e-7 / 9.7e-7 at 8 / 5 / 4 steps (598, 403,
 #: 342 steps per ms); LINEAR_LOADING 4.6e-9 / 3.6e-8, 3.5e-8 / 1.9e-7, 1.7e-7 / 1.1e-6 (815,
-#: 651, 602). Five keeps the waveform error five times below 1e-6. HERTZ_KUWABARA_KONO
-#: (quintic output) 3.2e-7 / 2.2e-7 at 8 (1242).
+#: 651, 602). Five keeps the damped waveform error five times below 1e-6; the undamped chain
+#: (907 steps per ms) errs by 7.0e-7 on the sensor contacts and 9.3e-7 on all of them
+#: (``benchmarks/chain_lammps.py``). HERTZ_KUWABARA_KONO (quintic output) 3.2e-7 / 2.2e-7 at
+#: 8 (1242).
 STEPS_PER_CONTACT_TIME = {DampingLaw.LINEAR: 5, DampingLaw.LINEAR_LOADING: 5,
                           DampingLaw.HERTZ_KUWABARA_KONO: 8}
 #: Steps per period of the highest linearised (precompressed) chain frequency.

@@ -403,6 +403,8 @@ def write_field_outputs(report: FieldReport, out_dir: str | Path,
                                                             out / f"field_B.{fig_format}"))}
     try:
         written["field_3d.png"] = str(plot_field_3d(report, out / "field_3d.png"))
+    except ImportError as exc:  # the base install has no pyvista: the message says how
+        written["field_3d.png"] = f"skipped: {exc}"
     except Exception as exc:  # no OpenGL context here: say so, keep the other outputs
         written["field_3d.png"] = f"skipped: pyvista could not render off-screen ({exc})"
     return written

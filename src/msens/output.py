@@ -22,12 +22,16 @@ MANIFEST = ".msens-manifest.json"
 
 
 def atomic_write(path: Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it into place."""
+    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it into place
+    (with the permissions a new file gets under the umask: mkstemp's are 0600)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     try:
         write(Path(tmp))
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -44,10 +48,23 @@ def _json_default(obj: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
+def _finite(obj: Any) -> Any:
+    """``obj`` with every non-finite float (NaN, ±inf) replaced by None, by value."""
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _finite(obj.tolist())
+    if isinstance(obj, float | np.floating):
+        return float(obj) if np.isfinite(obj) else None
+    return obj
+
+
 def to_json(data: Any) -> str:
-    """JSON text of ``data`` (numpy arrays and scalars allowed), NaN written as null."""
-    text = json.dumps(data, indent=2, default=_json_default, allow_nan=True)
-    return text.replace("NaN", "null")
+    """Strict JSON text of ``data`` (numpy arrays and scalars allowed): non-finite numbers
+    become null by value, so text such as "NaN" inside a string is kept as it is."""
+    return json.dumps(_finite(data), indent=2, default=_json_default, allow_nan=False)
 
 
 class OutputDir:

@@ -27,7 +27,7 @@ import gmsh
 import numpy as np
 
 from msens.errors import require
-from msens.field.mesh import AxiMesh, facets_of_lines, from_arrays
+from msens.field.mesh import AxiMesh, facets_of_lines, from_arrays, generate_sized
 
 
 @dataclass(frozen=True)
@@ -186,12 +186,7 @@ def layered_sphere_mesh(radius: float, layer: SkinLayer, r_out: float,
                 return h_core
             return min(h_far, h_surf + grading * max(d - radius, 0.0))
 
-        gmsh.model.mesh.setSizeCallback(size)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
-        gmsh.option.setNumber("Mesh.Algorithm", 6)
-        gmsh.model.mesh.generate(2)
+        generate_sized(size)
         tags, coords, _ = gmsh.model.mesh.getNodes()
         xy = coords.reshape(-1, 3)[:, :2]
         index = {int(g): k for k, g in enumerate(tags)}

@@ -19,7 +19,7 @@ import gmsh
 import numpy as np
 
 from msens.errors import require
-from msens.field.mesh import AxiMesh, read_gmsh
+from msens.field.mesh import AxiMesh, generate_sized, read_gmsh
 
 
 @dataclass(frozen=True)
@@ -119,12 +119,7 @@ def build_mesh(parts: Sequence[Part], r_out: float, h_far: float, grading: float
                 best = min(best, p.h + grading * p.distance(x, y))
             return best
 
-        gmsh.model.mesh.setSizeCallback(size)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
-        gmsh.option.setNumber("Mesh.Algorithm", 6)
-        gmsh.model.mesh.generate(2)
+        generate_sized(size)
         gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
         if path is None:
             fd, tmp = tempfile.mkstemp(suffix=".msh")

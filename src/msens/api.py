@@ -142,6 +142,9 @@ def physics_summary(result: StudyResult) -> dict:
                 "resonance_Hz": f0, "quality_factor": q,
                 "pre_peak_trough": _trough(r.mss),
                 "mechanism_share": mechanism_share(tr, s.history),
+                **({"frequency_response": frequency_summary(s.responses[r.sensor.particle],
+                                                            tr)}
+                   if s.responses else {}),
                 "sensitivity_profile": [
                     {"contact": int(c), "dLambda_dF_Wb_per_N": float(v + g),
                      "villari_Wb_per_N": float(v), "approach_Wb_per_N": float(g)}
@@ -153,6 +156,25 @@ def physics_summary(result: StudyResult) -> dict:
     return {"coils": coils, "magnetic_precompression_N": precompression,
             "dominant_mechanism": "villari" if villari >= approach else "contact approach",
             "mechanism_magnitude_Wb_per_N": {"villari": villari, "approach": approach}}
+
+
+def frequency_summary(response, tr) -> dict:
+    """A coil's eddy-current frequency response for ``summary.json``: at each solved
+    frequency, the contact-approach and Villari sensitivities of the two contacts beside the
+    coil's bead relative to their static values (magnitude, phase in degrees), and the coil
+    impedance as R (Ω) and L (H)."""
+    freqs = np.asarray(response.frequencies, dtype=float)
+    own = [int(np.flatnonzero(np.asarray(response.contacts) == c)[0])
+           for c in (tr.particle - 1, tr.particle)]
+    out = {"frequencies_Hz": freqs.tolist(), "contacts": [tr.particle - 1, tr.particle]}
+    for name, values in (("approach", response.approach), ("villari", response.villari)):
+        ratio = np.asarray(values)[:, own] / np.asarray(values)[0, own]
+        out[f"{name}_ratio_magnitude"] = np.abs(ratio).tolist()
+        out[f"{name}_ratio_phase_deg"] = np.degrees(np.angle(ratio)).tolist()
+    z = np.asarray(response.impedance)
+    out["resistance_ohm"] = z.real.tolist()
+    out["inductance_H"] = np.asarray(response.inductance).real.tolist()
+    return out
 
 
 def mechanism_share(tr, history) -> dict:

@@ -80,6 +80,9 @@ class SetupResult:
         Pulse speed between the top and bottom sensor, m/s (NaN with one sensor).
     transducers : dict or None
         Physics MsS transducers by coil particle (:class:`msens.magnetics.transducer.Transducer`).
+    responses : dict or None
+        With eddy currents: each coil's frequency response by particle
+        (:class:`msens.magnetics.dynamic.FrequencyResponse`).
     """
 
     setup: SetupSpec
@@ -90,6 +93,7 @@ class SetupResult:
     speed_incident: float
     speed_reflected: float
     transducers: dict | None = None
+    responses: dict | None = None
 
     def __repr__(self) -> str:
         coils = (f", transducers at {', '.join(map(str, sorted(self.transducers)))}"
@@ -344,7 +348,8 @@ def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
                                          top.features.t_reflected))
     return SetupResult(setup=setup, chain=chain, history=history, static_force=static,
                        sensors=tuple(results), speed_incident=speed_in,
-                       speed_reflected=speed_out, transducers=transducers)
+                       speed_reflected=speed_out, transducers=transducers,
+                       responses=responses)
 
 
 def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:

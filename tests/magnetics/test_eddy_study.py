@@ -31,7 +31,17 @@ def test_eddy_currents_screen_the_coil_signal(tmp_path, monkeypatch):
     static = api.run(_study(tmp_path)).setups[0].sensors[0]
     eddy_study = _study(tmp_path, "[field]\neddy_currents = true\n")
     assert eddy_study.field.eddy_currents
-    eddy = api.run(eddy_study).setups[0].sensors[0]
+    result = api.run(eddy_study)
+    eddy = result.setups[0].sensors[0]
+    # summary.json carries each coil's frequency response
+    fr = api.physics_summary(result)["coils"][0]["frequency_response"]
+    assert fr["frequencies_Hz"][0] == 0.0 and fr["contacts"] == [5, 6]
+    mag = np.array(fr["approach_ratio_magnitude"])
+    np.testing.assert_allclose(mag[0], 1.0, rtol=1e-12)
+    assert np.all(mag[-1] < 0.9) and np.all(np.array(fr["approach_ratio_phase_deg"])[-1] < 0)
+    assert fr["resistance_ohm"][-1] > fr["resistance_ohm"][0]  # eddy losses
+    assert "frequency_response" not in api.physics_summary(api.run(_study(tmp_path)))[
+        "coils"][0]
     v0, v1 = static.mss.voltage, eddy.mss.voltage
     assert v1.shape == v0.shape and np.all(np.isfinite(v1))
     assert 0.3 * np.max(np.abs(v0)) < np.max(np.abs(v1)) < np.max(np.abs(v0))

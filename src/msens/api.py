@@ -137,6 +137,8 @@ def physics_summary(result: StudyResult) -> dict:
             coils.append({
                 "setup": s.setup.name, "particle": r.sensor.particle,
                 "peak_voltage_V": float(np.max(np.abs(r.mss.voltage))),
+                "peak_voltage_time_us": float(r.mss.t_daq[np.argmax(np.abs(r.mss.voltage))]
+                                              * 1e6),
                 "peak_emf_V": float(np.max(np.abs(r.mss.emf))),
                 "resistance_ohm": tr.resistance_ohm, "inductance_H": tr.inductance_H,
                 "resonance_Hz": f0, "quality_factor": q,

@@ -33,8 +33,6 @@ from msens.fieldsetup import geometry_from_study
 from msens.output import OutputDir
 from msens.study import Study
 
-FILES = ("designs.csv", "pareto.png", "recommendation.json")
-
 
 def files(fig_format: str = "png") -> tuple[str, ...]:
     """The output file names, the Pareto figure in ``fig_format`` ("png", "pdf", "svg")."""
@@ -154,5 +152,5 @@ def format_result(result: DesignResult) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["FILES", "DesignResult", "files", "format_result", "load_sweep", "parse_sweep",
+__all__ = ["DesignResult", "files", "format_result", "load_sweep", "parse_sweep",
            "run_design", "write_results"]

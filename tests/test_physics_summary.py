@@ -36,3 +36,18 @@ def test_mechanism_shares_add_up_and_the_mechanisms_add_to_the_emf(result):
         e = np.abs(sensor.mss.emf)
         k = int(np.argmax(e))
         assert e[k] - max(e[k - 1], e[k + 1]) < 1e-3 * e[k]
+
+
+def test_rigid_translation_is_below_one_percent_of_the_approach_signal(result):
+    # The beads' rigid translation is part of the contact-approach sources; the issue asks
+    # that it be quantified and kept when it exceeds 1 % (it is kept either way).
+    summary = api.physics_summary(result)
+    setup = result.setups[0]
+    for coil, sensor in zip(summary["coils"], setup.sensors, strict=True):
+        rigid = coil["mechanism_share"]["approach"]["rigid_translation"]
+        tr = setup.transducers[sensor.sensor.particle]
+        assert rigid["sensitivity_Wb_per_m"] == tr.dlambda_dapproach[-1]
+        # whole-chain translation against the coil's own contact: small but not zero
+        assert 0 < abs(rigid["sensitivity_Wb_per_m"]) < 0.01 * np.max(
+            np.abs(tr.dlambda_dapproach))
+        assert 0 < rigid["fraction_of_peak"] < 0.01

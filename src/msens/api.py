@@ -182,8 +182,11 @@ def frequency_summary(response, tr) -> dict:
 def mechanism_share(tr, history) -> dict:
     """Each mechanism's open-circuit EMF alone: its peak (V) and its share of the summed
     signal energy ∫EMF_m² dt / Σ_m ∫EMF_m² dt (the two are not orthogonal: their cross term
-    is left out, so the shares add to 1)."""
-    from msens.magnetics.transducer import contact_rates, emf_from_rates
+    is left out, so the shares add to 1). The contact-approach entry also carries the
+    beads' rigid translation (contained in it, see
+    :func:`msens.magnetics.transducer.rigid_translation_emf`): its sensitivity, peak EMF and
+    fraction of the contact-approach peak."""
+    from msens.magnetics.transducer import contact_rates, emf_from_rates, rigid_translation_emf
 
     rates = contact_rates(history.t, history.force, tr.contacts, tr.contact_stiffness,
                           approach=history.approach)
@@ -191,8 +194,15 @@ def mechanism_share(tr, history) -> dict:
             for m in ("villari", "approach")}
     energy = {m: float(np.trapezoid(e**2, history.t)) for m, e in emfs.items()}
     total = sum(energy.values()) or 1.0
-    return {m: {"peak_emf_V": float(np.max(np.abs(e))), "energy_share": energy[m] / total}
-            for m, e in emfs.items()}
+    out = {m: {"peak_emf_V": float(np.max(np.abs(e))), "energy_share": energy[m] / total}
+           for m, e in emfs.items()}
+    rigid = rigid_translation_emf(tr, rates)
+    out["approach"]["rigid_translation"] = {
+        "sensitivity_Wb_per_m": float(tr.dlambda_dapproach[-1]),
+        "peak_emf_V": float(np.max(np.abs(rigid))),
+        "fraction_of_peak": float(np.max(np.abs(rigid))
+                                  / max(out["approach"]["peak_emf_V"], 1e-300))}
+    return out
 
 
 FIGURES = ("contact_forces.png", "sensor_profiles.png", "sensor_records.png", "table2.png")

@@ -88,6 +88,29 @@ def hertz_approach_rate(force: float, radius: float,
     return 2.0 / 3.0 * (force / hertz_stiffness(radius, material)) ** (2.0 / 3.0) / force
 
 
+def morphed_flux_linkage(sol: FieldSolution, geometry: SensorGeometry, contact: int,
+                         coil: Coil, delta: float, *, tol: float = 1e-12,
+                         max_iter: int = 20) -> float:
+    """Coil flux linkage after the beads above ``contact`` moved by ``delta``, full re-solve.
+
+    The nonlinear bias problem is solved again on the mesh morphed as in
+    :func:`approach_residuals` (every modelled bead above the contact moved rigidly toward
+    the wall by ``delta``; negative: away from it).
+
+    Returns
+    -------
+    float
+        Λ, Wb.
+    """
+    b = geometry.beads
+    phi = shell_function(sol, [f"bead_{p}" for p in range(b.first, contact + 1)], layers=0)
+    p = sol.problem.mesh.mesh.p.copy()
+    p[1] -= delta * phi
+    a = nonlinear_resolve(sol, _morphed_quadrature(sol, p), tol=tol, max_iter=max_iter)
+    # the coil does not move: its quadrature on the morphed mesh is the original one
+    return coil_flux_linkage(sol, a, coil)
+
+
 def approach_flux_change(sol: FieldSolution, geometry: SensorGeometry, contact: int,
                          coil: Coil, step: float = 1e-9, *, tol: float = 1e-12,
                          max_iter: int = 20) -> float:
@@ -98,19 +121,10 @@ def approach_flux_change(sol: FieldSolution, geometry: SensorGeometry, contact: 
     float
         Wb/m, central difference (Λ(+step) - Λ(-step)) / (2 step).
     """
-    b = geometry.beads
-    phi = shell_function(sol, [f"bead_{p}" for p in range(b.first, contact + 1)], layers=0)
-    p0 = sol.problem.mesh.mesh.p
-    lam = []
-    for s in (step, -step):
-        p = p0.copy()
-        p[1] -= s * phi
-        a = nonlinear_resolve(sol, _morphed_quadrature(sol, p), tol=tol, max_iter=max_iter)
-        # the coil does not move: its quadrature on the morphed mesh is the original one
-        lam.append(coil_flux_linkage(sol, a, coil))
+    lam = [morphed_flux_linkage(sol, geometry, contact, coil, s, tol=tol, max_iter=max_iter)
+           for s in (step, -step)]
     return (lam[0] - lam[1]) / (2 * step)
 
 
-
 __all__ = ["approach_flux_change", "approach_residuals", "hertz_approach_rate",
-           "hertz_stiffness"]
+           "hertz_stiffness", "morphed_flux_linkage"]

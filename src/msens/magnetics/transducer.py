@@ -294,6 +294,33 @@ def emf_from_rates(rates: ContactRates, sensitivity_villari: np.ndarray,
     return out
 
 
+def rigid_translation_emf(transducer: Transducer, rates: ContactRates) -> np.ndarray:
+    """The part of the contact-approach EMF that is the beads' rigid translation, V.
+
+    Each approach source moves every modelled bead above its contact rigidly, so summed over
+    contacts the sources move bead p by u_p = Σ_{c ≥ p} δ_c (the wall does not move): the
+    beads' translation in the coil's and magnet's field gradients is contained in the
+    contact-approach EMF. Its size is the sensitivity to translating all modelled beads
+    together, T = ∂Λ/∂δ of the lowest modelled contact (no contact changes then), times the
+    speed of the coil's bead: -T du_p/dt. Beads near the coil move together to within a few
+    contact approaches, so this estimates the translation part of the signal.
+
+    Parameters
+    ----------
+    transducer : Transducer
+    rates : ContactRates
+        Rates of ``transducer.contacts`` (:func:`contact_rates`).
+
+    Returns
+    -------
+    ndarray, shape (nt,)
+    """
+    contacts = np.asarray(transducer.contacts)
+    below = contacts >= transducer.particle
+    speed = np.sum(rates.approach[:, below], axis=1)
+    return -float(transducer.dlambda_dapproach[-1]) * speed
+
+
 def emf(transducer: Transducer, t: np.ndarray, force: np.ndarray,
         mechanism: Mechanism = "both", approach: np.ndarray | None = None) -> np.ndarray:
     """Open-circuit coil EMF of one transducer for a chain's contact forces, V.
@@ -785,6 +812,7 @@ __all__ = [
     "mechanism_potentials",
     "offset_profiles",
     "particle_forces",
+    "rigid_translation_emf",
     "transducer_report",
     "transducers_for",
 ]

@@ -11,6 +11,7 @@ from scipy import signal
 from msens.electronics import (
     NoiseModel,
     ReadoutCircuit,
+    add_readout_noise,
     bandwidth,
     daq_voltage,
     noise_rms,
@@ -209,6 +210,47 @@ def test_noise_realisation_variance_matches_psd_integral(circuit, rate):
     # samples are correlated over ~1/σ; the std. error is ~0.5 % (8 seeds), assert 3 %
     assert np.var(v) == pytest.approx(expected, rel=0.03)
     assert abs(np.mean(v)) < 5 * math.sqrt(expected * 200 / n)
+
+
+def test_psd_with_the_coil_impedance_given_as_r_plus_sl_is_the_default():
+    f = np.geomspace(1.0, 1e7, 200)
+    z = PAPER.resistance + 2j * np.pi * f * PAPER.inductance
+    np.testing.assert_allclose(thermal_noise_psd(WITH_CABLE_R, T_ROOM, f, coil_impedance=z),
+                               thermal_noise_psd(WITH_CABLE_R, T_ROOM, f), rtol=1e-13)
+
+
+def _lossy(f):
+    """A coil whose loss grows with frequency, as with eddy currents: R + (sL ∥ R_e), the
+    inductance shunted by a loss resistance (corner at 100 kHz)."""
+    s = 2j * np.pi * np.asarray(f, dtype=float)
+    r_e = 2 * np.pi * 1e5 * PAPER.inductance
+    return PAPER.resistance + s * PAPER.inductance * r_e / (s * PAPER.inductance + r_e)
+
+
+@pytest.mark.parametrize("impedance", [None, _lossy])
+def test_spectral_noise_variance_matches_psd_integral(impedance):
+    """Frequency-domain synthesis (used with Z(f)) has the variance ∫S df; for R + sL it
+    equals the exact state-space (Lyapunov) variance."""
+    rate, n = 2e6, 100_000
+    nm = NoiseModel(T_ROOM)
+    z = (lambda f: PAPER.resistance + 2j * np.pi * f * PAPER.inductance) if impedance is None \
+        else impedance
+    samples = np.concatenate([
+        add_readout_noise(np.zeros(n), PAPER, nm, rate, rng=seed, coil_impedance=z)
+        for seed in range(8)])
+    f = np.linspace(0.0, rate / 2, 400_001)
+    expected = np.trapezoid(thermal_noise_psd(PAPER, T_ROOM, f, coil_impedance=z(f)), f)
+    # 8 × 1e5 samples correlated over ~2 Q / ω0 (≈ 100 samples): std. error ~1 %, assert 4 %
+    assert np.var(samples) == pytest.approx(expected, rel=0.04)
+    if impedance is None:
+        assert expected == pytest.approx(noise_rms(PAPER, nm) ** 2, rel=2e-3)
+    else:  # the loss changes the spectrum: more noise above the corner, less at resonance
+        f_hi = np.array([3e5])
+        assert thermal_noise_psd(PAPER, T_ROOM, f_hi, coil_impedance=z(f_hi))[0] > \
+            thermal_noise_psd(PAPER, T_ROOM, f_hi)[0]
+        k = int(np.argmax(thermal_noise_psd(PAPER, T_ROOM, f)))
+        assert thermal_noise_psd(PAPER, T_ROOM, f[k:k + 1], coil_impedance=z(f[k:k + 1]))[0] < \
+            thermal_noise_psd(PAPER, T_ROOM, f[k:k + 1])[0]
 
 
 def test_daq_noise_and_quantisation():

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -180,16 +181,19 @@ def coil_transfer_function(circuit: ReadoutCircuit, f: ArrayLike,
     return _transfer(circuit, s, z, y_b)
 
 
-def _noise_transfers(circuit: ReadoutCircuit, f: np.ndarray):
+def _noise_transfers(circuit: ReadoutCircuit, f: np.ndarray,
+                     coil_impedance: np.ndarray | None = None):
     """V_daq per unit source of the coil's, the cable's and R_in's thermal noise.
 
     Returns (H_coil [V/V], H_cable [V/V], Z_out [V/A]): the coil noise is a voltage source in
     series with R (same path as the EMF), the cable's in series with R_c, and R_in's a
-    current source across R_in.
+    current source across R_in. ``coil_impedance`` (Ω, shape of f) replaces R + sL.
     """
     s, z_s, y_b = _admittances(circuit, f)
+    if coil_impedance is not None:
+        z_s = np.asarray(coil_impedance, dtype=complex)
     r_c = circuit.cable_resistance
-    h_coil = transfer_function(circuit, f)
+    h_coil = _transfer(circuit, s, z_s, y_b)
     y_a = 1.0 + z_s * s * circuit.winding_capacitance      # Z_A = Z_s / y_a
     h_cable = y_a / (y_a + y_b * (z_s + r_c * y_a))        # 1 / (1 + Y_B (Z_A + R_c))
     z_out = 1.0 / (y_b + y_a / (r_c * y_a + z_s))          # node B to ground
@@ -474,30 +478,97 @@ def daq_voltage(circuit: ReadoutCircuit, t: ArrayLike, emf: ArrayLike, sample_ra
         v[sel] = xs @ c
 
     if noise is not None:
-        gen = _as_rng(rng)
-        if noise.temperature_K > 0:
-            v = v + _thermal_realisation(circuit, noise.temperature_K, n_daq,
-                                         1.0 / sample_rate, gen)
-        if noise.input_noise_V_per_rtHz > 0:
-            sigma = noise.input_noise_V_per_rtHz * math.sqrt(sample_rate / 2.0)
-            v = v + sigma * gen.standard_normal(n_daq)
-        if noise.adc_bits is not None:
-            v = _quantise(v, noise)
+        v = add_readout_noise(v, circuit, noise, sample_rate, rng=rng)
     return t_daq, v
+
+
+def add_readout_noise(v: np.ndarray, circuit: ReadoutCircuit, noise: NoiseModel,
+                      sample_rate: float, *, rng: np.random.Generator | int | None = None,
+                      coil_impedance: Callable[[np.ndarray], np.ndarray] | None = None
+                      ) -> np.ndarray:
+    """A DAQ record with the read-out's noise added, V, shape (m,).
+
+    In order: the circuit-shaped Johnson noise of the coil, R_c and R_in; white DAQ input
+    noise of variance e_n² fs/2 per sample; ADC quantisation and clipping. The Johnson noise
+    is an exact sampled realisation of the state-space model when the coil is R + sL. With a
+    frequency-dependent coil impedance Z(f) (eddy currents) the coil's noise EMF has the
+    one-sided PSD 4kT Re Z(f) (fluctuation–dissipation), and the noise is synthesised in the
+    frequency domain from :func:`thermal_noise_psd` on twice the record's length (so that
+    the wrap-around of the FFT does not correlate its ends).
+
+    Parameters
+    ----------
+    v : ndarray, shape (m,)
+        Noise-free DAQ voltage sampled at ``sample_rate``, V.
+    circuit : ReadoutCircuit
+    noise : NoiseModel
+    sample_rate : float
+        Hz.
+    rng : numpy.random.Generator or int, optional
+        None = seed 0.
+    coil_impedance : callable, optional
+        f (Hz, shape (k,)) -> Z (Ω, complex, shape (k,)), e.g.
+        :meth:`msens.magnetics.dynamic.FrequencyResponse.impedance_at`.
+    """
+    v = np.asarray(v, dtype=float)
+    gen = _as_rng(rng)
+    dt = 1.0 / sample_rate
+    if noise.temperature_K > 0:
+        if coil_impedance is None:
+            v = v + _thermal_realisation(circuit, noise.temperature_K, v.size, dt, gen)
+        else:
+            v = v + _spectral_realisation(circuit, noise.temperature_K, v.size, sample_rate,
+                                          gen, coil_impedance)
+    if noise.input_noise_V_per_rtHz > 0:
+        sigma = noise.input_noise_V_per_rtHz * math.sqrt(sample_rate / 2.0)
+        v = v + sigma * gen.standard_normal(v.size)
+    if noise.adc_bits is not None:
+        v = _quantise(v, noise)
+    return v
+
+
+def _spectral_realisation(circuit: ReadoutCircuit, temperature: float, n: int,
+                          sample_rate: float, rng: np.random.Generator,
+                          coil_impedance: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """Gaussian samples of the Johnson noise at the DAQ with PSD S(f), V, shape (n,).
+
+    E|X_k|² = n fs S(f_k) / 2 for the real FFT of n samples, so that the variance per sample
+    is ∫_0^{fs/2} S df (S beyond fs/2 is negligible for a read-out that rolls off below it).
+    """
+    from scipy.fft import irfft, next_fast_len, rfftfreq
+
+    size = next_fast_len(2 * n, real=True)
+    f = rfftfreq(size, 1.0 / sample_rate)
+    psd = thermal_noise_psd(circuit, temperature, f, coil_impedance=coil_impedance(f))
+    amp = np.sqrt(psd * size * sample_rate / 2.0)
+    x = rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)
+    x *= amp / math.sqrt(2.0)
+    x[0] = amp[0] * rng.standard_normal()
+    if size % 2 == 0:
+        x[-1] = amp[-1] * rng.standard_normal()
+    return irfft(x, size)[:n]
 
 
 # --------------------------------------------------------------------------- noise levels
 
 def thermal_noise_psd(circuit: ReadoutCircuit, temperature_K: float,
-                      f: ArrayLike) -> np.ndarray:
+                      f: ArrayLike, *, coil_impedance: ArrayLike | None = None) -> np.ndarray:
     """One-sided PSD of the Johnson noise at the DAQ, V²/Hz, shape (n,).
 
-    S(f) = 4kT (R |H|² + R_c |H_c|² + |Z_out|² / R_in).
+    S(f) = 4kT (Re Z |H|² + R_c |H_c|² + |Z_out|² / R_in), Z the coil's series impedance:
+    R + sL by default, or ``coil_impedance`` (Ω, complex, shape (n,)) — e.g. with eddy-current
+    losses, whose Re Z > R is the coil's extra noise.
     """
     f = np.asarray(f, dtype=float)
-    h_coil, h_cable, z_out = _noise_transfers(circuit, f)
+    if coil_impedance is not None:
+        coil_impedance = np.asarray(coil_impedance, dtype=complex)
+        require(coil_impedance.shape == f.shape,
+                f"coil_impedance must have the shape of f {f.shape}, got "
+                f"{coil_impedance.shape}")
+    h_coil, h_cable, z_out = _noise_transfers(circuit, f, coil_impedance)
+    r_coil = circuit.resistance if coil_impedance is None else coil_impedance.real
     return 4.0 * K_B * temperature_K * (
-        circuit.resistance * np.abs(h_coil) ** 2
+        r_coil * np.abs(h_coil) ** 2
         + circuit.cable_resistance * np.abs(h_cable) ** 2
         + _conductance(circuit.input_resistance) * np.abs(z_out) ** 2)
 

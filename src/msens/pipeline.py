@@ -292,7 +292,7 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
                  transducers: dict, study: Study, index: int,
                  responses: dict | None = None) -> SensorResult:
     from msens.fieldsetup import coil_geometry
-    from msens.magnetics.mss import mss_record, readout, voltage_on
+    from msens.magnetics.mss import mss_record, noise_model, readout, voltage_on
     from msens.study import CoilSpec
 
     tr = transducers[sensor.particle]
@@ -303,7 +303,9 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
 
         rec = dynamic_signals(tr, responses[sensor.particle], circuit, history.t,
                               history.force, study.electronics.sample_rate_hz,
-                              approach=history.approach)
+                              approach=history.approach,
+                              noise=noise_model(study.electronics),
+                              rng=study.electronics.seed + index)
     else:
         rec = mss_record(tr, circuit, history.t, history.force, study.electronics,
                          approach=history.approach, static=static, seed_offset=index)
@@ -397,16 +399,10 @@ def setup_responses(study: Study, setup: SetupSpec) -> dict | None:
     if not study.field.eddy_currents or not any(s.model is MssModel.PHYSICS
                                                 for s in setup.sensors):
         return None
-    from msens.errors import InputError
     from msens.field.eddy import SIGMA_1018
     from msens.fieldsetup import geometry_from_study
     from msens.magnetics.dynamic import dynamic_report
 
-    e = study.electronics
-    if e.johnson_noise or e.adc_bits or e.input_noise_v_per_rthz > 0:
-        raise InputError(f"{study.source}: [field] eddy_currents = true gives noise-free "
-                         "records for now (the coil's thermal noise would need Re Z(f)); "
-                         "turn the [electronics] noise off or eddy_currents off")
     sigma = study.field.steel_conductivity_s_per_m or SIGMA_1018
     _log.info("setup %s: eddy-current frequency responses (steel %.3g MS/m)", setup.name,
               sigma / 1e6)

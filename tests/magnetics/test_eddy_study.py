@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from msens import api
-from msens.cli import main
 from msens.errors import InputError
 
 TINY = (Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text().replace(
@@ -57,8 +56,39 @@ def test_eddy_currents_key_is_validated(tmp_path, capsys):
         _study(tmp_path, "[field]\neddy_currents = 1\n")
     with pytest.raises(InputError, match="steel_conductivity_S_per_m"):
         _study(tmp_path, "[field]\nsteel_conductivity_S_per_m = 1e12\n")
+
+
+def test_eddy_current_records_carry_the_coils_thermal_noise(tmp_path, monkeypatch):
+    """With eddy currents the coil's Johnson noise comes from 4kT Re Z(f) of the field model.
+
+    The run adds exactly :func:`add_readout_noise` with the coil's Z(f) to the noise-free
+    record; a long realisation has the variance ∫S df; and, Z(f) being a passive impedance,
+    the total is kT/C of the read-out's capacitance (equipartition) whatever the losses."""
+    from msens.electronics import NoiseModel, add_readout_noise, thermal_noise_psd
+    from msens.units import K_B
+
+    monkeypatch.setenv("MSENS_MESH_DIR", str(tmp_path / "cache"))
+    quiet = api.run(_study(tmp_path, "[field]\neddy_currents = true\n"))
     noisy = TINY.replace("[electronics]\n", "[electronics]\njohnson_noise = true\n")
     path = tmp_path / "noisy.toml"
     path.write_text(noisy + "[field]\neddy_currents = true\n")
-    assert main(["run", str(path), "--out", str(tmp_path / "o"), "-q"]) == 2
-    assert "noise-free" in capsys.readouterr().err
+    study = api.load(path)
+    setup = api.run(study).setups[0]
+    rec, rec0 = setup.sensors[0].mss, quiet.setups[0].sensors[0].mss
+    impedance = setup.responses[setup.sensors[0].sensor.particle].impedance_at
+    e = study.electronics
+    nm = NoiseModel(e.temperature_k)
+    added = add_readout_noise(np.zeros(rec0.voltage.size), rec.circuit, nm, e.sample_rate_hz,
+                              rng=e.seed, coil_impedance=impedance)
+    np.testing.assert_allclose(rec.voltage - rec0.voltage, added, rtol=0, atol=1e-15)
+    long = np.concatenate([add_readout_noise(np.zeros(100_000), rec.circuit, nm,
+                                             e.sample_rate_hz, rng=k, coil_impedance=impedance)
+                           for k in range(4)])
+    f = np.linspace(0.0, e.sample_rate_hz / 2, 500_001)
+    psd = thermal_noise_psd(rec.circuit, e.temperature_k, f, coil_impedance=impedance(f))
+    assert np.var(long) == pytest.approx(np.trapezoid(psd, f), rel=0.04)
+    f = np.linspace(0.0, 5e8, 2_000_001)
+    total = np.trapezoid(thermal_noise_psd(rec.circuit, e.temperature_k, f,
+                                           coil_impedance=impedance(f)), f)
+    assert total == pytest.approx(K_B * e.temperature_k / rec.circuit.total_capacitance,
+                                  rel=0.01)

@@ -46,7 +46,7 @@ import numpy as np
 from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
 from scipy.interpolate import PchipInterpolator
 
-from msens.electronics import ReadoutCircuit, coil_transfer_function
+from msens.electronics import NoiseModel, ReadoutCircuit, add_readout_noise, coil_transfer_function
 from msens.errors import require
 from msens.field.eddy import SIGMA_1018, HarmonicOperator, dissipated_power
 from msens.field.geometry import SensorGeometry
@@ -452,7 +452,9 @@ def emf_spectrum(response: FrequencyResponse, f: np.ndarray, force_rate: np.ndar
 def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
                     circuit: ReadoutCircuit, t: np.ndarray, force: np.ndarray,
                     sample_rate: float, *, approach: np.ndarray | None = None,
-                    columns: np.ndarray | None = None, pad: float = 2.0) -> MssRecord:
+                    columns: np.ndarray | None = None, pad: float = 2.0,
+                    noise: NoiseModel | None = None,
+                    rng: np.random.Generator | int | None = None) -> MssRecord:
     """Coil signals of one physics MsS with eddy currents: the frequency-domain read-out.
 
     The contact force and approach rates (as :func:`msens.magnetics.mss.mss_signals`) are
@@ -460,7 +462,8 @@ def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
     :func:`emf_spectrum` and the DAQ voltage that times the read-out transfer function with
     the coil's impedance Z(ω) (:func:`msens.electronics.coil_transfer_function`); inverse
     FFT. The circuit starts at rest and the EMF is zero before ``t[0]`` (chain histories
-    start static). Noise-free (thermal noise would need Re Z(ω)). With σ = 0 this is
+    start static). Noise (optional) is the read-out's, with the coil's Johnson noise from
+    4kT Re Z(f) (:func:`msens.electronics.add_readout_noise`). With σ = 0 this is
     :func:`~msens.magnetics.mss.mss_signals` up to its first-order-hold EMF (agreement to
     ~(ωΔt)²/12 at the signal frequencies).
 
@@ -483,6 +486,9 @@ def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
         As :func:`~msens.magnetics.mss.mss_signals` (no ``static``: the EMF needs rates only).
     pad : float
         FFT length ≥ ``pad`` × nt (> 1: the circuit's ring-down must fit in the padding).
+    noise : NoiseModel, optional
+    rng : numpy.random.Generator or int, optional
+        Seed or generator of the noise (None = seed 0).
 
     Returns
     -------
@@ -515,8 +521,12 @@ def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
     t_daq = t[0] + np.arange(n_daq) / sample_rate
     flux = -cumulative_trapezoid(e, t, initial=0.0)
     total = float(np.sum(transducer.sensitivity("both")))
+    voltage = np.interp(t_daq, t, v)
+    if noise is not None:
+        voltage = add_readout_noise(voltage, circuit, noise, sample_rate, rng=rng,
+                                    coil_impedance=response.impedance_at)
     return MssRecord(t=t, flux=flux, weighted_force=flux / total if total else flux * np.nan,
-                     emf=e, t_daq=t_daq, voltage=np.interp(t_daq, t, v), circuit=circuit)
+                     emf=e, t_daq=t_daq, voltage=voltage, circuit=circuit)
 
 
 __all__ = ["DEFAULT_FREQUENCIES", "DYNAMIC_VERSION", "MAGNET_CONDUCTIVITY", "DynamicReport",

@@ -105,4 +105,5 @@ def geometry_from_study(study: Study, setup: SetupSpec | None = None) -> SensorG
     air = AirBox(**_given(radius=f.air_radius_m, margin=f.air_margin_m))
     # A study without [field] steel_bh keeps the geometry's default 1018 curve.
     steel = {} if f.steel_bh is None else {"steel": f.steel_bh}
-    return SensorGeometry(beads=beads, sensors=units, air=air, **steel)
+    return SensorGeometry(beads=beads, sensors=units, air=air,
+                          reversibility=f.steel_reversibility, **steel)

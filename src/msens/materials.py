@@ -92,6 +92,13 @@ STEEL_1018_BH = BHCurve(
     source="FEMM 4.2 material library, '1018 Steel'",
 )
 
+#: Reversible fraction c of a steel's differential susceptibility, for small signals about a
+#: bias point (the reversibility coefficient of the Jiles–Atherton model). 0.1 is the value
+#: usually quoted for steels (D. C. Jiles, D. L. Atherton, J. Magn. Magn. Mater. 61, 48-60
+#: (1986); design.md §7): an estimate, not a measurement of 1018. With the 1018 curve it gives
+#: a small-signal relative permeability of about 80-100 in the bead bulk (differential: 800-1000).
+STEEL_REVERSIBILITY = 0.1
+
 
 @dataclass(frozen=True)
 class MagnetGrade:

@@ -243,6 +243,13 @@ class FieldSpec:
     steel_conductivity_s_per_m : float or None
         Electrical conductivity of the beads and pole pieces, S/m; None means
         :data:`msens.field.eddy.SIGMA_1018` (AISI 1018, 6 MS/m, cited there).
+    small_signal_permeability : {"differential", "reversible"}
+        Permeability of the steel for the signal about the bias point (the transducer's
+        sensitivities, the coil's L and Z(f)): the differential slope of the B–H curve, or its
+        reversible part c (``reversibility``; :class:`msens.field.regions.NonlinearSoft`).
+    reversibility : float or None
+        c in (0, 1) with ``"reversible"``; None means
+        :data:`msens.materials.STEEL_REVERSIBILITY`.
     """
 
     beads: tuple[int, int] | None = None
@@ -254,6 +261,17 @@ class FieldSpec:
     steel_bh: BHCurve | None = None
     eddy_currents: bool = False
     steel_conductivity_s_per_m: float | None = None
+    small_signal_permeability: str = "differential"
+    reversibility: float | None = None
+
+    @property
+    def steel_reversibility(self) -> float:
+        """The fraction c of the differential susceptibility the signal sees (1 = all)."""
+        if self.small_signal_permeability == "differential":
+            return 1.0
+        from msens.materials import STEEL_REVERSIBILITY
+
+        return STEEL_REVERSIBILITY if self.reversibility is None else self.reversibility
 
 
 @dataclass(frozen=True)
@@ -767,7 +785,17 @@ def _field(t: Table | None, chain: ChainSpec, source: str) -> FieldSpec:
                      # steels lie between ~1 MS/m (stainless) and ~10 MS/m (pure iron)
                      steel_conductivity_s_per_m=t.number("steel_conductivity_S_per_m", None,
                                                          low=1e5, high=2e7,
-                                                         allow_none=True))
+                                                         allow_none=True),
+                     small_signal_permeability=t.string(
+                         "small_signal_permeability", "differential",
+                         choices=("differential", "reversible")),
+                     # c -> 0 would make the steel non-magnetic for the signal; 1 is the
+                     # differential slope ("differential")
+                     reversibility=t.number("reversibility", None, low=0.01, high=1.0,
+                                            allow_none=True))
+    if spec.reversibility is not None and spec.small_signal_permeability != "reversible":
+        raise t.error("reversibility", "applies only with small_signal_permeability = "
+                                       "\"reversible\"")
     t.finish()
     return spec
 

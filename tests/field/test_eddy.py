@@ -18,8 +18,9 @@ from scipy.special import spherical_jn
 
 from msens.errors import InputError
 from msens.field import eddy
+from msens.field.constitutive import material_fields
 from msens.field.eddy_geometry import SkinLayer, layer_profile, layered_sphere_mesh, skin_layer
-from msens.field.forms import element_mass, quadrature_data
+from msens.field.forms import element_mass, flux_density_qp, potential_qp, quadrature_data
 from msens.field.regions import Air, LinearMagnetic, NonlinearSoft, PermanentMagnet, Winding
 from msens.field.solve import MagnetostaticProblem, incremental, solve
 from msens.field.verification_geometry import Part, build_mesh
@@ -281,3 +282,45 @@ def test_input_errors(sphere_mesh, rod_bias):
     with pytest.raises(InputError, match="not a Winding"):
         eddy.solve_harmonic(prob, np.zeros(sphere_mesh.n_elements), [1.0],
                             sources={"sphere": Winding(1.0)})
+
+
+# ------------------------------------------------------------ small-signal permeability
+
+def test_small_signal_tangent_keeps_the_reversible_part_along_b(rod_bias):
+    """Along B the small-signal permeability is μ0 + c (dB/dH − μ0); across B it is B/H."""
+    from msens.field.constitutive import reluctivities, small_signal_tangent, tangent
+
+    d = rod_bias.disc
+    b = flux_density_qp(d.quad, rod_bias.a)
+    nu, nu_d = reluctivities(d.materials, b)
+    np.testing.assert_array_equal(small_signal_tangent(d.materials, b), tangent(b, nu, nu_d))
+    c = 0.3
+    regions = {**rod_bias.problem.regions, "rod": NonlinearSoft(STEEL_1018_BH, reversibility=c)}
+    mat = material_fields(rod_bias.problem.mesh, regions)
+    nu_t = small_signal_tangent(mat, b)
+    rod = rod_bias.problem.mesh.subdomains["rod"]
+    bhat = b[rod] / np.linalg.norm(b[rod], axis=-1, keepdims=True)
+    perp = np.stack([-bhat[..., 1], bhat[..., 0]], axis=-1)
+    along = np.einsum("eqc,eqcd,eqd->eq", bhat, nu_t[rod], bhat)
+    across = np.einsum("eqc,eqcd,eqd->eq", perp, nu_t[rod], perp)
+    np.testing.assert_allclose(1.0 / along, MU0 + c * (1.0 / nu_d[rod] - MU0), rtol=1e-12)
+    np.testing.assert_allclose(across, nu[rod], rtol=1e-12)
+
+
+def test_reversible_permeability_changes_the_signal_not_the_bias(rod_mesh, rod_bias):
+    """The bias solve ignores c; the incremental and harmonic solves both use it (f = 0 equal),
+    and the smaller permeability gives a smaller incremental inductance."""
+    regions = {**rod_bias.problem.regions,
+               "rod": NonlinearSoft(STEEL_1018_BH, reversibility=0.2)}
+    bias = solve(MagnetostaticProblem(rod_mesh, regions))
+    np.testing.assert_array_equal(bias.a, rod_bias.a)
+    j = 1e6
+    inc = incremental(bias, {"coil": Winding(j)})
+    sigma = eddy.conductivity(rod_mesh, {"rod": eddy.SIGMA_1018})
+    (sol,) = eddy.solve_harmonic(bias, sigma, [0.0], sources={"coil": Winding(j)})
+    np.testing.assert_allclose(sol.a.real, inc.a, rtol=0, atol=1e-12 * np.abs(inc.a).max())
+    full = incremental(rod_bias, {"coil": Winding(j)})
+    coil = rod_mesh.subdomains["coil"]
+    q = bias.disc.quad
+    link = [float(np.sum(potential_qp(q, a)[coil] * q.w[coil])) for a in (inc.a, full.a)]
+    assert 0 < link[0] < link[1]

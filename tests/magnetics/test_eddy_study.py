@@ -58,6 +58,29 @@ def test_eddy_currents_key_is_validated(tmp_path, capsys):
         _study(tmp_path, "[field]\nsteel_conductivity_S_per_m = 1e12\n")
 
 
+def test_small_signal_permeability_key(tmp_path):
+    from msens.fieldsetup import geometry_from_study
+    from msens.materials import STEEL_REVERSIBILITY
+
+    study = _study(tmp_path)
+    assert study.field.steel_reversibility == 1.0
+    rev = _study(tmp_path, '[field]\nsmall_signal_permeability = "reversible"\n')
+    assert rev.field.steel_reversibility == STEEL_REVERSIBILITY
+    geometry = geometry_from_study(rev, rev.setups[0])
+    assert geometry.reversibility == STEEL_REVERSIBILITY
+    chosen = _study(tmp_path, '[field]\nsmall_signal_permeability = "reversible"\n'
+                              'reversibility = 0.25\n')
+    assert chosen.field.steel_reversibility == 0.25
+    for bad, key in (('small_signal_permeability = "initial"', "small_signal_permeability"),
+                     ("reversibility = 0.3", "reversibility"),
+                     ('small_signal_permeability = "reversible"\nreversibility = 0',
+                      "reversibility"),
+                     ('small_signal_permeability = "reversible"\nreversibility = 1.5',
+                      "reversibility")):
+        with pytest.raises(InputError, match=key):
+            _study(tmp_path, f"[field]\n{bad}\n")
+
+
 def test_eddy_current_records_carry_the_coils_thermal_noise(tmp_path, monkeypatch):
     """With eddy currents the coil's Johnson noise comes from 4kT Re Z(f) of the field model.
 

@@ -53,6 +53,7 @@ class Materials:
     br: np.ndarray
     j: np.ndarray
     soft: tuple[tuple[np.ndarray, MonotoneBH], ...]
+    reversibility: tuple[float, ...] = ()
 
     @property
     def nonlinear(self) -> bool:
@@ -65,7 +66,7 @@ def material_fields(mesh: AxiMesh, regions: Mapping[str, Region]) -> Materials:
     ne = mesh.n_elements
     nu = np.full(ne, NU0)
     hc, br, j = np.zeros(ne), np.zeros(ne), np.zeros(ne)
-    soft = []
+    soft, reversibility = [], []
     for name, reg in regions.items():
         el = mesh.subdomains[name]
         if isinstance(reg, Air):
@@ -85,9 +86,11 @@ def material_fields(mesh: AxiMesh, regions: Mapping[str, Region]) -> Materials:
             # 2.0 T took 17/16/8/7/11 iterations; on the test models the choice barely matters.
             nu[el] = float(law.reluctivity(np.array(INITIAL_SECANT_B)))
             soft.append((el, law))
+            reversibility.append(float(reg.reversibility))
         else:
             raise InputError(f"region '{name}': unknown region kind {type(reg).__name__}")
-    return Materials(nu=nu, hc=hc, br=br, j=j, soft=tuple(soft))
+    return Materials(nu=nu, hc=hc, br=br, j=j, soft=tuple(soft),
+                     reversibility=tuple(reversibility))
 
 
 def reluctivities(mat: Materials, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -128,6 +131,21 @@ def tangent(b: np.ndarray, nu: np.ndarray, nu_d: np.ndarray) -> np.ndarray:
     out[..., 0, 0] += nu
     out[..., 1, 1] += nu
     return out
+
+
+def small_signal_tangent(mat: Materials, b: np.ndarray) -> np.ndarray:
+    """dH/dB for small signals about the bias flux density ``b``, shape (..., 2, 2).
+
+    :func:`tangent` of the bias state, except that along B each nonlinear soft region sees only
+    the reversible part c of its differential susceptibility (``NonlinearSoft.reversibility``):
+    μ_along = μ0 + c (1/ν_d − μ0). Across B the secant reluctivity stays (a small transverse
+    field rotates M reversibly). Newton's Jacobian of the bias solve is :func:`tangent`.
+    """
+    nu, nu_d = reluctivities(mat, b)
+    for (el, _), c in zip(mat.soft, mat.reversibility, strict=False):
+        if c != 1.0:
+            nu_d[el] = 1.0 / (MU0 + c * (1.0 / nu_d[el] - MU0))
+    return tangent(b, nu, nu_d)
 
 
 def energy_density(mat: Materials, b: np.ndarray, nu: np.ndarray) -> np.ndarray:

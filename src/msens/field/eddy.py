@@ -42,7 +42,7 @@ from scipy.sparse.linalg import splu
 
 from msens.errors import require
 from msens.field.assembly import assemble_matrix, assemble_vector, factorize
-from msens.field.constitutive import reluctivities, tangent
+from msens.field.constitutive import small_signal_tangent
 from msens.field.forms import (
     element_load,
     element_mass,
@@ -307,8 +307,7 @@ def _setup(model: MagnetostaticProblem | FieldSolution,
         mat = d.materials
         if mat.nonlinear:
             b = flux_density_qp(d.quad, model.a)
-            nu_s, nu_d = reluctivities(mat, b)
-            nu = tangent(b, nu_s, nu_d)
+            nu = small_signal_tangent(mat, b)
         else:
             nu = np.broadcast_to(mat.nu[:, None], d.quad.w.shape)
         j = np.zeros(prob.mesh.n_elements, dtype=complex)

@@ -432,6 +432,11 @@ class SensorGeometry:
         Normal magnetisation curve of the beads and pole pieces (default AISI 1018, FEMM
         library). It is a material, not a dimension: the mesh does not depend on it
         (:func:`msens.field.cache.geometry_key` leaves it out).
+    reversibility : float
+        Small-signal permeability of that steel about the bias point: the fraction c in
+        (0, 1] of its differential susceptibility that is reversible
+        (:class:`msens.field.regions.NonlinearSoft`); 1 = the differential slope. A material
+        property: not in the mesh key.
     """
 
     beads: BeadChain = field(default_factory=BeadChain)
@@ -439,8 +444,11 @@ class SensorGeometry:
     sensors: tuple[SensorUnit, ...] = field(default_factory=_default_sensors)
     air: AirBox = field(default_factory=AirBox)
     steel: BHCurve = field(default=STEEL_1018_BH, metadata={"mesh": False})
+    reversibility: float = field(default=1.0, metadata={"mesh": False})
 
     def __post_init__(self) -> None:
+        require(0.0 < self.reversibility <= 1.0,
+                f"reversibility must be in (0, 1], got {self.reversibility!r}")
         b, t = self.beads, self.tube
         require(b.radius <= t.inner_radius,
                 f"beads of diameter {b.diameter} m do not fit in the tube of inner radius "

@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 from scipy.sparse.linalg import spsolve
 
 from msens.errors import InputError, require
-from msens.field.constitutive import energy_density, reluctivities, tangent
+from msens.field.constitutive import energy_density, reluctivities, small_signal_tangent
 from msens.field.forms import flux_density_qp, potential_qp
 from msens.field.mesh import AxiMesh
 from msens.field.regions import Air, Winding
@@ -94,8 +94,7 @@ def field_strength(sol: FieldSolution, r: ArrayLike, z: ArrayLike) -> np.ndarray
         bv, bg, _ = _evaluate(sol.bias, sol.bias.a, pts)
         bb = _b_from(bv, bg, pts[0], scale)[:, None, :]
         mat = _cell_materials(sol.bias, cells)
-        nu, nu_d = reluctivities(mat, bb)
-        return np.einsum("nqcd,nqd->nqc", tangent(bb, nu, nu_d), b)[:, 0].reshape(*shape, 2)
+        return np.einsum("nqcd,nqd->nqc", small_signal_tangent(mat, bb), b)[:, 0].reshape(*shape, 2)
     mat = _cell_materials(sol, cells)
     nu, _ = reluctivities(mat, b)
     h = nu[..., None] * b
@@ -147,8 +146,8 @@ def energy(sol: FieldSolution) -> float:
     b = flux_density_qp(q, sol.a)
     if sol.bias is not None:
         bb = flux_density_qp(q, sol.bias.a)
-        nu, nu_d = reluctivities(sol.bias.disc.materials, bb)
-        w = 0.5 * np.einsum("eqc,eqcd,eqd->eq", b, tangent(bb, nu, nu_d), b)
+        w = 0.5 * np.einsum("eqc,eqcd,eqd->eq", b, small_signal_tangent(
+            sol.bias.disc.materials, bb), b)
     else:
         nu, _ = reluctivities(sol.disc.materials, b)
         w = energy_density(sol.disc.materials, b, nu)

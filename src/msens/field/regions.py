@@ -41,9 +41,19 @@ class NonlinearSoft:
     ----------
     curve : BHCurve
         Anhysteretic curve, e.g. :data:`msens.materials.STEEL_1018_BH`.
+    reversibility : float
+        Fraction c in (0, 1] of the differential susceptibility that small signals about the
+        bias see (the reversible part, Jiles–Atherton's c): along B the small-signal
+        permeability is μ0 + c (dB/dH − μ0). 1 = the differential slope of the curve. The
+        bias solve does not use it.
     """
 
     curve: BHCurve
+    reversibility: float = 1.0
+
+    def __post_init__(self) -> None:
+        require(0.0 < self.reversibility <= 1.0,
+                f"reversibility must be in (0, 1], got {self.reversibility!r}")
 
 
 @dataclass(frozen=True)

@@ -68,7 +68,7 @@ def regions_for(geometry: SensorGeometry, names: Sequence[str], *, magnets: bool
     """
     magnet = {f"magnet_{u.magnet.particle}": u.magnet for u in geometry.sensors
               if u.magnet is not None}
-    soft = NonlinearSoft(geometry.steel)
+    soft = NonlinearSoft(geometry.steel, reversibility=geometry.reversibility)
     out: dict[str, Region] = {}
     for name in names:
         if name.startswith(("bead_", "pole_")):

@@ -30,6 +30,7 @@ from msens.field.constitutive import (
     field_strength,
     material_fields,
     reluctivities,
+    small_signal_tangent,
     tangent,
 )
 from msens.field.forms import (
@@ -329,9 +330,9 @@ def incremental(solution: FieldSolution, sources: Mapping[str, Winding]) -> Fiel
     d = replace(d0, materials=material_fields(prob.mesh, regions),
                 fixed_values=np.zeros_like(d0.fixed_values))
     b = flux_density_qp(d.quad, solution.a)
-    nu, nu_d = reluctivities(d0.materials, b)
     load = _external_load(d, d.materials)
-    a, res = _solve_linear(d, tangent(b, nu, nu_d), load, np.zeros(d.basis.N))
+    a, res = _solve_linear(d, small_signal_tangent(d0.materials, b), load,
+                           np.zeros(d.basis.N))
     return FieldSolution(inc, d.basis, a, 1, (res,), disc=d, bias=solution)
 
 
@@ -341,7 +342,6 @@ def internal_field_strength(sol: FieldSolution) -> np.ndarray:
     b = flux_density_qp(d.quad, sol.a)
     if sol.bias is not None:
         bb = flux_density_qp(d.quad, sol.bias.a)
-        nu, nu_d = reluctivities(sol.bias.disc.materials, bb)
-        return np.einsum("eqcd,eqd->eqc", tangent(bb, nu, nu_d), b)
+        return np.einsum("eqcd,eqd->eqc", small_signal_tangent(sol.bias.disc.materials, bb), b)
     nu, _ = reluctivities(d.materials, b)
     return field_strength(d.materials, b, nu)

@@ -21,9 +21,9 @@ Approximations (say so wherever the numbers are used):
 
 * the approach source −∂R/∂δ_c is the static residual derivative; the motional EMF v × B
   of the moving beads (σ v × B_bias, velocities ≲ 1 m/s) is left out;
-* the tangent reluctivity of the bias state is the small-signal permeability — the
-  differential slope of the single-valued B–H curve, which overstates the reversible
-  permeability of real steel (design.md §5) and so overstates the screening;
+* the small-signal permeability is a study choice (``[field] small_signal_permeability``,
+  :func:`msens.field.constitutive.small_signal_tangent`): the differential slope of the B–H
+  curve, or its reversible part; the README shows how much it matters;
 * the winding itself is non-conducting (fine wire); its R is the DC resistance.
 
 In time (:func:`dynamic_signals`) the contact force and approach rates are Fourier

@@ -28,7 +28,7 @@ import scipy.sparse as sp
 
 from msens.errors import require
 from msens.field.assembly import assemble_matrix, assemble_vector, factorize
-from msens.field.constitutive import reluctivities, tangent
+from msens.field.constitutive import reluctivities, small_signal_tangent, tangent
 from msens.field.forms import element_stiffness, flux_density_qp
 from msens.field.solve import FieldSolution
 from msens.units import TWO_PI
@@ -46,10 +46,9 @@ class TangentOperator:
     def __init__(self, sol: FieldSolution):
         d = sol.disc
         b0 = flux_density_qp(d.quad, sol.a)
-        nu, nu_d = reluctivities(d.materials, b0)
         self.sol = sol
-        #: tangent reluctivity at the quadrature points, shape (n_el, n_qp, 2, 2), m/H
-        self.nu_t = tangent(b0, nu, nu_d)
+        #: small-signal reluctivity at the quadrature points, shape (n_el, n_qp, 2, 2), m/H
+        self.nu_t = small_signal_tangent(d.materials, b0)
         _, ff = assemble_matrix(d.pattern, element_stiffness(d.quad, self.nu_t))
         self._lu = factorize(ff)
 

@@ -685,6 +685,8 @@ def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
     if not geometry.default_steel:
         payload["steel_bh"] = {"b": _canonical(geometry.steel.b),
                                "h": _canonical(geometry.steel.h)}
+    if geometry.reversibility != 1.0:
+        payload["reversibility"] = repr(float(geometry.reversibility))
     text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

@@ -1,0 +1,57 @@
+"""The main study under each small-signal permeability, without and with eddy currents.
+
+The physics MsS sees the steel's permeability for small signals about the bias point. msens
+offers the differential slope of the B–H curve (default) and its reversible part
+(``[field] small_signal_permeability = "reversible"``, c = 0.1 by default: see
+:data:`msens.materials.STEEL_REVERSIBILITY`). This runs ``studies/paper-mss.toml`` four ways
+and prints, per coil, the peak DAQ voltage and its time, the peak EMF, the incremental
+inductance, the read-out resonance, and (with eddy currents) the contact approach of the
+coil's lower contact at 10, 30 and 100 kHz relative to static (magnitude, phase in degrees).
+
+Run: ``python benchmarks/permeability_choice.py`` (about 2 minutes cold on 2 cores; the field
+models of the reversible variants are built and cached on first use).
+"""
+
+from __future__ import annotations
+
+import json
+
+from msens import api
+from msens.study import default_study_path
+
+VARIANTS = {
+    "differential": {},
+    "reversible": {"field.small_signal_permeability": "reversible"},
+    "differential + eddy currents": {"field.eddy_currents": True},
+    "reversible + eddy currents": {"field.small_signal_permeability": "reversible",
+                                   "field.eddy_currents": True},
+}
+
+
+def coil_figures(coil: dict) -> dict:
+    out = {"peak_voltage_V": coil["peak_voltage_V"],
+           "peak_voltage_time_us": coil["peak_voltage_time_us"],
+           "peak_emf_V": coil["peak_emf_V"], "inductance_H": coil["inductance_H"],
+           "resonance_Hz": coil["resonance_Hz"], "quality_factor": coil["quality_factor"]}
+    fr = coil.get("frequency_response")
+    if fr:
+        freqs = fr["frequencies_Hz"]
+        out["approach_vs_static"] = {
+            f"{f / 1e3:g} kHz": [fr["approach_ratio_magnitude"][freqs.index(f)][1],
+                                  fr["approach_ratio_phase_deg"][freqs.index(f)][1]]
+            for f in (1e4, 3e4, 1e5) if f in freqs}
+    return out
+
+
+def main() -> dict:
+    base = api.load(default_study_path())
+    report = {}
+    for name, changes in VARIANTS.items():
+        study = api.replace(base, changes) if changes else base
+        summary = api.physics_summary(api.run(study))
+        report[name] = {str(c["particle"]): coil_figures(c) for c in summary["coils"]}
+    return report
+
+
+if __name__ == "__main__":
+    print(json.dumps(main(), indent=1))

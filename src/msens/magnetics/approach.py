@@ -17,7 +17,7 @@ rejected: the mesh-to-mesh noise of the coil's bias flux linkage (~1e-4 relative
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import skfem
@@ -88,14 +88,19 @@ def hertz_approach_rate(force: float, radius: float,
     return 2.0 / 3.0 * (force / hertz_stiffness(radius, material)) ** (2.0 / 3.0) / force
 
 
-def morphed_flux_linkage(sol: FieldSolution, geometry: SensorGeometry, contact: int,
-                         coil: Coil, delta: float, *, tol: float = 1e-12,
+def morphed_flux_linkage(sol: FieldSolution, geometry: SensorGeometry,
+                         approaches: Mapping[int, float], coil: Coil, *, tol: float = 1e-12,
                          max_iter: int = 20) -> float:
-    """Coil flux linkage after the beads above ``contact`` moved by ``delta``, full re-solve.
+    """Coil flux linkage after finite contact approaches, by a full nonlinear re-solve.
 
-    The nonlinear bias problem is solved again on the mesh morphed as in
-    :func:`approach_residuals` (every modelled bead above the contact moved rigidly toward
-    the wall by ``delta``; negative: away from it).
+    The mesh is morphed as in :func:`approach_residuals`, all contacts at once: the approach
+    δ_c of contact c moves every modelled bead above it rigidly toward the wall (negative:
+    away from it), so bead p moves by Σ_{c ≥ p} δ_c.
+
+    Parameters
+    ----------
+    approaches : mapping of int -> float
+        Contact number -> δ_c, m.
 
     Returns
     -------
@@ -103,9 +108,11 @@ def morphed_flux_linkage(sol: FieldSolution, geometry: SensorGeometry, contact: 
         Λ, Wb.
     """
     b = geometry.beads
-    phi = shell_function(sol, [f"bead_{p}" for p in range(b.first, contact + 1)], layers=0)
     p = sol.problem.mesh.mesh.p.copy()
-    p[1] -= delta * phi
+    for contact, delta in approaches.items():
+        phi = shell_function(sol, [f"bead_{q}" for q in range(b.first, contact + 1)],
+                             layers=0)
+        p[1] -= delta * phi
     a = nonlinear_resolve(sol, _morphed_quadrature(sol, p), tol=tol, max_iter=max_iter)
     # the coil does not move: its quadrature on the morphed mesh is the original one
     return coil_flux_linkage(sol, a, coil)
@@ -121,7 +128,7 @@ def approach_flux_change(sol: FieldSolution, geometry: SensorGeometry, contact: 
     float
         Wb/m, central difference (Λ(+step) - Λ(-step)) / (2 step).
     """
-    lam = [morphed_flux_linkage(sol, geometry, contact, coil, s, tol=tol, max_iter=max_iter)
+    lam = [morphed_flux_linkage(sol, geometry, {contact: s}, coil, tol=tol, max_iter=max_iter)
            for s in (step, -step)]
     return (lam[0] - lam[1]) / (2 * step)
 

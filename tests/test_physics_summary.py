@@ -51,3 +51,12 @@ def test_rigid_translation_is_below_one_percent_of_the_approach_signal(result):
         assert 0 < abs(rigid["sensitivity_Wb_per_m"]) < 0.01 * np.max(
             np.abs(tr.dlambda_dapproach))
         assert 0 < rigid["fraction_of_peak"] < 0.01
+
+
+def test_open_contacts_carry_a_small_part_of_the_signal(result):
+    # the open-gap part of the approach signal is a linear extrapolation: say how much it is
+    summary = api.physics_summary(result)
+    for coil in summary["coils"]:
+        opened = coil["mechanism_share"]["approach"]["open_contacts"]
+        assert 0 < opened["energy_share"] < 0.05
+        assert 0 < opened["peak_emf_V"] < 0.2 * coil["mechanism_share"]["approach"]["peak_emf_V"]

@@ -185,8 +185,16 @@ def mechanism_share(tr, history) -> dict:
     is left out, so the shares add to 1). The contact-approach entry also carries the
     beads' rigid translation (contained in it, see
     :func:`msens.magnetics.transducer.rigid_translation_emf`): its sensitivity, peak EMF and
-    fraction of the contact-approach peak."""
-    from msens.magnetics.transducer import contact_rates, emf_from_rates, rigid_translation_emf
+    fraction of the contact-approach peak, and the part of it from contacts while they are open
+    (extrapolated linearly: :func:`msens.magnetics.transducer.open_contact_emf`), its peak and
+    share of the contact-approach energy."""
+    from msens.magnetics.transducer import (
+        contact_forces_of,
+        contact_rates,
+        emf_from_rates,
+        open_contact_emf,
+        rigid_translation_emf,
+    )
 
     rates = contact_rates(history.t, history.force, tr.contacts, tr.contact_stiffness,
                           approach=history.approach)
@@ -196,6 +204,10 @@ def mechanism_share(tr, history) -> dict:
     total = sum(energy.values()) or 1.0
     out = {m: {"peak_emf_V": float(np.max(np.abs(e))), "energy_share": energy[m] / total}
            for m, e in emfs.items()}
+    opened = open_contact_emf(tr, rates, contact_forces_of(history.approach, tr.contacts))
+    out["approach"]["open_contacts"] = {
+        "peak_emf_V": float(np.max(np.abs(opened))),
+        "energy_share": float(np.trapezoid(opened**2, history.t)) / (energy["approach"] or 1.0)}
     rigid = rigid_translation_emf(tr, rates)
     out["approach"]["rigid_translation"] = {
         "sensitivity_Wb_per_m": float(tr.dlambda_dapproach[-1]),

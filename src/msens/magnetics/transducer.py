@@ -321,6 +321,30 @@ def rigid_translation_emf(transducer: Transducer, rates: ContactRates) -> np.nda
     return -float(transducer.dlambda_dapproach[-1]) * speed
 
 
+def open_contact_emf(transducer: Transducer, rates: ContactRates,
+                     approach: np.ndarray) -> np.ndarray:
+    """The part of the contact-approach EMF from contacts while they are open (δ_c < 0), V.
+
+    The approach sources are linearised about the static load; for an open gap they are
+    extrapolated linearly (a gap changes the field mesh's topology). This is how much of the
+    signal rests on that extrapolation.
+
+    Parameters
+    ----------
+    transducer : Transducer
+    rates : ContactRates
+        Rates of ``transducer.contacts``.
+    approach : ndarray, shape (nt, n_c)
+        δ_c(t) of the same contacts, m.
+
+    Returns
+    -------
+    ndarray, shape (nt,)
+    """
+    parts = -rates.approach * np.asarray(transducer.dlambda_dapproach)[None, :]
+    return np.where(np.asarray(approach) < 0.0, parts, 0.0).sum(axis=1)
+
+
 def emf(transducer: Transducer, t: np.ndarray, force: np.ndarray,
         mechanism: Mechanism = "both", approach: np.ndarray | None = None) -> np.ndarray:
     """Open-circuit coil EMF of one transducer for a chain's contact forces, V.
@@ -813,6 +837,7 @@ __all__ = [
     "magnetic_precompression",
     "mechanism_potentials",
     "offset_profiles",
+    "open_contact_emf",
     "particle_forces",
     "rigid_translation_emf",
     "transducer_report",

@@ -250,6 +250,9 @@ class FieldSpec:
     reversibility : float or None
         c in (0, 1) with ``"reversible"``; None means
         :data:`msens.materials.STEEL_REVERSIBILITY`.
+    skin_size_m : float or None
+        Element size at the surfaces of the beads near a coil for the eddy-current model, m;
+        None means :data:`msens.magnetics.dynamic.SKIN_SIZE`.
     """
 
     beads: tuple[int, int] | None = None
@@ -263,6 +266,7 @@ class FieldSpec:
     steel_conductivity_s_per_m: float | None = None
     small_signal_permeability: str = "differential"
     reversibility: float | None = None
+    skin_size_m: float | None = None
 
     @property
     def steel_reversibility(self) -> float:
@@ -792,7 +796,13 @@ def _field(t: Table | None, chain: ChainSpec, source: str) -> FieldSpec:
                      # c -> 0 would make the steel non-magnetic for the signal; 1 is the
                      # differential slope ("differential")
                      reversibility=t.number("reversibility", None, low=0.01, high=1.0,
-                                            allow_none=True))
+                                            allow_none=True),
+                     # below 1 µm the mesh explodes; above 1 mm it is no refinement of a 2.4 mm
+                     # bead
+                     skin_size_m=t.number("skin_size_m", None, low=1e-6, high=1e-3,
+                                          allow_none=True))
+    if spec.skin_size_m is not None and not spec.eddy_currents:
+        raise t.error("skin_size_m", "applies only with eddy_currents = true")
     if spec.reversibility is not None and spec.small_signal_permeability != "reversible":
         raise t.error("reversibility", "applies only with small_signal_permeability = "
                                        "\"reversible\"")

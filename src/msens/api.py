@@ -42,9 +42,10 @@ def replace(study: Study, changes: dict | None = None, /, **more) -> Study:
     return study.replace(changes, **more)
 
 
-def run(study: Study) -> StudyResult:
-    """Calibrate, simulate and observe every setup of ``study``."""
-    return run_study(study)
+def run(study: Study, *, scheduler: str | None = None) -> StudyResult:
+    """Calibrate, simulate and observe every setup of ``study`` (the eddy-current frequency
+    solves on the Dask cluster at ``scheduler`` when given)."""
+    return run_study(study, scheduler=scheduler)
 
 
 def provenance(study: Study) -> dict:

@@ -95,6 +95,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("study", nargs="?", help="study .toml file (default: built-in)")
     run.add_argument("--out", default=None, help="output directory (default: out/<name>)")
     run.add_argument("--no-figures", action="store_true", help="write summary.json only")
+    run.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                     help="Dask distributed scheduler for the eddy-current frequency solves "
+                          "(default: here)")
 
     field = sub.add_parser("field", help="solve the sensor's magnetostatic field model")
     field.add_argument("study", help="study .toml file with an mss sensor")
@@ -156,7 +159,7 @@ def _run(args: argparse.Namespace) -> int:
     study = api.load(args.study) if args.study else api.load_default()
     out = Path(args.out) if args.out else Path("out") / study.name
     target = api.prepare_outputs(out, figures=not args.no_figures, fig_format=args.fig_format)
-    result = api.run(study)
+    result = api.run(study, scheduler=args.scheduler)
     written = api.write_outputs(result, target, figures=not args.no_figures,
                                 fig_format=args.fig_format)
     print(api.format_summary(result))

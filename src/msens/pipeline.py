@@ -393,9 +393,11 @@ def setup_transducers(study: Study, setup: SetupSpec) -> dict | None:
     return transducers_for(geometry_from_study(study, setup))
 
 
-def setup_responses(study: Study, setup: SetupSpec) -> dict | None:
+def setup_responses(study: Study, setup: SetupSpec, *,
+                    scheduler: str | None = None) -> dict | None:
     """Eddy-current frequency responses of a setup's physics MsS coils (cached on disk), or
-    None unless the study asks for eddy currents (``[field] eddy_currents = true``)."""
+    None unless the study asks for eddy currents (``[field] eddy_currents = true``). With
+    ``scheduler`` (a Dask address) the frequency solves run on that cluster."""
     if not study.field.eddy_currents or not any(s.model is MssModel.PHYSICS
                                                 for s in setup.sensors):
         return None
@@ -409,7 +411,7 @@ def setup_responses(study: Study, setup: SetupSpec) -> dict | None:
               sigma / 1e6)
     skin = study.field.skin_size_m or SKIN_SIZE
     return dynamic_report(geometry_from_study(study, setup), steel=sigma,
-                          options=MeshOptions(skin_size=skin)).responses
+                          options=MeshOptions(skin_size=skin), scheduler=scheduler).responses
 
 
 def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_contact: float,
@@ -449,7 +451,7 @@ def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_conta
 
 
 def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = None,
-              fit: DissipationFit | None = None) -> StudyResult:
+              fit: DissipationFit | None = None, scheduler: str | None = None) -> StudyResult:
     """Calibrate (if asked), simulate and observe every setup of ``study``.
 
     Parameters
@@ -460,6 +462,8 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
         predicted by the field model).
     fit : DissipationFit, optional
         A fit already made (skips the Eq. 10 calibration).
+    scheduler : str, optional
+        Dask scheduler address for the eddy-current frequency solves (default: here).
 
     Returns
     -------
@@ -476,6 +480,8 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
                                         extra=(static_forces or {}).get(setup.name),
                                         transducers=transducers)
         setups.append(observe_setup(setup, chain, history, transducers=transducers,
-                                    study=study, responses=setup_responses(study, setup)))
+                                    study=study,
+                                    responses=setup_responses(study, setup,
+                                                              scheduler=scheduler)))
     return StudyResult(study=study, gamma_contact=gc, gamma_wall=gw, fit=fit,
                        setups=tuple(setups))

@@ -20,8 +20,10 @@ from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeom
 from msens.field.sensor_model import coil_resistance
 from msens.magnetics.approach import hertz_stiffness
 from msens.magnetics.dynamic import (
+    dynamic_report,
     dynamic_signals,
     frequency_responses,
+    join_reports,
     report_from_json,
     report_to_json,
     sensor_conductivity,
@@ -206,3 +208,41 @@ def test_skin_refinement_option_keeps_existing_mesh_keys():
     assert geometry_key(g, MeshOptions(skin_size=20e-6)) != geometry_key(g)
     with pytest.raises(InputError, match="skin_size"):
         MeshOptions(skin_size=-1.0)
+
+
+def _same_report(a, b, rtol=1e-10):
+    for p, ra in a.responses.items():
+        rb = b.responses[p]
+        np.testing.assert_array_equal(ra.frequencies, rb.frequencies)
+        for name in ("villari", "approach", "impedance"):
+            x, y = getattr(ra, name), getattr(rb, name)
+            np.testing.assert_allclose(x, y, rtol=0, atol=rtol * np.max(np.abs(x)))
+
+
+def test_frequency_chunks_join_to_the_whole(model, report):
+    """Frequencies solved in chunks (each from 0 Hz, as cluster tasks do) join to the whole."""
+    g, m = model
+    parts = [frequency_responses(m, g, (0.0, *chunk), direct=True)
+             for chunk in ((1e3, 1e4), (3e4, 1e5))]
+    joined = join_reports(parts)
+    _same_report(report, joined, rtol=1e-12)
+    assert joined.details["tasks"] == 2
+    assert len(joined.details["coils"]["13"]["power_balance_rel_error"]) == len(FREQS)
+
+
+@pytest.mark.slow
+def test_frequency_solves_on_a_dask_cluster(tmp_path):
+    """dynamic_report with a scheduler: the tasks run on the cluster and give the local report
+    (each task meshes through the shared cache and re-solves bias and sources: round-off)."""
+    distributed = pytest.importorskip("distributed")
+    g = one_sensor()
+    local = dynamic_report(g, options=COARSE, cache_dir=tmp_path / "local",
+                           mesh_dir=tmp_path / "meshes", frequencies=FREQS)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0") as cluster:
+        remote = dynamic_report(g, options=COARSE, cache_dir=tmp_path / "dask",
+                                mesh_dir=tmp_path / "meshes", frequencies=FREQS,
+                                scheduler=cluster.scheduler_address)
+        seen = {str(entry[0]) for entry in cluster.scheduler.transition_log}
+    assert remote.details["tasks"] == 2 and len(seen) >= 2
+    _same_report(local, remote)

@@ -399,22 +399,25 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, cache_dir: str | P
                    mesh_dir: str | Path | None = None,
                    frequencies: Sequence[float] = DEFAULT_FREQUENCIES,
                    steel: float = SIGMA_1018, magnets: Mapping[str, float] | None = None,
-                   refresh: bool = False) -> DynamicReport:
+                   refresh: bool = False, scheduler: str | None = None) -> DynamicReport:
     """Cached :func:`frequency_responses` of a geometry (``dynamic-<key>.json``).
 
     The sources are those of the default static transducer (:func:`transducer_report`'s
     defaults: stress at the geometry's contact load, the steel's JAS law, both mechanisms);
     lookup and storage follow :func:`msens.magnetics.transducer.transducer_report`.
+
+    With ``scheduler`` (a Dask distributed scheduler address) the frequencies are split into
+    one chunk per worker; each task meshes (through the shared mesh cache ``mesh_dir``),
+    solves the bias and the sources and then its frequencies, and the chunks are joined
+    (:func:`join_reports`). The result equals the local one to round-off.
     """
     from msens.field.cache import committed_mesh_dirs, default_mesh_dir
-    from msens.magnetics.transducer import bias_solution, cache_key, mechanism_potentials
+    from msens.magnetics.transducer import cache_key
     from msens.materials import BEAD_STEEL
     from msens.steel_law import law_for_steel
 
-    force = geometry.beads.contact_load
-    law = law_for_steel(geometry.steel)
-    tkey = cache_key(geometry, options, stress_force=force, law=law, material=BEAD_STEEL,
-                     approach=True)
+    tkey = cache_key(geometry, options, stress_force=geometry.beads.contact_load,
+                     law=law_for_steel(geometry.steel), material=BEAD_STEEL, approach=True)
     name = f"dynamic-{dynamic_key(tkey, frequencies, steel, magnets)}.json"
     if cache_dir is not None:
         directory, search = Path(cache_dir), [Path(cache_dir)]
@@ -425,17 +428,88 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, cache_dir: str | P
         for d in search:
             if (d / name).is_file():
                 return report_from_json(json.loads((d / name).read_text()))
-    t0 = time.perf_counter()
-    sol, _ = bias_solution(geometry, options=options, mesh_dir=mesh_dir)
-    timings: dict[str, float] = {"mesh_and_bias_solve": time.perf_counter() - t0}
-    model = mechanism_potentials(sol, geometry, stress_force=force, law=law, timings=timings)
-    rep = frequency_responses(model, geometry, frequencies, steel=steel, magnets=magnets)
-    rep.details["timings_s"] = {**timings, **rep.details["timings_s"]}
+    freqs = [float(f) for f in frequencies]
+    if scheduler is None:
+        rep = _report_task((geometry, options, mesh_dir, freqs, steel, magnets))
+    else:
+        from msens.parallel import run_tasks
+
+        meshes = str(Path(mesh_dir or default_mesh_dir()).resolve())
+        chunks = [c for c in np.array_split(np.asarray(freqs[1:]), _workers(scheduler))
+                  if c.size]
+        tasks = [(geometry, options, meshes, [0.0, *c.tolist()], steel, magnets)
+                 for c in chunks]
+        parts = dict(run_tasks(_report_task, tasks, scheduler=scheduler))
+        rep = join_reports([parts[i] for i in range(len(tasks))])
     rep.details["transducer_key"] = tkey
     directory.mkdir(parents=True, exist_ok=True)
     atomic_write_bytes(directory / name, json.dumps(report_to_json(rep), indent=1).encode(),
                        overwrite=True)
     return rep
+
+
+def _workers(scheduler: str) -> int:
+    """Workers of a Dask scheduler (at least 1)."""
+    from distributed import Client
+
+    with Client(scheduler) as client:
+        return max(1, len(client.scheduler_info()["workers"]))
+
+
+def _report_task(args: tuple) -> DynamicReport:
+    """Mesh, bias, sources and the harmonic solves of one list of frequencies (from 0)."""
+    from msens.magnetics.transducer import bias_solution, mechanism_potentials
+    from msens.steel_law import law_for_steel
+
+    geometry, options, mesh_dir, freqs, steel, magnets = args
+    t0 = time.perf_counter()
+    sol, _ = bias_solution(geometry, options=options, mesh_dir=mesh_dir)
+    timings: dict[str, float] = {"mesh_and_bias_solve": time.perf_counter() - t0}
+    model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
+                                 law=law_for_steel(geometry.steel), timings=timings)
+    rep = frequency_responses(model, geometry, freqs, steel=steel, magnets=magnets)
+    rep.details["timings_s"] = {**timings, **rep.details["timings_s"]}
+    return rep
+
+
+def join_reports(parts: Sequence[DynamicReport]) -> DynamicReport:
+    """One report from reports of the same model at different frequencies (each from 0 Hz).
+
+    The 0 Hz rows of all but the first are dropped (they repeat it); frequencies must then
+    increase. Timings are summed, checks concatenated.
+    """
+    first = parts[0]
+    responses = {}
+    for p, r0 in first.responses.items():
+        rows = [r0, *(part.responses[p] for part in parts[1:])]
+        keep = [slice(None)] + [slice(1, None)] * (len(rows) - 1)
+
+        def cat(field, rows=rows, keep=keep):
+            return np.concatenate([np.asarray(getattr(r, field))[k] for r, k in
+                                   zip(rows, keep, strict=True)])
+
+        freqs = cat("frequencies")
+        require(bool(np.all(np.diff(freqs) > 0)), "join_reports: frequencies must increase")
+        responses[p] = FrequencyResponse(
+            particle=r0.particle, frequencies=freqs, contacts=r0.contacts,
+            villari=cat("villari"), approach=cat("approach"), impedance=cat("impedance"),
+            resistance_ohm=r0.resistance_ohm, static_inductance_H=r0.static_inductance_H,
+            source=r0.source.replace(f"at {np.asarray(r0.frequencies).size} frequencies",
+                                     f"at {freqs.size} frequencies"))
+    details = dict(first.details)
+    details["frequencies_Hz"] = responses[next(iter(responses))].frequencies.tolist()
+    timings: dict[str, float] = {}
+    for part in parts:
+        for k, v in part.details.get("timings_s", {}).items():
+            timings[k] = timings.get(k, 0.0) + v
+    details["timings_s"] = timings
+    details["coils"] = {
+        c: {k: [x for i, part in enumerate(parts)
+                for x in part.details["coils"][c][k][(1 if i else 0):]]
+            for k in chk}
+        for c, chk in first.details["coils"].items()}
+    details["tasks"] = len(parts)
+    return DynamicReport(responses, details)
 
 
 # ----------------------------------------------------------------------------- in time
@@ -536,8 +610,20 @@ def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
                      emf=e, t_daq=t_daq, voltage=voltage, circuit=circuit)
 
 
-__all__ = ["DEFAULT_FREQUENCIES", "DYNAMIC_VERSION", "MAGNET_CONDUCTIVITY", "SKIN_SIZE",
-           "DynamicReport",
-           "FrequencyResponse", "dynamic_key", "dynamic_report", "dynamic_signals",
-           "emf_spectrum", "frequency_responses", "report_from_json", "report_to_json",
-           "sensor_conductivity"]
+__all__ = [
+    "DEFAULT_FREQUENCIES",
+    "DYNAMIC_VERSION",
+    "MAGNET_CONDUCTIVITY",
+    "SKIN_SIZE",
+    "DynamicReport",
+    "FrequencyResponse",
+    "dynamic_key",
+    "dynamic_report",
+    "dynamic_signals",
+    "emf_spectrum",
+    "frequency_responses",
+    "join_reports",
+    "report_from_json",
+    "report_to_json",
+    "sensor_conductivity",
+]

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from msens import api
+from msens.cli import main
 from msens.errors import InputError
 
 TINY = (Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text().replace(
@@ -124,3 +125,18 @@ def test_eddy_current_records_carry_the_coils_thermal_noise(tmp_path, monkeypatc
                                            coil_impedance=impedance(f)), f)
     assert total == pytest.approx(K_B * e.temperature_k / rec.circuit.total_capacitance,
                                   rel=0.01)
+
+
+@pytest.mark.parametrize("command", ["design", "diagnose"])
+def test_workflows_without_eddy_currents_say_so(tmp_path, capsys, command):
+    path = tmp_path / "eddy.toml"
+    path.write_text(TINY + EDDY)
+    (tmp_path / "sweep.toml").write_text("")
+    (tmp_path / "data.csv").write_text("")
+    args = (["design", str(path), "--sweep", str(tmp_path / "sweep.toml")]
+            if command == "design" else
+            ["diagnose", str(tmp_path / "data.csv"), "--study", str(path)])
+    assert main([*args, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "eddy_currents" in err and "does not model eddy currents" in err
+    assert not (tmp_path / "out").exists()

@@ -8,8 +8,8 @@ and prints, per coil, the peak DAQ voltage and its time, the peak EMF, the incre
 inductance, the read-out resonance, and (with eddy currents) the contact approach of the
 coil's lower contact at 10, 30 and 100 kHz relative to static (magnitude, phase in degrees).
 
-Run: ``python benchmarks/permeability_choice.py`` (about 2 minutes cold on 2 cores; the field
-models of the reversible variants are built and cached on first use).
+Run: ``python benchmarks/permeability_choice.py`` (seconds with the caches; the field models
+of the reversible variants are built and cached on first use, about 4 minutes on 2 cores).
 """
 
 from __future__ import annotations

@@ -347,8 +347,12 @@ def mss_voltages(result: StudyResult, t_max_s: float = 600e-6) -> Figure:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper right")
     axes[-1, 0].set_xlabel("time since impact (µs)")
-    fig.suptitle("Predicted MsS voltage: contact approach + Villari (field model), chain, "
-                 "read-out")
+    f = result.study.field
+    model = "eddy currents" if f.eddy_currents else "magnetostatic"
+    if f.small_signal_permeability != "differential":
+        model += f", {f.small_signal_permeability} permeability"
+    fig.suptitle("Predicted MsS voltage: contact approach + Villari, chain, read-out\n"
+                 f"(field model: {model})", fontsize=10)
     fig.tight_layout()
     return fig
 

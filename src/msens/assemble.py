@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from msens.chain.contact import hertz_sphere_flat, hertz_sphere_sphere
 from msens.chain.model import Chain
+from msens.mechanics.hertz import hertz_sphere_flat, hertz_sphere_sphere
 from msens.study import PrecompressionSpec, SetupSpec, Study
 
 

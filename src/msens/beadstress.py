@@ -42,6 +42,7 @@ from skfem import BilinearForm, Functional, LinearForm
 
 from msens.beadmesh import BeadMeshSpec, bead_section_mesh
 from msens.errors import InputError, require
+from msens.mechanics.hertz import hertz_contact_radius, identical_spheres_modulus
 
 #: Component order of every stress array returned here.
 COMPONENTS = ("rr", "zz", "tt", "rz")
@@ -75,9 +76,8 @@ def hertz_contact(radius: float, youngs_modulus: float, poisson_ratio: float,
     """
     _check_material(radius, youngs_modulus, poisson_ratio)
     require(np.isfinite(force) and force > 0, f"force must be > 0 N, got {force}")
-    r_eff = radius / 2.0
-    e_eff = youngs_modulus / (2.0 * (1.0 - poisson_ratio**2))
-    a = (3.0 * force * r_eff / (4.0 * e_eff)) ** (1.0 / 3.0)
+    e_eff = identical_spheres_modulus(youngs_modulus, poisson_ratio)
+    a = float(hertz_contact_radius(force, radius / 2.0, e_eff))
     return a, 3.0 * force / (2.0 * np.pi * a**2)
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from msens.chain.contact import (
+from msens.mechanics.hertz import (
     effective_modulus,
     hertz_energy,
     hertz_sphere_flat,

@@ -1,7 +1,6 @@
 """Discrete particle chain (paper Eq. 6-9): contact laws, model, static equilibrium and the
 compiled time integrator. Knows nothing of fields, sensors or studies."""
 
-from msens.chain.contact import hertz_energy, hertz_sphere_flat, hertz_sphere_sphere
 from msens.chain.equilibrium import static_contact_forces, static_equilibrium
 from msens.chain.integrate import (
     ChainResult,
@@ -12,6 +11,7 @@ from msens.chain.integrate import (
 )
 from msens.chain.model import Chain, DampingLaw, uniform_chain
 from msens.chain.published import paper_chain, striker_velocity
+from msens.mechanics.hertz import hertz_energy, hertz_sphere_flat, hertz_sphere_sphere
 
 __all__ = [
     "Chain",

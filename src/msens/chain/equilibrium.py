@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from msens.chain.model import Chain
+from msens.mechanics.hertz import hertz_approach
 
 
 def static_contact_forces(chain: Chain) -> np.ndarray:
@@ -84,7 +85,7 @@ def equilibrium_from_loads(load: np.ndarray, stiffness: np.ndarray) -> np.ndarra
 def equilibrium_from_forces(force: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
     """:func:`static_equilibrium` from the static contact forces (N, from
     :func:`contact_forces_from_loads`) and Hertz prefactors (N/m^1.5), shape (..., n)."""
-    delta = (force / stiffness) ** (2.0 / 3.0)
+    delta = np.array(hertz_approach(force, stiffness), dtype=float, ndmin=1)
     delta[..., 0] = 0.0
     # u_k = sum_{j >= k} delta_j, summed from the wall up.
     return np.cumsum(delta[..., ::-1], axis=-1)[..., ::-1]

@@ -29,6 +29,7 @@ import numpy as np
 
 from msens.errors import InputError, require
 from msens.materials import BEAD_STEEL, MAGNET_GRADES, STEEL_1018_BH, BHCurve
+from msens.mechanics.hertz import hertz_contact_radius, identical_spheres_modulus
 from msens.units import G0
 
 #: Bead diameter of the paper, m (McMaster-Carr 96455K51, paper §2).
@@ -100,9 +101,8 @@ def hertz_flat_radius(load: float, radius: float = BEAD_DIAMETER / 2,
         Contact radius a, m.
     """
     require(load > 0, f"contact load must be > 0 N, got {load}")
-    r_star = radius / 2
-    e_star = youngs_modulus / (2 * (1 - poisson_ratio**2))
-    return (3 * load * r_star / (4 * e_star)) ** (1 / 3)
+    e_star = identical_spheres_modulus(youngs_modulus, poisson_ratio)
+    return float(hertz_contact_radius(load, radius / 2, e_star))
 
 
 #: Default contact load for the flat radius, N: the weight of beads 2..13 resting on the upper

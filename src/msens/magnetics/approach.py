@@ -16,7 +16,6 @@ rejected: the mesh-to-mesh noise of the coil's bias flux linkage (~1e-4 relative
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -31,6 +30,7 @@ from msens.field.solve import FieldSolution
 from msens.magnetics.potentials import bias_residual, nonlinear_resolve
 from msens.magnetics.villari import coil_flux_linkage
 from msens.materials import BEAD_STEEL, ElasticMaterial
+from msens.mechanics.hertz import hertz_approach, hertz_sphere_sphere
 
 
 def _morphed_quadrature(sol: FieldSolution, points: np.ndarray):
@@ -75,17 +75,17 @@ def approach_residuals(sol: FieldSolution, geometry: SensorGeometry,
 def hertz_stiffness(radius: float, material: ElasticMaterial = BEAD_STEEL) -> float:
     """Hertz prefactor A of two identical spheres, F = A δ^{3/2}, N/m^1.5.
 
-    A = E√(2R)/(3(1-ν²)) (Johnson 1985, eq. 4.23 with R* = R/2, E* = E/(2(1-ν²))).
+    A = E√(2R)/(3(1-ν²)) (:func:`msens.mechanics.hertz.hertz_sphere_sphere`).
     """
-    return material.youngs_modulus * math.sqrt(2 * radius) / (
-        3 * (1 - material.poisson_ratio**2))
+    e, nu = material.youngs_modulus, material.poisson_ratio
+    return float(hertz_sphere_sphere(e, nu, radius, e, nu, radius))
 
 
 def hertz_approach_rate(force: float, radius: float,
                         material: ElasticMaterial = BEAD_STEEL) -> float:
     """dδ/dF = 2δ/(3F) of two identical spheres at ``force`` (N), m/N."""
     require(force > 0, f"force must be > 0 N, got {force}")
-    return 2.0 / 3.0 * (force / hertz_stiffness(radius, material)) ** (2.0 / 3.0) / force
+    return 2.0 / 3.0 * float(hertz_approach(force, hertz_stiffness(radius, material))) / force
 
 
 def morphed_flux_linkage(sol: FieldSolution, geometry: SensorGeometry,

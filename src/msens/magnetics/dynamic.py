@@ -60,6 +60,7 @@ from msens.magnetics.transducer import (
     contact_forces_of,
     contact_rates,
 )
+from msens.mechanics.hertz import hertz_approach
 from msens.units import TWO_PI
 
 #: Frequencies solved by default, Hz: 0 (the static transducer), 12 roughly log-spaced
@@ -585,7 +586,7 @@ def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
     t = np.asarray(t, dtype=float)
     fc = contact_forces_of(force, contacts, columns)
     stiff = transducer.contact_stiffness
-    delta = ((np.clip(fc, 0.0, None) / stiff) ** (2.0 / 3.0) if approach is None
+    delta = (hertz_approach(fc, stiff) if approach is None
              else contact_forces_of(approach, contacts, columns))
     rates = contact_rates(t, fc, contacts, stiff, columns=contacts, approach=delta)
     dt = (t[-1] - t[0]) / (t.size - 1)

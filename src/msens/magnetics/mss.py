@@ -25,6 +25,7 @@ from msens.magnetics.transducer import (
     contact_rates,
     emf_from_rates,
 )
+from msens.mechanics.hertz import hertz_approach
 from msens.study import ElectronicsSpec
 
 
@@ -143,9 +144,9 @@ def mss_signals(sensor: MssSensor, t: np.ndarray, force: np.ndarray, sample_rate
     base = fc[0] if static is None else contact_forces_of(np.asarray(static)[None, :],
                                                            contacts)[0]
     stiff = tr.contact_stiffness
-    delta0 = (np.clip(base, 0.0, None) / stiff) ** (2.0 / 3.0)
+    delta0 = hertz_approach(base, stiff)
     if approach is None:
-        delta = (np.clip(fc, 0.0, None) / stiff) ** (2.0 / 3.0)
+        delta = hertz_approach(fc, stiff)
     else:
         delta = contact_forces_of(approach, contacts, columns)
     flux = (fc - base) @ tr.sensitivity_villari + (delta - delta0) @ tr.dlambda_dapproach

@@ -70,6 +70,7 @@ from msens.magnetics.villari import (
 )
 from msens.magnetoelastic import JilesAthertonSablik
 from msens.materials import BEAD_STEEL, ElasticMaterial
+from msens.mechanics.hertz import hertz_approach
 from msens.steel_law import law_for_steel
 
 _log = logging.getLogger(__name__)
@@ -145,7 +146,7 @@ class Transducer:
     @property
     def sensitivity_approach(self) -> np.ndarray:
         """∂Λ/∂F_c of the contact approach linearised at ``reference_force``, Wb/N."""
-        rate = 2.0 / 3.0 * (self.reference_force / self.contact_stiffness) ** (2.0 / 3.0) \
+        rate = 2.0 / 3.0 * float(hertz_approach(self.reference_force, self.contact_stiffness)) \
             / self.reference_force
         return np.asarray(self.dlambda_dapproach) * rate
 
@@ -263,7 +264,7 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
             f"internal: force must have shape (nt={t.size}, n_contacts), got "
             f"{np.shape(force)}")
     fc = contact_forces_of(force, contacts, columns)
-    delta = (np.clip(fc, 0.0, None) / stiffness) ** (2.0 / 3.0) if approach is None else \
+    delta = hertz_approach(fc, stiffness) if approach is None else \
         contact_forces_of(approach, contacts, columns)
     return ContactRates(t=t, force=np.gradient(fc, t, axis=0),
                         approach=np.gradient(delta, t, axis=0))

@@ -12,8 +12,8 @@ import dataclasses
 
 import numpy as np
 
-from msens.chain.contact import hertz_sphere_flat
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
+from msens.mechanics.hertz import hertz_sphere_flat
 
 NAME = "wall_stiffness"
 PARAM = "wall_youngs_modulus_pa"

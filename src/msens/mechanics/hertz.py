@@ -1,10 +1,11 @@
-"""Hertz contact stiffness of elastic spheres (paper Eq. 1, 2, 7).
+"""Hertz contact of elastic spheres (paper Eq. 1, 2, 7): the one home of its formulas.
 
 A Hertz contact carries F = A delta^{3/2} (compressive positive, delta the approach of the
 two centres, m). The prefactor is A = (4/3) E* sqrt(R*) with the effective modulus
 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 and effective radius R* = R1 R2 / (R1 + R2)
 (Johnson, *Contact Mechanics*, CUP 1985, Eq. 4.22-4.23). A flat face (rod end, the wall
-treated as a half-space) is a sphere of infinite radius, R* = R_s.
+treated as a half-space) is a sphere of infinite radius, R* = R_s. The contact circle has the
+radius a = (3 F R* / (4 E*))^{1/3} and a² = R* δ (Johnson Eq. 4.22).
 
 Pure functions of floats or NumPy arrays (broadcast); units SI.
 """
@@ -19,6 +20,13 @@ def effective_modulus(E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike, nu2: ArrayLi
     """Contact modulus E* = 1 / ((1 - nu1^2)/E1 + (1 - nu2^2)/E2), Pa."""
     E1, nu1, E2, nu2 = (np.asarray(x, dtype=float) for x in (E1, nu1, E2, nu2))
     out = 1.0 / ((1.0 - nu1**2) / E1 + (1.0 - nu2**2) / E2)
+    return out[()] if out.ndim == 0 else out
+
+
+def identical_spheres_modulus(E: ArrayLike, nu: ArrayLike):
+    """E* = E / (2 (1 - nu^2)) of two spheres of one material, Pa (:func:`effective_modulus`
+    with the same material twice, in the rounding the field meshes were built with)."""
+    out = np.asarray(E, dtype=float) / (2.0 * (1.0 - np.asarray(nu, dtype=float) ** 2))
     return out[()] if out.ndim == 0 else out
 
 
@@ -69,4 +77,31 @@ def hertz_energy(A: ArrayLike, delta: ArrayLike):
     """Elastic energy stored in a Hertz contact, (2/5) A [delta]_+^{5/2}, J."""
     d = np.maximum(np.asarray(delta, dtype=float), 0.0)
     out = 0.4 * np.asarray(A, dtype=float) * d**2.5
+    return out[()] if out.ndim == 0 else out
+
+
+def hertz_approach(force: ArrayLike, A: ArrayLike):
+    """Approach δ = ([F]_+ / A)^{2/3} of a Hertz contact carrying the force F (N), m.
+
+    Its slope in F is infinite at F = 0: signals should use the chain's own approach there.
+    """
+    f = np.clip(np.asarray(force, dtype=float), 0.0, None)
+    out = (f / np.asarray(A, dtype=float)) ** (2.0 / 3.0)
+    return out[()] if out.ndim == 0 else out
+
+
+def hertz_contact_radius(force: ArrayLike, R_eff: ArrayLike, E_eff: ArrayLike):
+    """Radius a = (3 F R* / (4 E*))^{1/3} of the contact circle, m.
+
+    Parameters
+    ----------
+    force : float or ndarray
+        Contact force F, N (>= 0).
+    R_eff : float or ndarray
+        Effective radius R*, m (R/2 for two identical spheres).
+    E_eff : float or ndarray
+        Contact modulus E* (:func:`effective_modulus`), Pa.
+    """
+    out = (3.0 * np.asarray(force, dtype=float) * np.asarray(R_eff, dtype=float)
+           / (4.0 * np.asarray(E_eff, dtype=float))) ** (1.0 / 3.0)
     return out[()] if out.ndim == 0 else out

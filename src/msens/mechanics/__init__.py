@@ -1,0 +1,1 @@
+"""Contact mechanics of the beads, below both the chain and the field model."""

@@ -8,12 +8,15 @@ and prints, per coil, the peak DAQ voltage and its time, the peak EMF, the incre
 inductance, the read-out resonance, and (with eddy currents) the contact approach of the
 coil's lower contact at 10, 30 and 100 kHz relative to static (magnitude, phase in degrees).
 
-Run: ``python benchmarks/permeability_choice.py`` (seconds with the caches; the field models
-of the reversible variants are built and cached on first use, about 4 minutes on 2 cores).
+Run: ``python benchmarks/permeability_choice.py [--figure PATH]`` (seconds with the caches;
+the field models of the reversible variants are built and cached on first use, about 4 minutes
+on 2 cores). ``--figure`` also plots coil 13's DAQ voltage of the four variants (the README's
+``docs/permeability_choice.png``).
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 
 from msens import api
@@ -43,15 +46,48 @@ def coil_figures(coil: dict) -> dict:
     return out
 
 
-def main() -> dict:
+def main(figure: str | None = None) -> dict:
     base = api.load(default_study_path())
-    report = {}
+    report, records = {}, {}
     for name, changes in VARIANTS.items():
         study = api.replace(base, changes) if changes else base
-        summary = api.physics_summary(api.run(study))
+        result = api.run(study)
+        summary = api.physics_summary(result)
         report[name] = {str(c["particle"]): coil_figures(c) for c in summary["coils"]}
+        records[name] = next(r.mss for r in result.setups[0].sensors
+                             if r.sensor.particle == 13)
+    if figure:
+        plot(records, figure)
     return report
 
 
+def plot(records: dict, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    styles = {"differential": ("C0", "-"), "reversible": ("C1", "-"),
+              "differential + eddy currents": ("C0", "--"),
+              "reversible + eddy currents": ("C1", "--")}
+    for name, rec in records.items():
+        keep = rec.t_daq <= 200e-6
+        color, ls = styles[name]
+        ax.plot(rec.t_daq[keep] * 1e6, rec.voltage[keep] * 1e3, color=color, ls=ls, lw=1.3,
+                label=name)
+    ax.set_xlabel("time since impact (µs)")
+    ax.set_ylabel("DAQ voltage, coil @13 (mV)")
+    ax.set_title("Small-signal permeability of the steel and eddy currents (main study)",
+                 fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, title="field model", title_fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+
+
 if __name__ == "__main__":
-    print(json.dumps(main(), indent=1))
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--figure", default=None, help="also write the figure here (.png)")
+    print(json.dumps(main(parser.parse_args().figure), indent=1))

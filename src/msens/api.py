@@ -144,7 +144,8 @@ def physics_summary(result: StudyResult) -> dict:
                 "resistance_ohm": tr.resistance_ohm, "inductance_H": tr.inductance_H,
                 "resonance_Hz": f0, "quality_factor": q,
                 "pre_peak_trough": _trough(r.mss),
-                "mechanism_share": mechanism_share(tr, s.history),
+                "mechanism_share": mechanism_share(
+                    tr, s.history, s.responses[r.sensor.particle] if s.responses else None),
                 **({"frequency_response": frequency_summary(s.responses[r.sensor.particle],
                                                             tr)}
                    if s.responses else {}),
@@ -180,7 +181,7 @@ def frequency_summary(response, tr) -> dict:
     return out
 
 
-def mechanism_share(tr, history) -> dict:
+def mechanism_share(tr, history, response=None) -> dict:
     """Each mechanism's open-circuit EMF alone: its peak (V) and its share of the summed
     signal energy ∫EMF_m² dt / Σ_m ∫EMF_m² dt (the two are not orthogonal: their cross term
     is left out, so the shares add to 1). The contact-approach entry also carries the
@@ -188,7 +189,9 @@ def mechanism_share(tr, history) -> dict:
     :func:`msens.magnetics.transducer.rigid_translation_emf`): its sensitivity, peak EMF and
     fraction of the contact-approach peak, and the part of it from contacts while they are open
     (extrapolated linearly: :func:`msens.magnetics.transducer.open_contact_emf`), its peak and
-    share of the contact-approach energy."""
+    share of the contact-approach energy. With an eddy-current ``response`` the two mechanisms'
+    EMFs are the frequency-domain ones (:func:`msens.magnetics.dynamic.mechanism_emfs`); the
+    rigid-translation and open-contact parts stay magnetostatic estimates."""
     from msens.magnetics.transducer import (
         contact_forces_of,
         contact_rates,
@@ -199,8 +202,13 @@ def mechanism_share(tr, history) -> dict:
 
     rates = contact_rates(history.t, history.force, tr.contacts, tr.contact_stiffness,
                           approach=history.approach)
-    emfs = {m: emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach, m)
-            for m in ("villari", "approach")}
+    if response is None:
+        emfs = {m: emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach, m)
+                for m in ("villari", "approach")}
+    else:
+        from msens.magnetics.dynamic import mechanism_emfs
+
+        emfs = mechanism_emfs(response, rates)
     energy = {m: float(np.trapezoid(e**2, history.t)) for m, e in emfs.items()}
     total = sum(energy.values()) or 1.0
     out = {m: {"peak_emf_V": float(np.max(np.abs(e))), "energy_share": energy[m] / total}

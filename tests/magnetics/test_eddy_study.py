@@ -38,6 +38,19 @@ def test_eddy_currents_screen_the_coil_signal(tmp_path, monkeypatch):
     assert eddy_study.field.eddy_currents
     result = api.run(eddy_study)
     eddy = result.setups[0].sensors[0]
+    # the mechanisms' EMFs with eddy currents add up to the record's EMF
+    from msens.magnetics.dynamic import mechanism_emfs
+    from msens.magnetics.transducer import contact_rates
+
+    setup = result.setups[0]
+    tr = setup.transducers[eddy.sensor.particle]
+    h = setup.history
+    rates = contact_rates(h.t, h.force, tr.contacts, tr.contact_stiffness, approach=h.approach)
+    parts = mechanism_emfs(setup.responses[eddy.sensor.particle], rates)
+    np.testing.assert_allclose(parts["villari"] + parts["approach"], eddy.mss.emf, rtol=0,
+                               atol=1e-12 * np.max(np.abs(eddy.mss.emf)))
+    share = api.physics_summary(result)["coils"][0]["mechanism_share"]
+    assert share["approach"]["peak_emf_V"] == pytest.approx(np.max(np.abs(parts["approach"])))
     # summary.json carries each coil's frequency response
     fr = api.physics_summary(result)["coils"][0]["frequency_response"]
     assert fr["frequencies_Hz"][0] == 0.0 and fr["contacts"] == [5, 6]

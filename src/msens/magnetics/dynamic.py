@@ -55,6 +55,7 @@ from msens.io._files import atomic_write_bytes
 from msens.magnetics.mss import MssRecord
 from msens.magnetics.potentials import region_linkage
 from msens.magnetics.transducer import (
+    ContactRates,
     MechanismPotentials,
     Transducer,
     contact_forces_of,
@@ -529,6 +530,34 @@ def emf_spectrum(response: FrequencyResponse, f: np.ndarray, force_rate: np.ndar
     """
     return -(np.sum(response.villari_at(f) * force_rate, axis=1)
              + np.sum(response.approach_at(f) * approach_rate, axis=1))
+
+
+def mechanism_emfs(response: FrequencyResponse, rates: ContactRates,
+                   pad: float = 2.0) -> dict[str, np.ndarray]:
+    """Each mechanism's open-circuit EMF alone, with eddy currents, V.
+
+    Parameters
+    ----------
+    response : FrequencyResponse
+    rates : ContactRates
+        Rates of ``response.contacts`` on uniform times.
+    pad : float
+        FFT length ≥ ``pad`` × nt, as :func:`dynamic_signals`.
+
+    Returns
+    -------
+    dict
+        ``"villari"`` and ``"approach"``: ndarray, shape (nt,); they add up to the EMF of
+        :func:`dynamic_signals`.
+    """
+    t = np.asarray(rates.t)
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    n = next_fast_len(math.ceil(pad * t.size), real=True)
+    f = rfftfreq(n, dt)
+    force = rfft(rates.force, n, axis=0)
+    approach = rfft(rates.approach, n, axis=0)
+    return {"villari": irfft(emf_spectrum(response, f, force, 0.0 * approach), n)[:t.size],
+            "approach": irfft(emf_spectrum(response, f, 0.0 * force, approach), n)[:t.size]}
 
 
 def dynamic_signals(transducer: Transducer, response: FrequencyResponse,

@@ -342,9 +342,9 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
 
 #: Element size at the surfaces of the beads near a coil for the eddy-current model, m (the
 #: skin depth is ~20 µm at 100 kHz with the differential permeability). On the one-sensor model
-#: (``python benchmarks/dynamic_mesh_convergence.py``) 40 µm agrees with 20 µm to 0.6 % and
-#: 0.1° at 100 kHz and 2 % and 0.7° at 200 kHz; without refinement the contact approach is
-#: 9° off at 30 kHz and 28° off at 100 kHz.
+#: (``python benchmarks/dynamic_mesh_convergence.py``) the contact approach at 40 µm agrees
+#: with 10 µm to 0.7 % and 0.05° at 100 kHz and 2.3 % and 0.7° at 200 kHz; without refinement
+#: it is 9° off at 30 kHz and 28° off at 100 kHz.
 SKIN_SIZE = 40e-6
 
 #: Version of what :func:`frequency_responses` computes; part of the cache key.

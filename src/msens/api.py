@@ -14,10 +14,10 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-import numpy as np
-
+from msens import results
 from msens.output import OutputDir
-from msens.pipeline import StudyResult, run_study
+from msens.pipeline import run_study
+from msens.results import StudyResult
 from msens.study import PAPER_TABLE2, Study, builtin_study_path, default_study_path, load_study
 
 
@@ -64,166 +64,14 @@ def provenance(study: Study) -> dict:
 
 
 def summary(result: StudyResult) -> dict:
-    """The content of ``summary.json``: study, calibrated parameters, Table-2 rows."""
-    fit = result.fit
-    calibration = {
-        "gamma_contact_kg_per_s": result.gamma_contact,
-        "gamma_wall_kg_per_s": result.gamma_wall,
-        "fitted": fit is not None,
-    }
-    if fit is not None:
-        calibration.update({
-            "objective_eq10": fit.objective,
-            "ar_top_model": fit.ar_top_model,
-            "ar_bottom_model": fit.ar_bottom_model,
-            "simulations": fit.n_simulations,
-            "paper_gamma_contact_kg_per_s": 4.8,
-            "paper_gamma_wall_kg_per_s": 0.0,
-        })
-    static = {
-        s.setup.name: {
-            "precompression": [{"contacts": [p.first, p.last], "force_N": p.force_n}
-                               for p in s.setup.precompression],
-        }
-        for s in result.setups
-    }
-    out = {
-        "study": result.study.name,
-        "source": result.study.source,
-        "provenance": provenance(result.study),
-        "striker_velocity_m_per_s": result.study.striker.velocity_m_per_s,
-        "calibration": calibration,
-        "setups": static,
-        "rows": result.rows(),
-    }
-    out.update(physics_summary(result))
-    return out
+    """The content of ``summary.json`` (:func:`msens.results.summary` with this run's
+    provenance)."""
+    return results.summary(result, provenance(result.study))
 
 
-def _trough(record) -> dict:
-    """Is there a dip of the integrated signal before its main (incident) peak?"""
-    f = record.weighted_force
-    i_peak = int(np.argmax(f))
-    before = f[:i_peak + 1]
-    depth = float(-before.min()) if before.size else 0.0
-    peak = float(f[i_peak])
-    return {"present": bool(depth > 0.01 * peak), "depth_fraction_of_peak": depth / peak,
-            "time_us": float(record.t[int(np.argmin(before))] * 1e6)}
-
-
-def physics_summary(result: StudyResult) -> dict:
-    """Physics-MsS part of ``summary.json``: per-coil voltage, each mechanism's share of the
-    signal and sensitivity profile, the magnet's precompression per contact and the
-    dominant transduction mechanism."""
-    coils, villari, approach = [], 0.0, 0.0
-    precompression = []
-    for s in result.setups:
-        if not s.transducers:
-            continue
-        from msens.electronics import resonance
-        from msens.magnetics.transducer import magnetic_precompression
-
-        magnetic = magnetic_precompression(s.transducers)
-        for c, f in enumerate(np.cumsum(magnetic)[:-1], start=1):
-            if abs(f) > 1e-3:
-                precompression.append({"setup": s.setup.name, "contact": c, "upper": c,
-                                       "lower": c + 1, "force_N": float(f)})
-        for r in s.sensors:
-            if r.mss is None:
-                continue
-            tr = s.transducers[r.sensor.particle]
-            villari += float(np.sum(np.abs(tr.sensitivity_villari)))
-            approach += float(np.sum(np.abs(tr.sensitivity_approach)))
-            f0, q = resonance(r.mss.circuit)
-            coils.append({
-                "setup": s.setup.name, "particle": r.sensor.particle,
-                "peak_voltage_V": float(np.max(np.abs(r.mss.voltage))),
-                "peak_voltage_time_us": float(r.mss.t_daq[np.argmax(np.abs(r.mss.voltage))]
-                                              * 1e6),
-                "peak_emf_V": float(np.max(np.abs(r.mss.emf))),
-                "resistance_ohm": tr.resistance_ohm, "inductance_H": tr.inductance_H,
-                "resonance_Hz": f0, "quality_factor": q,
-                "pre_peak_trough": _trough(r.mss),
-                "mechanism_share": mechanism_share(
-                    tr, s.history, s.responses[r.sensor.particle] if s.responses else None),
-                **({"frequency_response": frequency_summary(s.responses[r.sensor.particle],
-                                                            tr)}
-                   if s.responses else {}),
-                "sensitivity_profile": [
-                    {"contact": int(c), "dLambda_dF_Wb_per_N": float(v + g),
-                     "villari_Wb_per_N": float(v), "approach_Wb_per_N": float(g)}
-                    for c, v, g in zip(tr.contacts, tr.sensitivity_villari,
-                                       tr.sensitivity_approach, strict=True)],
-            })
-    if not coils:
-        return {}
-    return {"coils": coils, "magnetic_precompression_N": precompression,
-            "dominant_mechanism": "villari" if villari >= approach else "contact approach",
-            "mechanism_magnitude_Wb_per_N": {"villari": villari, "approach": approach}}
-
-
-def frequency_summary(response, tr) -> dict:
-    """A coil's eddy-current frequency response for ``summary.json``: at each solved
-    frequency, the contact-approach and Villari sensitivities of the two contacts beside the
-    coil's bead relative to their static values (magnitude, phase in degrees), and the coil
-    impedance as R (Ω) and L (H)."""
-    freqs = np.asarray(response.frequencies, dtype=float)
-    own = [int(np.flatnonzero(np.asarray(response.contacts) == c)[0])
-           for c in (tr.particle - 1, tr.particle)]
-    out = {"frequencies_Hz": freqs.tolist(), "contacts": [tr.particle - 1, tr.particle]}
-    for name, values in (("approach", response.approach), ("villari", response.villari)):
-        ratio = np.asarray(values)[:, own] / np.asarray(values)[0, own]
-        out[f"{name}_ratio_magnitude"] = np.abs(ratio).tolist()
-        out[f"{name}_ratio_phase_deg"] = np.degrees(np.angle(ratio)).tolist()
-    z = np.asarray(response.impedance)
-    out["resistance_ohm"] = z.real.tolist()
-    out["inductance_H"] = np.asarray(response.inductance).real.tolist()
-    return out
-
-
-def mechanism_share(tr, history, response=None) -> dict:
-    """Each mechanism's open-circuit EMF alone: its peak (V) and its share of the summed
-    signal energy ∫EMF_m² dt / Σ_m ∫EMF_m² dt (the two are not orthogonal: their cross term
-    is left out, so the shares add to 1). The contact-approach entry also carries the
-    beads' rigid translation (contained in it, see
-    :func:`msens.magnetics.transducer.rigid_translation_emf`): its sensitivity, peak EMF and
-    fraction of the contact-approach peak, and the part of it from contacts while they are open
-    (extrapolated linearly: :func:`msens.magnetics.transducer.open_contact_emf`), its peak and
-    share of the contact-approach energy. With an eddy-current ``response`` the two mechanisms'
-    EMFs are the frequency-domain ones (:func:`msens.magnetics.dynamic.mechanism_emfs`); the
-    rigid-translation and open-contact parts stay magnetostatic estimates."""
-    from msens.magnetics.transducer import (
-        contact_forces_of,
-        contact_rates,
-        emf_from_rates,
-        open_contact_emf,
-        rigid_translation_emf,
-    )
-
-    rates = contact_rates(history.t, history.force, tr.contacts, tr.contact_stiffness,
-                          approach=history.approach)
-    if response is None:
-        emfs = {m: emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach, m)
-                for m in ("villari", "approach")}
-    else:
-        from msens.magnetics.dynamic import mechanism_emfs
-
-        emfs = mechanism_emfs(response, rates)
-    energy = {m: float(np.trapezoid(e**2, history.t)) for m, e in emfs.items()}
-    total = sum(energy.values()) or 1.0
-    out = {m: {"peak_emf_V": float(np.max(np.abs(e))), "energy_share": energy[m] / total}
-           for m, e in emfs.items()}
-    opened = open_contact_emf(tr, rates, contact_forces_of(history.approach, tr.contacts))
-    out["approach"]["open_contacts"] = {
-        "peak_emf_V": float(np.max(np.abs(opened))),
-        "energy_share": float(np.trapezoid(opened**2, history.t)) / (energy["approach"] or 1.0)}
-    rigid = rigid_translation_emf(tr, rates)
-    out["approach"]["rigid_translation"] = {
-        "sensitivity_Wb_per_m": float(tr.dlambda_dapproach[-1]),
-        "peak_emf_V": float(np.max(np.abs(rigid))),
-        "fraction_of_peak": float(np.max(np.abs(rigid))
-                                  / max(out["approach"]["peak_emf_V"], 1e-300))}
-    return out
+physics_summary = results.physics_summary
+mechanism_share = results.mechanism_share
+frequency_summary = results.frequency_summary
 
 
 FIGURES = ("contact_forces.png", "sensor_profiles.png", "sensor_records.png", "table2.png")

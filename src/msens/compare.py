@@ -32,8 +32,8 @@ from scipy.integrate import cumulative_trapezoid
 from msens.errors import InputError
 from msens.features import PulseFeatures, centre_distance, pulse_features, wave_speed
 from msens.io.waveform import Channel, Waveform
-from msens.pipeline import SensorResult, SetupResult, StudyResult
 from msens.processing import integrate_drift_corrected, lowpass, xcorr_delay
+from msens.results import SensorResult, SetupResult, StudyResult
 from msens.sensors import SensorKind
 from msens.study import SetupSpec, Study
 from msens.synth import UNITS, UNITS_KEY, is_physics_mss

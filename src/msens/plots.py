@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 from matplotlib.legend_handler import HandlerTuple
 from matplotlib.ticker import MultipleLocator
 
-from msens.pipeline import SetupResult, StudyResult
+from msens.results import SetupResult, StudyResult
 
 _US = 1e6
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from msens.io.waveform import Channel, Waveform
-from msens.pipeline import SensorResult, SetupResult
+from msens.results import SensorResult, SetupResult
 from msens.sensors import SensorKind
 from msens.study import MssModel
 

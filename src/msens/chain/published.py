@@ -30,6 +30,8 @@ N_PARTICLES = 30
 DROP_HEIGHT = 7.2e-3
 #: Fitted dissipation of the bead contacts, kg/s (paper §5.1).
 GAMMA_CONTACT = 4.8
+#: Fitted dissipation of the wall contact, kg/s (paper §5.1).
+GAMMA_WALL = 0.0
 
 
 def striker_velocity(drop_height: float = DROP_HEIGHT, gravity: float = G0) -> float:
@@ -37,7 +39,7 @@ def striker_velocity(drop_height: float = DROP_HEIGHT, gravity: float = G0) -> f
     return float(np.sqrt(2.0 * gravity * drop_height))
 
 
-def paper_chain(gamma_contact: float = GAMMA_CONTACT, gamma_wall: float = 0.0, *,
+def paper_chain(gamma_contact: float = GAMMA_CONTACT, gamma_wall: float = GAMMA_WALL, *,
                 damping_law: DampingLaw = DampingLaw.LINEAR,
                 rods_at: Iterable[int] = (), gravity: float = G0,
                 static_force: np.ndarray | None = None,

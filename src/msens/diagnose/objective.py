@@ -30,7 +30,7 @@ from msens.compare import align_shot
 from msens.diagnose.predict import feature_records, model_features_of, signal
 from msens.errors import InputError
 from msens.io.waveform import Channel, Waveform
-from msens.pipeline import SetupResult
+from msens.results import SetupResult
 from msens.sensors import SensorKind
 from msens.study import MssModel, ReferenceRow, SetupSpec
 

@@ -23,7 +23,7 @@ from msens.diagnose import physics
 from msens.diagnose.effects.base import Context, ModelState
 from msens.features import pulse_features
 from msens.magnetics.mss import mss_signals, voltage_on
-from msens.pipeline import SensorResult, SetupResult
+from msens.results import SensorResult, SetupResult
 from msens.sensors import SensorKind, observe, read_contacts, time_derivative
 
 #: Output memory of one simulate_batch call, bytes (forces and approaches, runs x nt x
@@ -183,7 +183,7 @@ def feature_records(records: np.ndarray, physics: Sequence[bool], t: np.ndarray
 
 
 def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> SetupResult:
-    """A :class:`~msens.pipeline.SetupResult` whose records come from ``state``.
+    """A :class:`~msens.results.SetupResult` whose records come from ``state``.
 
     The sensors keep the setup's nominal specs (so synthetic channels are labelled as the
     study says) while their records are read where ``state`` says. The contact-force history

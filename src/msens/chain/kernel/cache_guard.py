@@ -49,14 +49,16 @@ def package_digest(folder: Path = PACKAGE_DIR) -> str:
     str
         64 hex digits; changes with any edit, addition, removal or renaming of a file.
     """
-    return _digest(Path(folder).resolve())
+    files = sorted(Path(folder).resolve().glob("*.py"))
+    return _digest(tuple((f, f.stat().st_mtime_ns, f.stat().st_size) for f in files))
 
 
 @functools.cache
-def _digest(folder: Path) -> str:
-    # Once per process: numba takes the stamp when a function is decorated (at import).
+def _digest(files: tuple[tuple[Path, int, int], ...]) -> str:
+    # Keyed by modification time and size, as numba's own stamp: each function decorated
+    # at import asks, the files are read once while unchanged.
     h = hashlib.sha256()
-    for path in sorted(folder.glob("*.py")):
+    for path, _, _ in files:
         for part in (path.name.encode(), path.read_bytes()):
             h.update(len(part).to_bytes(8, "little"))
             h.update(part)

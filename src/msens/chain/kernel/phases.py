@@ -4,9 +4,11 @@ In the order the loop calls them: :func:`nominal_length`, :func:`plan_opening` a
 :func:`predict_switch` choose the step's length and time variable; :func:`take_step` runs the
 Runge-Kutta step; :func:`earliest_violation` finds a contact state violated at its end, and
 :func:`cut_back` redoes the step to that crossing; :func:`prediction_holds` and
-:func:`keep_history` serve the dashpot-switch predictor; :func:`dense_output` writes the
-samples inside the step; :func:`switch_at_end` names the contact that switches at its end.
-They are inlined into the loop (numba ``inline="always"``), so the split costs no calls.
+:func:`keep_history` serve the dashpot-switch predictor; :func:`output_jerks` and
+:func:`dense_output` write the samples inside the step; :func:`switch_at_end` names the
+contact that switches at its end. They are inlined into the loop (numba ``inline="always"``),
+so the split costs no calls; arrays are passed one by one, not in tuples (building a tuple of
+arrays counts references in the step loop).
 """
 
 from __future__ import annotations
@@ -107,7 +109,7 @@ def plan_opening(h, mode, dt, sqrt_start, u, v, a0, closed, flag, n):
 
 @nb.njit(cache=True, inline="always")
 def predict_switch(t, h, mode, k_open, dt, v, a0, j0, closed, damp, gam_p, rate_tol, flag,
-                   left, history, h_prev, n):
+                   t_left, q_left, s_left, r_prev, q_prev, s_prev, h_prev, n):
     """Loading law: end the step where a dashpot is predicted to switch.
 
     The zero of a contact's approach rate, extrapolated from the quintic through the rate
@@ -115,8 +117,10 @@ def predict_switch(t, h, mode, k_open, dt, v, a0, j0, closed, damp, gam_p, rate_
     (:func:`msens.chain.kernel.events.rate_zero`), instead of stepping past it and redoing
     the step to the crossing. Only the flagged candidates are visited
     (:func:`msens.chain.kernel.events.switch_candidates`); of equal predicted times the
-    first wins. ``left`` = (t_left, q_left, s_left), ``history`` = (r_prev, q_prev, s_prev):
-    see :func:`msens.chain.kernel.events.switch`.
+    first wins. ``t_left``, ``q_left``, ``s_left``: the left limits at the latest switch
+    nearby (see :func:`msens.chain.kernel.events.switch`); ``r_prev``, ``q_prev``,
+    ``s_prev``: the rates and their derivatives at the previous step's start, ``h_prev`` ago
+    (:func:`keep_history`).
 
     Returns
     -------
@@ -128,8 +132,6 @@ def predict_switch(t, h, mode, k_open, dt, v, a0, j0, closed, damp, gam_p, rate_
     now : bool
         The switch is due at the step's start.
     """
-    t_left, q_left, s_left = left
-    r_prev, q_prev, s_prev = history
     k_pred = -1
     h_max = h * (1.0 + PRED_STRETCH)
     if switch_candidates(v, a0, closed, damp, gam_p, rate_tol, 2.0 * h, flag) > 0:
@@ -312,10 +314,9 @@ def prediction_holds(k_pred, h, v1, a1, damp):
 
 
 @nb.njit(cache=True, inline="always")
-def keep_history(v, a0, j0, history, n):
+def keep_history(v, a0, j0, r_prev, q_prev, s_prev, n):
     """The approach rates and their first two derivatives at the step's start into
-    ``history`` = (r_prev, q_prev, s_prev), for the next prediction."""
-    r_prev, q_prev, s_prev = history
+    ``r_prev``, ``q_prev``, ``s_prev``, for the next prediction."""
     for k in range(n):
         r_prev[k] = gap(v, k)
         q_prev[k] = gap(a0, k)
@@ -323,31 +324,30 @@ def keep_history(v, a0, j0, history, n):
 
 
 @nb.njit(cache=True, inline="always")
-def dense_output(t_out, j, t, h, dt, mode, law, septic, store_uv, subset, j0_ok, ends, cA, cg,
-                 inv_m, out, scratch):
-    """Write the output samples in (t, t + h] (see :mod:`msens.chain.kernel.sampling`).
-
-    ``ends`` = (u, v, a0, j0, u1, v1, a1, j1): the states at both ends; the jerks are formed
-    first where the septic interpolant needs them (``j0`` only unless ``j0_ok``). ``out`` =
-    (out_F, out_d, out_u, out_v, sel), ``scratch`` = (us, vs, F, cs).
-
-    Returns
-    -------
-    j : int
-        The next output index.
-    j1_ok : bool
-        ``j1`` holds the jerks at the step's end.
-    """
-    u, v, a0, j0, u1, v1, a1, j1 = ends
-    out_F, out_d, out_u, out_v, sel = out
-    us, vs, F, cs = scratch
-    nt = t_out.shape[0]
-    j1_ok = False
-    if septic and j < nt and t_out[j] <= t + h:
+def output_jerks(t_out, j, t, h, septic, j0_ok, u, v, a0, j0, u1, v1, a1, j1, cA, cg, inv_m):
+    """The jerks at both ends of the step (``j0`` only unless ``j0_ok``) where the septic
+    interpolant needs them: the step holds output samples. Returns whether ``j1`` holds
+    those at its end."""
+    if septic and j < t_out.shape[0] and t_out[j] <= t + h:
         if not j0_ok:
             jerks(u, v, a0, cA, cg, inv_m, j0)
         jerks(u1, v1, a1, cA, cg, inv_m, j1)
-        j1_ok = True
+        return True
+    return False
+
+
+@nb.njit(cache=True, inline="always")
+def dense_output(t_out, j, t, h, dt, mode, law, septic, store_uv, subset, u, v, a0, j0, u1, v1,
+                 a1, j1, cA, cg, out_F, out_d, out_u, out_v, sel, us, vs, F, cs):
+    """Write the output samples in (t, t + h] (see :mod:`msens.chain.kernel.sampling`) and
+    return the next output index.
+
+    (u, v, a0, j0) and (u1, v1, a1, j1): the states, accelerations and jerks at both ends
+    (:func:`output_jerks`). Outputs and scratch arrays as in
+    :func:`msens.chain.kernel.sampling.sample`. (At most 29 arguments: from 30 on, CPython
+    passes them as a tuple, which numba cannot inline.)
+    """
+    nt = t_out.shape[0]
     if mode == STEP_REGULAR or h < 1e-3 * dt:
         j = sample(t_out, j, t, h, 1e-3 * dt, u, v, a0, j0, u1, v1, a1, j1, cA, cg, law, septic,
                    store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs, sel, subset)
@@ -355,7 +355,7 @@ def dense_output(t_out, j, t, h, dt, mode, law, septic, store_uv, subset, j0_ok,
         j = sample_sqrt(t_out, j, t, h, mode, u, v, a0, j0, u1, v1, a1, j1, cA, cg, law,
                         septic, store_uv, out_F, out_d, out_u, out_v, us, vs, F, cs, sel,
                         subset)
-    return j, j1_ok
+    return j
 
 
 @nb.njit(cache=True, inline="always")

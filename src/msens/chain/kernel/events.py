@@ -233,8 +233,7 @@ def switch_candidates(v, a, closed, damp, gam, rate_tol, two_h, flag):
     is above the noise floor, of the sign their dashpot state allows (not one that just
     switched, within its tolerance) and closing in on zero within ``two_h`` on a linear
     estimate; returns their number. Branch-free over the padded arrays (vectorised); the
-    predictor then visits only these (before, the scan over all contacts with these tests
-    as branches took a sixth of the run time)."""
+    predictor then visits only these."""
     count = 0
     for k in range(closed.shape[0]):
         r = v[k] - v[k + 1]

@@ -36,9 +36,8 @@ def padded_length(n: int) -> int:
 def zeros64(size):
     """Zeros of shape (size,) starting on a 64-byte boundary (a cache line, one AVX-512
     register). numba aligns arrays to 32 bytes only, so whether the scratch arrays' full-width
-    loads straddle cache lines varied with the heap's state (the start offset changed run
-    times by up to 4 % in a test of four offsets); aligned, the layout is the same in every
-    run."""
+    loads straddle cache lines would vary with the heap's state, and the run time with it;
+    aligned, the layout is the same in every run."""
     buf = np.zeros(size + 8)
     off = (-(buf.ctypes.data // 8)) % 8
     return buf[off:off + size]

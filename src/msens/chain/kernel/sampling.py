@@ -131,8 +131,7 @@ def _horner(cs, c, x):
     """Value and s-derivative at s = x of the polynomial in column c of ``cs`` (rows 0-7:
     coefficients of s^0..s^7)."""
     # Horner's scheme for both at once: the eight coefficients are loaded once (loads, not
-    # arithmetic, bound the sampling loop: 25 % faster than separate sums for the gap and its
-    # rate).
+    # arithmetic, bound the sampling loop).
     g = cs[7, c]
     d = 0.0
     for q in range(6, -1, -1):

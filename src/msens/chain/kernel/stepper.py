@@ -30,6 +30,7 @@ from msens.chain.kernel.phases import (
     earliest_violation,
     keep_history,
     nominal_length,
+    output_jerks,
     plan_opening,
     predict_switch,
     prediction_holds,
@@ -122,14 +123,15 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     # Loading law: approach rates and their first two derivatives at the start of the
     # previous step (size h_prev), and left limits of the derivatives at the latest switch
     # nearby (time t_left), for predicting dashpot switches.
-    history = (np.zeros(n), np.zeros(n), np.zeros(n))
+    r_prev = np.zeros(n)
+    q_prev = np.zeros(n)
+    s_prev = np.zeros(n)
     t_left = np.full(n, -np.inf)
     q_left = np.zeros(n)
     s_left = np.zeros(n)
     h_prev = 0.0
     # Contact states padded like cA (zeros past n) for the vectorised passes, with a padded
-    # copy of gamma and scratch flags (gam itself stays unpadded: rebinding it to the padded
-    # copy made the runs 2-3 % slower).
+    # copy of gamma and scratch flags (gam itself stays unpadded: measured faster).
     closed = zeros64(p)
     damp = zeros64(p)
     gam_p = zeros64(p)
@@ -155,8 +157,6 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     # The jerks are only formed for steps with samples: j0 holds those at the step's start
     # when j0_ok.
     j0_ok = True
-    out = (out_F, out_d, out_u, out_v, sel)
-    scratch = (us, vs, F, cs)
     j = 0
     # Samples at the initial time.
     while j < nt and t_out[j] <= 0.0:
@@ -185,7 +185,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         if loading and h_prev > 0.0:
             h, mode, k_open, k_pred, now = predict_switch(
                 t, h, mode, k_open, dt, v, a0, j0, closed, damp, gam_p, rate_tol, flag,
-                (t_left, q_left, s_left), history, h_prev, n)
+                t_left, q_left, s_left, r_prev, q_prev, s_prev, h_prev, n)
             if now and toggles_here < 4 * n:
                 toggles_here += 1
                 _, j0_ok = switch(1, k_pred, t, u, v, a0, j0, j0_ok, closed, damp, A, gam, cA,
@@ -235,10 +235,12 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
         if not (k_pred >= 0 and kmin < 0 and prediction_holds(k_pred, h, v1, a1, damp)):
             k_pred = -1
         if loading:
-            keep_history(v, a0, j0, history, n)
+            keep_history(v, a0, j0, r_prev, q_prev, s_prev, n)
             h_prev = h
-        j, j1_ok = dense_output(t_out, j, t, h, dt, mode, law, septic, store_uv, subset, j0_ok,
-                                (u, v, a0, j0, u1, v1, a1, j1), cA, cg, inv_m, out, scratch)
+        j1_ok = output_jerks(t_out, j, t, h, septic, j0_ok, u, v, a0, j0, u1, v1, a1, j1, cA, cg,
+                             inv_m)
+        j = dense_output(t_out, j, t, h, dt, mode, law, septic, store_uv, subset, u, v, a0, j0,
+                         u1, v1, a1, j1, cA, cg, out_F, out_d, out_u, out_v, sel, us, vs, F, cs)
         t += h
         sqrt_start = False
         u, u1 = u1, u

@@ -129,7 +129,6 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     t_left = np.full(n, -np.inf)
     q_left = np.zeros(n)
     s_left = np.zeros(n)
-    h_prev = 0.0
     # Contact states padded like cA (zeros past n) for the vectorised passes, with a padded
     # copy of gamma and scratch flags (gam itself stays unpadded: measured faster).
     closed = zeros64(p)
@@ -139,6 +138,37 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     flag = zeros64(p)
     cA = zeros64(p)
     cg = zeros64(p)
+    sqrt_start = _initial_states(u, v, A, gam, law == LAW_LINEAR_LOADING, n, closed, damp, cA,
+                                 cg)
+    return _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_start, n,
+                      (u, v, u1, v1, a0, a1, j0, j1, kv, tu, tv, F, us, vs, cs),
+                      (closed, damp, A, gam, gam_p, flag, cA, cg, load_p, inv_m),
+                      (r_prev, q_prev, s_prev, t_left, q_left, s_left),
+                      (out_F, out_d, out_u, out_v, sel))
+
+
+@nb.njit(cache=True, _nrt=False)
+def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_start, n, work,
+               contacts, history, out):
+    """The step loop of :func:`integrate` on its allocated arrays; returns the steps taken.
+
+    ``work`` = (u, v, u1, v1, a0, a1, j0, j1, kv, tu, tv, F, us, vs, cs): states at the two
+    ends of a step, their accelerations and jerks, Runge-Kutta and sampling scratch;
+    ``contacts`` = (closed, damp, A, gam, gam_p, flag, cA, cg, load_p, inv_m): contact states,
+    coefficients and the particles' loads and inverse masses (padded layout);
+    ``history`` = (r_prev, q_prev, s_prev, t_left, q_left, s_left): the dashpot-switch
+    predictor's data; ``out`` = (out_F, out_d, out_u, out_v, sel). ``sqrt_start``: a contact
+    closes at t = 0.
+
+    Compiled without reference counting (it allocates nothing): the phase helpers inlined
+    into the loop would otherwise count references to every array they are passed, at
+    every step (~10 % of the run time).
+    """
+    u, v, u1, v1, a0, a1, j0, j1, kv, tu, tv, F, us, vs, cs = work
+    closed, damp, A, gam, gam_p, flag, cA, cg, load_p, inv_m = contacts
+    r_prev, q_prev, s_prev, t_left, q_left, s_left = history
+    out_F, out_d, out_u, out_v, sel = out
+    h_prev = 0.0
     loading = law == LAW_LINEAR_LOADING
     hkk = law == LAW_HKK
     # Septic dense output from the jerks (the Kuwabara-Kono jerk is unbounded at contact
@@ -146,7 +176,6 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     septic = not hkk
     # Whether the next step starts where a contact closed (then taken in sqrt(t - t0), of
     # length dt 2^-grade), and the time of the latest closing (see nominal_length).
-    sqrt_start = _initial_states(u, v, A, gam, loading, n, closed, damp, cA, cg)
     t_close = 0.0 if sqrt_start else -np.inf
     grade = grade_levels
     nt = t_out.shape[0]

@@ -77,8 +77,14 @@ def _instrumented_source() -> str:
     src = inspect.getsource(stepper)
     start = src.index("def integrate(")
     head, body = src[:start], src[start:]
-    body = body.replace("store_uv, out_F, out_d, out_u, out_v, sel):",
-                        "store_uv, out_F, out_d, out_u, out_v, sel, prof):", 1)
+    # prof (the counters) through integrate into its step loop
+    for a, b in [("store_uv, out_F, out_d, out_u, out_v, sel):",
+                  "store_uv, out_F, out_d, out_u, out_v, sel, prof):"),
+                 ("(out_F, out_d, out_u, out_v, sel))", "(out_F, out_d, out_u, out_v, sel), prof)"),
+                 ("contacts, history, out):", "contacts, history, out, prof):")]:
+        if a not in body:
+            sys.exit(f"chain_profile: stepper.py has no {a!r}; update _instrumented_source")
+        body = body.replace(a, b, 1)
     pos = 0
     for i, (_, line) in enumerate(PARTS):
         at = body.find(line, pos)

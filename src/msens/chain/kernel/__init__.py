@@ -72,10 +72,11 @@ docs/chain-performance.md.
 
 Modules: :mod:`.forces` (padded layout, forces, accelerations, jerks), :mod:`.dop853_step`
 (the generated Runge-Kutta step), :mod:`.hermite` (interpolating polynomials),
-:mod:`.sampling` (dense output), :mod:`.events` (contact state switches), :mod:`.stepper`
-(the step loop), :mod:`.noalias` (the no-overlap compiler), :mod:`.cache_guard` (numba's
-on-disk cache, invalidated by an edit to any of these files). All compiled functions are
-cached on disk (first call ~30 s, then loaded).
+:mod:`.sampling` (dense output), :mod:`.events` (contact state switches), :mod:`.phases`
+(the phases of one step), :mod:`.stepper` (the step loop), :mod:`.noalias` (the no-overlap
+compiler), :mod:`.cache_guard` (numba's on-disk cache, invalidated by an edit to any of these
+files). All compiled functions are cached on disk (the first use compiles them, up to a
+minute; later processes load them).
 """
 
 # The cache guard first: numba stamps each function's cache when it is decorated.

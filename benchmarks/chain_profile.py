@@ -1,7 +1,7 @@
 """Where the chain kernel's time goes, per part of its step loop (prints JSON).
 
-Runs a copy of :func:`msens.chain.kernel.integrate` with cycle counters (LLVM's
-``readcyclecounter``) between the parts of its loop: choosing the step (openings), predicting
+Runs a copy of :func:`msens.chain.kernel.stepper.integrate` with cycle counters (LLVM's
+``readcyclecounter``) between the phases of its loop: choosing the step (openings), predicting
 dashpot switches, the Runge-Kutta step(s), finding violated states, cut-backs, the end-of-step
 bookkeeping, the dense output and the switch at the step's end. The copy is written to a
 temporary folder and compiled there (no cache), so the first run takes ~1 min. Problem: the
@@ -11,7 +11,7 @@ in the loop, and ns per step at the counter's rate (calibrated against the wall 
 loop's share of the wall time says how much falls outside the parts).
 
 The counters cost a few ns each, and the parts are cut at source lines: after a change to
-``kernel.integrate`` that moves them, the script stops and names the missing line.
+``stepper.integrate`` that moves them, the script stops and names the missing line.
 
 Run: python benchmarks/chain_profile.py [--law linear|linear-loading] [--contacts 11,12,16,17]
 """
@@ -29,8 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
-from msens.chain import DampingLaw, kernel, paper_chain, stable_step, striker_velocity
+from msens.chain import DampingLaw, paper_chain, stable_step, striker_velocity
 from msens.chain.integrate import _LAW_CODE, GRADE_LEVELS, _initial_state, _rate_tol
+from msens.chain.kernel import stepper
 
 _COUNTER = '''
 from llvmlite import ir as _ir
@@ -56,32 +57,39 @@ def cycles_now():
 #: Parts of the loop, each starting at the first line (after the previous part's) that begins
 #: with this text.
 PARTS = [
-    ("step length and openings", "        h = dt\n        if sqrt_start:"),
-    ("dashpot-switch prediction", "        # Loading law: end the step where a dashpot"),
+    ("step length and openings", "        h = nominal_length("),
+    ("dashpot-switch prediction", "        k_pred = -1\n"),
     ("last-step stretch, Runge-Kutta step", "        if t + h > t_end - 0.01 * dt:"),
     ("violated states", "        if loading:\n            accelerations(u1, v1"),
-    ("cut-backs and switches now", "        if kmin >= 0:\n"),
+    ("cut-backs and switches now", "        if kmin >= 0 and th_min <= THETA_NOW"),
     ("accelerations, predicted switch check", "        if not (loading and kmin < 0):"),
-    ("predictor history", "        if loading:\n            for k in range(n):"),
-    ("jerks for the output", "        j1_ok = False\n"),
-    ("dense output", "        if mode == STEP_REGULAR or h < 1e-3 * dt:"),
+    ("predictor history", "        if loading:\n            keep_history("),
+    ("jerks for the output", "        j1_ok = output_jerks("),
+    ("dense output", "        j = dense_output("),
     ("switch at the step's end", "        t += h\n"),
 ]
-_RK_CALL = "            rk_step(u, v, a0, h, mode,"
+#: The Runge-Kutta step with its Newton re-steps to an opening (not the cut-backs).
+_RK_CALL = "        h, mode, k_open, taken = take_step("
 _LOOP_END = "    return steps\n"
 
 
 def _instrumented_source() -> str:
-    src = inspect.getsource(kernel)
+    src = inspect.getsource(stepper)
     start = src.index("def integrate(")
     head, body = src[:start], src[start:]
-    body = body.replace("store_uv, out_F, out_d, out_u, out_v, sel):",
-                        "store_uv, out_F, out_d, out_u, out_v, sel, prof):", 1)
+    # prof (the counters) through integrate into its step loop
+    for a, b in [("store_uv, out_F, out_d, out_u, out_v, sel):",
+                  "store_uv, out_F, out_d, out_u, out_v, sel, prof):"),
+                 ("(out_F, out_d, out_u, out_v, sel))", "(out_F, out_d, out_u, out_v, sel), prof)"),
+                 ("contacts, history, out):", "contacts, history, out, prof):")]:
+        if a not in body:
+            sys.exit(f"chain_profile: stepper.py has no {a!r}; update _instrumented_source")
+        body = body.replace(a, b, 1)
     pos = 0
     for i, (_, line) in enumerate(PARTS):
         at = body.find(line, pos)
         if at < 0:
-            sys.exit(f"chain_profile: kernel.integrate has no line starting {line!r} "
+            sys.exit(f"chain_profile: stepper.integrate has no line starting {line!r} "
                      "after the previous part; update PARTS")
         mark = f"        _c{i} = _cycles()\n"
         if i:
@@ -91,14 +99,14 @@ def _instrumented_source() -> str:
     last = len(PARTS) - 1
     end = body.index(_LOOP_END, pos)
     body = (body[:end] + f"        prof[{last}] += _cycles() - _c{last}\n" + body[end:])
-    # The Runge-Kutta step alone (its first call site: the regular step and Newton re-steps).
+    # The Runge-Kutta step (take_step: the regular step and its Newton re-steps).
     rk = body.index(_RK_CALL)
     after = body.index("\n", body.index(")", rk)) + 1
-    body = body[:after] + f"            prof[{len(PARTS)}] += _cycles() - _rk\n" + body[after:]
-    body = body[:rk] + "            _rk = _cycles()\n" + body[rk:]
+    body = body[:after] + f"        prof[{len(PARTS)}] += _cycles() - _rk\n" + body[after:]
+    body = body[:rk] + "        _rk = _cycles()\n" + body[rk:]
     numpy = "\nimport numpy as np\n"
     if numpy not in head:
-        sys.exit("chain_profile: kernel.py no longer imports numpy as np; update "
+        sys.exit("chain_profile: stepper.py no longer imports numpy as np; update "
                  "_instrumented_source")
     head = head.replace(numpy, numpy + _COUNTER, 1)
     return (head + body).replace("cache=True", "cache=False")
@@ -155,7 +163,7 @@ def main(law: DampingLaw, contacts: list[int] | None = None) -> dict:
         "parts": {name: {"share": float(prof[i] / loop),
                          "ns_per_step": float(prof[i] / per_ns / steps)}
                   for i, (name, _) in enumerate(PARTS)},
-        "runge_kutta_step_alone": {"share": float(prof[-1] / loop),
+        "runge_kutta_step": {"share": float(prof[-1] / loop),
                                    "ns_per_step": float(prof[-1] / per_ns / steps)},
     }
 

@@ -51,16 +51,11 @@ def run(study: Study, *, scheduler: str | None = None) -> StudyResult:
 def provenance(study: Study) -> dict:
     """What made a result file: the msens version and the study's content hash (SHA-256 of
     its canonical JSON form, so the same study gives the same hash wherever its file is)."""
-    import hashlib
-    import json
-
     from msens.cli import version
-    from msens.design.cache import canonical
+    from msens.io.hashing import content_hash
 
-    text = json.dumps(canonical(dataclasses.replace(study, source="")), sort_keys=True,
-                      separators=(",", ":"))
     return {"msens_version": version(),
-            "study_sha256": hashlib.sha256(text.encode()).hexdigest()}
+            "study_sha256": content_hash(dataclasses.replace(study, source=""))}
 
 
 def summary(result: StudyResult) -> dict:

@@ -8,7 +8,8 @@ import pytest
 from scipy.integrate._ivp import dop853_coefficients as dop
 from scipy.integrate._ivp.rk import rk_step as scipy_rk_step
 
-from msens.chain import _dop853_step, dop853_codegen, kernel
+from msens.chain import dop853_codegen, kernel
+from msens.chain.kernel import dop853_step
 
 
 def test_committed_module_is_the_generator_output():
@@ -25,7 +26,7 @@ def test_generated_coefficients_are_the_exactly_rounded_products():
     import mpmath
 
     s_count = dop.N_STAGES
-    tab = dop853_codegen._tableaus()
+    tab = dop853_codegen.tableaus()
     with mpmath.workprec(2000):
         a = [[mpmath.mpf(float(x)) for x in row] for row in dop.A[:s_count, :s_count]]
         b = [mpmath.mpf(float(x)) for x in dop.B]
@@ -72,9 +73,9 @@ def test_step_matches_scipy_dop853_step(law):
 
     a0 = acc(u, v)
     h = 1.5e-6
-    kv = np.zeros((_dop853_step.N_STAGES, p + 1))
+    kv = np.zeros((dop853_step.N_STAGES, p + 1))
     u1, v1 = pad.copy(), pad.copy()
-    _dop853_step.rk_step(u, v, a0, h, _dop853_step.STEP_REGULAR, cA, cg, law == kernel.LAW_HKK,
+    dop853_step.rk_step(u, v, a0, h, dop853_step.STEP_REGULAR, cA, cg, law == kernel.LAW_HKK,
                          load_p, inv_m, kv, pad.copy(), pad.copy(), u1, v1)
 
     def rhs(_t, y):
@@ -112,29 +113,29 @@ def test_local_error_is_ninth_order():
     slope 8.8 over omega h ~ 0.25-0.5; asserted within [8.5, 9.5])."""
     u, v, cA, cg, load, inv_m = _random_chain()
     m = u.size
-    kv = np.zeros((_dop853_step.N_STAGES, m))
+    kv = np.zeros((dop853_step.N_STAGES, m))
 
     def one(fn, uu, vv, h):
         a0 = np.zeros(m)
         kernel.accelerations(uu, vv, cA, cg, kernel.LAW_LINEAR, load, inv_m, a0)
         u1, v1 = np.zeros(m), np.zeros(m)
-        fn(uu, vv, a0, h, _dop853_step.STEP_REGULAR, cA, cg, False, load, inv_m, kv, np.zeros(m),
+        fn(uu, vv, a0, h, dop853_step.STEP_REGULAR, cA, cg, False, load, inv_m, kv, np.zeros(m),
            np.zeros(m), u1, v1)
         return u1, v1
 
     def fine(h):
         uu, vv = u.copy(), v.copy()
         for _ in range(64):
-            uu, vv = one(_dop853_step.rk_step, uu, vv, h / 64)
+            uu, vv = one(dop853_step.rk_step, uu, vv, h / 64)
         return vv
 
     hs = np.array([2e-5, 1.5e-5, 1e-5])  # omega h ~ 0.5 for the stiffest mode
-    errs = [np.max(np.abs(one(_dop853_step.rk_step, u, v, h)[1] - fine(h))) for h in hs]
+    errs = [np.max(np.abs(one(dop853_step.rk_step, u, v, h)[1] - fine(h))) for h in hs]
     slope = np.polyfit(np.log(hs), np.log(errs), 1)[0]
     assert 8.5 <= slope <= 9.5, (slope, errs)
 
 
-@pytest.mark.parametrize("mode", [_dop853_step.STEP_SQRT_START, _dop853_step.STEP_SQRT_END])
+@pytest.mark.parametrize("mode", [dop853_step.STEP_SQRT_START, dop853_step.STEP_SQRT_END])
 def test_sqrt_modes_are_dop853_in_the_square_root_of_time(mode):
     """A step of length h in STEP_SQRT_START equals SciPy's DOP853 step of size sqrt(h) on
     dy/ds = 2 s f(y) from s = 0 (t = t0 + s^2); STEP_SQRT_END equals its step of size
@@ -151,9 +152,9 @@ def test_sqrt_modes_are_dop853_in_the_square_root_of_time(mode):
 
     a0 = acc(u, v)
     u1, v1 = np.zeros(m), np.zeros(m)
-    _dop853_step.rk_step(u, v, a0, h, mode, cA, cg, False, load, inv_m,
-                         np.zeros((_dop853_step.N_STAGES, m)), np.zeros(m), np.zeros(m), u1, v1)
-    sign = 1.0 if mode == _dop853_step.STEP_SQRT_START else -1.0
+    dop853_step.rk_step(u, v, a0, h, mode, cA, cg, False, load, inv_m,
+                         np.zeros((dop853_step.N_STAGES, m)), np.zeros(m), np.zeros(m), u1, v1)
+    sign = 1.0 if mode == dop853_step.STEP_SQRT_START else -1.0
 
     def rhs(s, y):
         uu, vv = np.zeros(m), np.zeros(m)
@@ -183,24 +184,24 @@ def test_sqrt_step_keeps_the_order_at_a_closing():
         u[0], v[0] = u0, v0
         kernel.accelerations(u, v, cA, cg, kernel.LAW_LINEAR, load, inv_m, a0)
         u1, v1 = np.zeros(m), np.zeros(m)
-        _dop853_step.rk_step(u, v, a0, h, mode, cA, cg, False, load, inv_m,
-                             np.zeros((_dop853_step.N_STAGES, m)), np.zeros(m), np.zeros(m),
+        dop853_step.rk_step(u, v, a0, h, mode, cA, cg, False, load, inv_m,
+                             np.zeros((dop853_step.N_STAGES, m)), np.zeros(m), np.zeros(m),
                              u1, v1)
         return u1[0], v1[0]
 
     def reference(h):
         # 64 START substeps of equal length in s (the first from the contact, in s).
         ds = np.sqrt(h) / 64
-        u, v = step(_dop853_step.STEP_SQRT_START, ds**2)
+        u, v = step(dop853_step.STEP_SQRT_START, ds**2)
         for i in range(1, 64):
             t_a, t_b = (i * ds) ** 2, ((i + 1) * ds) ** 2
-            u, v = step(_dop853_step.STEP_REGULAR, t_b - t_a, u, v)
+            u, v = step(dop853_step.STEP_REGULAR, t_b - t_a, u, v)
         return v
 
     hs = np.array([4e-6, 2e-6, 1e-6])  # t_c = 31 us: h from t_c/8 to t_c/31
     ref = [reference(h) for h in hs]
     slopes = []
-    for mode in (_dop853_step.STEP_SQRT_START, _dop853_step.STEP_REGULAR):
+    for mode in (dop853_step.STEP_SQRT_START, dop853_step.STEP_REGULAR):
         errs = [abs(step(mode, h)[1] - r) for h, r in zip(hs, ref, strict=True)]
         slopes.append(np.polyfit(np.log(hs), np.log(errs), 1)[0])
     assert slopes[0] >= 5.5 and slopes[1] <= 3.0, slopes

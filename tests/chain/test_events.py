@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from msens.chain import kernel
+from msens.chain.kernel import events
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -27,17 +28,17 @@ def test_rate_predictor_is_exact_for_quintic_rates(seed, switch_now):
     q, s = after.deriv(1)(0.0), after.deriv(2)(0.0)
     ql, sl = before.deriv(1)(0.0), before.deriv(2)(0.0)
     past = (before(-hp), before.deriv(1)(-hp), before.deriv(2)(-hp))
-    tau = kernel._rate_zero(after(0.0), q, s, ql, sl, *past, hp, 2.0 * hp)
+    tau = events.rate_zero(after(0.0), q, s, ql, sl, *past, hp, 2.0 * hp)
     assert tau == pytest.approx(tau_star, rel=1e-9)
     # A zero beyond the horizon is not reported.
-    assert kernel._rate_zero(after(0.0), q, s, ql, sl, *past, hp, 0.5 * tau_star) == -1.0
+    assert events.rate_zero(after(0.0), q, s, ql, sl, *past, hp, 0.5 * tau_star) == -1.0
 
 
 def test_first_violation_of_a_gap():
     """A closed contact's gap (allowed sign >= 0) that turns negative at theta = 0.6."""
     # gap(theta) = (0.6 - theta) (1 + theta): value and derivative at both ends
     g = np.polynomial.Polynomial([0.6, -0.4, -1.0])
-    th = kernel._first_violation(g(0.0), g.deriv()(0.0), g(1.0), g.deriv()(1.0), True)
+    th = events.first_violation(g(0.0), g.deriv()(0.0), g(1.0), g.deriv()(1.0), True)
     assert th == pytest.approx(0.6, abs=1e-12)
 
 
@@ -49,11 +50,11 @@ def test_a_state_just_switched_within_its_tolerance_is_no_violation():
     # rate -1), falls, and rises through zero again at theta = 0.7.
     g = np.polynomial.Polynomial([1e-6, -1.0, 1.0 / 0.7 - 1e-6 / 0.49])
     assert g(0.7) == pytest.approx(0.0, abs=1e-12)
-    th = kernel._first_violation(g(0.0), g.deriv()(0.0), g(1.0), g.deriv()(1.0), False)
+    th = events.first_violation(g(0.0), g.deriv()(0.0), g(1.0), g.deriv()(1.0), False)
     assert th == pytest.approx(0.7, abs=1e-5)
     # The same start value moving away from the allowed side, or too far on the wrong one.
-    assert kernel._first_violation(1e-6, 1.0, 2.0, 1.0, False) == 0.0
-    assert kernel._first_violation(1e-2, -1.0, 0.5, 3.0, False) == 0.0
+    assert events.first_violation(1e-6, 1.0, 2.0, 1.0, False) == 0.0
+    assert events.first_violation(1e-2, -1.0, 0.5, 3.0, False) == 0.0
 
 
 def _random_contact_states(rng, n=30):
@@ -94,27 +95,27 @@ def test_vectorised_event_passes_match_their_scalar_definitions(seed):
         bad = gap_bad | (loading & rate_bad)
         for skip in (-1, *np.flatnonzero(bad)[:3]):
             expect = bool(np.any(np.delete(bad, skip) if skip >= 0 else bad))
-            assert kernel._violated(u, v, closed, damp, gam, tol, loading, skip) is expect
+            assert events.violated(u, v, closed, damp, gam, tol, loading, skip) is expect
     # Consistent states violate nothing; one contact put in the wrong state is found.
     ok_closed = np.r_[g > 0.0, np.zeros(closed.size - n)].astype(float)
     ok_damp = ok_closed * np.r_[r > 0.0, np.zeros(closed.size - n)]
-    assert not kernel._violated(u, v, ok_closed, ok_damp, gam, 0.0, True, -1)
+    assert not events.violated(u, v, ok_closed, ok_damp, gam, 0.0, True, -1)
     k = int(rng.integers(n))
     ok_closed[k] = 1.0 - ok_closed[k]
     ok_damp[k] = ok_closed[k] * (r[k] > 0.0)
-    assert kernel._violated(u, v, ok_closed, ok_damp, gam, 0.0, True, -1)
-    assert not kernel._violated(u, v, ok_closed, ok_damp, gam, 0.0, True, k)
+    assert events.violated(u, v, ok_closed, ok_damp, gam, 0.0, True, -1)
+    assert not events.violated(u, v, ok_closed, ok_damp, gam, 0.0, True, k)
     # Dashpot-switch candidates (as the predictor's branches before).
     cand = (c & (gam[:n] > 0.0) & (r * q < 0.0) & (np.abs(r) > tol)
             & (np.abs(r) < 2.0 * h * np.abs(q)) & ((r > 0.0) == d))
     flag = np.full(closed.size, np.nan)
-    assert kernel._switch_candidates(v, a, closed, damp, gam, tol, 2.0 * h, flag) == cand.sum()
+    assert events.switch_candidates(v, a, closed, damp, gam, tol, 2.0 * h, flag) == cand.sum()
     np.testing.assert_array_equal(flag, np.r_[cand, np.zeros(flag.size - n, bool)])
-    # Openings: every contact with _opening_time < T is flagged, and few others.
+    # Openings: every contact with opening_time < T is flagged, and few others.
     for T in (1e-6, 1e-5, 1e-4):
-        tau = np.array([kernel._opening_time(g[k], r[k], q[k], closed[k]) for k in range(n)])
+        tau = np.array([events.opening_time(g[k], r[k], q[k], closed[k]) for k in range(n)])
         flag[:] = np.nan
-        count = kernel._openings_within(u, v, a, closed, T, flag)
+        count = events.openings_within(u, v, a, closed, T, flag)
         assert count == flag.sum() and not flag[n:].any()
         assert np.all(flag[:n][tau < T] == 1.0)
         near = np.abs(tau / T - 1.0) < 1e-5

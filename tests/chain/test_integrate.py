@@ -17,6 +17,7 @@ from msens.chain import (
     uniform_chain,
 )
 from msens.chain.integrate import HERTZ_TIME_CONSTANT, STEPS_PER_CONTACT_TIME
+from msens.chain.kernel import events, hermite
 
 M, A_WALL, V = 0.45e-3, 7.1e9, 0.3
 
@@ -106,12 +107,12 @@ def test_hermite_interpolant_reproduces_polynomials(septic, degree):
         return [d[q](s) / h**q for q in range(4)]  # value, rate, acceleration, jerk in time
 
     (p0, r0, q0, s0), (p1, r1, q1, s1) = data(0.0), data(1.0)
-    coeffs = kernel._hermite_coefficients(septic, p0, h * r0, h * h * q0, h**3 * s0, p1 - p0,
+    coeffs = hermite.hermite_coefficients(septic, p0, h * r0, h * h * q0, h**3 * s0, p1 - p0,
                                           h * r1, h * h * q1, h**3 * s1)
     got = np.polynomial.Polynomial([p0, *coeffs])
     for x in (0.1, 0.45, 0.9):
         assert got(x) == pytest.approx(p(x), abs=1e-12)
-        w = kernel._hermite_weights(septic, x, h)
+        w = hermite.hermite_weights(septic, x, h)
         value = p0 + np.dot(w[:7], [p1 - p0, r0, r1, q0, q1, s0, s1])
         rate = np.dot(w[7:], [p1 - p0, r0, r1, q0, q1, s0, s1])
         assert value == pytest.approx(p(x), abs=1e-12)
@@ -142,7 +143,7 @@ def test_sqrt_interpolant_reproduces_its_function_class(septic, sign):
     nq = 4 if septic else 3  # the Kuwabara-Kono jerk is unbounded at t_ref
     ref = [f(0.0, q) for q in range(nq)] + [0.0] * (4 - nq)
     other = [f(hs, q) for q in range(nq)] + [0.0] * (4 - nq)
-    c = kernel._sqrt_coefficients(septic, hs, ref[0], ref[1], ref[2], ref[3],
+    c = hermite.sqrt_coefficients(septic, hs, ref[0], ref[1], ref[2], ref[3],
                                   other[0] - ref[0], other[1], other[2], other[3])
     full = np.zeros(11)
     full[0], full[2:] = c[0], c[1:]
@@ -171,7 +172,7 @@ def test_local_update_after_a_switch_equals_the_full_pass(law, k):
     kernel.accelerations(u, v, cA, cg, law, load, inv_m, a)
     kernel.jerks(u, v, a, cA, cg, inv_m, jk)
     cA[k], cg[k] = 0.0, 0.0  # the contact opens
-    kernel._update_near(k, u, v, a, jk, law != kernel.LAW_HKK, cA, cg, law, load, inv_m)
+    events.update_near(k, u, v, a, jk, law != kernel.LAW_HKK, cA, cg, law, load, inv_m)
     a_full, j_full = np.empty(p + 1), np.empty(p + 1)
     kernel.accelerations(u, v, cA, cg, law, load, inv_m, a_full)
     np.testing.assert_allclose(a, a_full, rtol=0, atol=1e-14 * np.abs(a_full).max())

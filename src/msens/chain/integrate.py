@@ -52,10 +52,8 @@ HERTZ_TIME_CONSTANT = 2.0 * 1.25**0.4 * 0.4 * float(beta(0.4, 0.5))
 #: twice the time since the closing, should the first have been cut short). On the paper
 #: chain (LINEAR) K = 2, 3, 4 take 403, 411, 419 steps per ms at peak-force errors 4.9e-8,
 #: 4.5e-8, 4.4e-8 (waveform 1.6e-7, 2.5e-7, 2.6e-7): the steps in sqrt(t - t0) carry the
-#: closing's singularity (with regular steps K = 4 was needed: 2.9e-5 peak error at K = 0).
-#: HERTZ_KUWABARA_KONO (quintic output): K = 4, as K = 2 and 3 miss the single Hertz
-#: collision's peak force by 8e-8 at t_c/10 (test_integrate.py; 1242 against 1946 steps per
-#: ms on the paper chain at K = 10 before, at the same errors).
+#: closing's singularity. HERTZ_KUWABARA_KONO (quintic output): K = 4, as K = 2 and 3 miss
+#: the single Hertz collision's peak force by 8e-8 at t_c/10 (tests/chain/test_integrate.py).
 GRADE_LEVELS = {DampingLaw.LINEAR: 2, DampingLaw.LINEAR_LOADING: 2,
                 DampingLaw.HERTZ_KUWABARA_KONO: 4}
 #: Runs per work item of :func:`simulate_batch`'s parallel loop.
@@ -156,9 +154,9 @@ def _stable_step(chain: Chain, striker_velocity: float, f0: np.ndarray) -> float
 
 @numba.njit(cache=True)
 def _step_limit(mass, mu, stiffness, damping, f0, v, steps_per_contact_time, dashpot_time):
-    # The three limits of stable_step in one compiled pass (the numpy form took ~20 us of
-    # small-array calls on every simulate); mu = reduced masses of the contacts. inf when
-    # none applies.
+    # The three limits of stable_step in one compiled pass (numpy's small-array calls would
+    # cost more than the work on every simulate); mu = reduced masses of the contacts. inf
+    # when none applies.
     n = mass.shape[0]
     omega2 = 0.0
     t_damp = np.inf

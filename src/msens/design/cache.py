@@ -8,44 +8,22 @@ moment leaves valid entries for the designs that finished and none for the other
 
 from __future__ import annotations
 
-import dataclasses
-import enum
-import hashlib
 import json
 import os
 import tempfile
 from pathlib import Path
 from typing import Any
 
+from msens.io.hashing import content_hash
+
 #: Bumped whenever a design function changes what it computes; part of every key.
 RESULT_VERSION = "msens.design/2"
 
 
-def canonical(obj: Any) -> Any:
-    """JSON-ready, order-independent form of nested dataclasses, enums, paths and floats."""
-    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        return {"__type__": type(obj).__name__,
-                **{f.name: canonical(getattr(obj, f.name)) for f in dataclasses.fields(obj)}}
-    if isinstance(obj, enum.Enum):
-        return canonical(obj.value)
-    if isinstance(obj, Path):
-        return str(obj)
-    if isinstance(obj, dict):
-        return {str(k): canonical(v) for k, v in sorted(obj.items(), key=lambda kv: str(kv[0]))}
-    if isinstance(obj, tuple | list):
-        return [canonical(v) for v in obj]
-    if isinstance(obj, float):
-        return repr(obj)
-    if hasattr(obj, "tolist"):
-        return canonical(obj.tolist())
-    return obj
-
-
 def content_key(*parts: Any) -> str:
-    """SHA-256 (hex) of the canonical JSON of ``parts`` and :data:`RESULT_VERSION`."""
-    text = json.dumps(canonical([RESULT_VERSION, *parts]), sort_keys=True,
-                      separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()
+    """SHA-256 (hex) of the canonical JSON (:mod:`msens.io.hashing`) of ``parts`` and
+    :data:`RESULT_VERSION`."""
+    return content_hash([RESULT_VERSION, *parts])
 
 
 def atomic_write_bytes(path: Path, data: bytes) -> None:
@@ -88,4 +66,4 @@ class ResultCache:
         atomic_write_bytes(self.path(key), json.dumps(value, sort_keys=True).encode())
 
 
-__all__ = ["RESULT_VERSION", "ResultCache", "atomic_write_bytes", "canonical", "content_key"]
+__all__ = ["RESULT_VERSION", "ResultCache", "atomic_write_bytes", "content_key"]

@@ -10,53 +10,41 @@ concurrent run never leaves a half-written mesh under a valid name.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import os
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
 from msens.field.build import MeshOptions, build_mesh
 from msens.field.geometry import SensorGeometry
+from msens.io import hashing
 
 #: Version of the mesh builder's output; part of every cache key.
 BUILDER_VERSION = "sensor-mesh/3"
 
 
+def _mesh_relevant(f: dataclasses.Field, value: object) -> bool:
+    # Materials (metadata mesh=False) leave the mesh unchanged; options added later are left
+    # out at their default value, so existing meshes keep their keys.
+    return f.metadata.get("mesh", True) and not (f.metadata.get("omit_if_default")
+                                                 and value == f.default)
+
+
 def canonical(obj: object) -> object:
-    """JSON-ready form of nested frozen dataclasses (floats by repr, exact).
+    """:func:`msens.io.hashing.canonical` of what a mesh depends on.
 
     Dataclass fields with ``metadata={"mesh": False}`` (materials, such as
     :attr:`SensorGeometry.steel`) are left out: the mesh does not depend on them. Fields with
     ``metadata={"omit_if_default": True}`` are left out at their default value (options added
-    later keep the keys of existing meshes). numpy arrays become nested lists.
+    later keep the keys of existing meshes).
     """
-    if dataclasses.is_dataclass(obj):
-        return {"__type__": type(obj).__name__,
-                **{f.name: canonical(getattr(obj, f.name)) for f in dataclasses.fields(obj)
-                   if f.metadata.get("mesh", True) and not (
-                       f.metadata.get("omit_if_default") and getattr(obj, f.name) == f.default)}}
-    if isinstance(obj, np.ndarray):
-        return canonical(obj.tolist())
-    if isinstance(obj, tuple | list):
-        return [canonical(v) for v in obj]
-    if isinstance(obj, float):
-        return repr(obj)
-    if isinstance(obj, np.floating):
-        return repr(float(obj))
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
+    return hashing.canonical(obj, _mesh_relevant)
 
 
 def geometry_key(geometry: SensorGeometry, options: MeshOptions | None = None) -> str:
     """Content hash (16 hex digits) of a geometry and its mesh options."""
-    payload = {"builder": BUILDER_VERSION, "geometry": canonical(geometry),
-               "options": canonical(options or MeshOptions())}
-    text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return hashing.content_hash({"builder": BUILDER_VERSION, "geometry": canonical(geometry),
+                                 "options": canonical(options or MeshOptions())}, 16)
 
 
 def committed_mesh_dirs() -> list[Path]:

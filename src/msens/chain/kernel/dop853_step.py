@@ -5,7 +5,7 @@ Do not edit: run ``python -m msens.chain.dop853_codegen``. See :func:`rk_step`.
 
 import numpy as np
 
-from msens.chain._noalias import njit_noalias
+from msens.chain.kernel.noalias import njit_noalias
 
 FASTMATH = {"contract", "nnan", "ninf", "nsz"}
 N_STAGES = 12
@@ -151,7 +151,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
     ``mode`` selects the time variable of the step (see :mod:`msens.chain.dop853_codegen`):
     ``STEP_REGULAR``, ``STEP_SQRT_START`` (a contact closed at the step's start) or
     ``STEP_SQRT_END`` (a contact opens at its end). Padded layout of
-    :func:`msens.chain.kernel.contact_forces`: ``u``, ``v``, ``a0``, ``tu``, ``tv``, ``u1``,
+    :func:`msens.chain.kernel.forces.contact_forces`: ``u``, ``v``, ``a0``, ``tu``, ``tv``, ``u1``,
     ``v1`` have shape (p + 1,) and ``cA``, ``cg``, ``load``, ``inv_m`` shape (p,), zero past
     the n particles. ``hkk`` selects the Kuwabara-Kono force law (else the linear dashpot).
     ``kv`` (N_STAGES, p + 1) receives the stage accelerations, ``tu``/``tv`` are scratch;

@@ -3,10 +3,8 @@
 Why: numba passes every array argument as a plain pointer, so LLVM must assume that any two
 of them may overlap. Each vectorised loop that writes one array while reading others is then
 preceded by run-time overlap checks of every pair (with a scalar fallback loop). In the
-chain kernel's loops over 32 padded entries those checks cost more than the loops:
-``benchmarks/chain_profile.py`` times the DOP853 step inside the step loop at 954 ns with plain
-``njit`` (``git checkout 1a60657 -- src/msens/chain/kernel.py src/msens/chain/_dop853_step.py``)
-against 465-511 ns declared free of overlaps (with 64-byte aligned scratch arrays).
+chain kernel's loops over 32 padded entries those checks cost more than the loops (measured
+figures: docs/chain-performance.md).
 
 The declaration is LLVM's ``noalias`` on the pointer arguments (C's ``restrict``), set through
 numba's own ``flags.noalias`` (the flag its parallel backend sets for kernels it has proven
@@ -16,8 +14,7 @@ the same array, and views of one allocation may be passed as long as they do not
 They are compiled without numba's reference counting (``_nrt=False``): they may not allocate
 arrays, and the counts, which live in a header that views of one array share and so would
 be written through two "non-overlapping" pointers, are never touched inside them (numba's
-pruning of the counting is heuristic: it left increments of every argument in one of these
-kernels). A test checks both attributes on the compiled code.
+pruning of the counting is heuristic and may leave increments of arguments in place).
 """
 
 from __future__ import annotations

@@ -34,7 +34,6 @@ function with the coil's series impedance Z(ω) (:func:`msens.electronics.coil_t
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import time
@@ -52,6 +51,7 @@ from msens.field.eddy import SIGMA_1018, HarmonicOperator, dissipated_power
 from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import coil_current_density, coil_resistance
 from msens.io._files import atomic_write_bytes
+from msens.io.hashing import content_hash
 from msens.magnetics.mss import MssRecord
 from msens.magnetics.potentials import region_linkage
 from msens.magnetics.transducer import (
@@ -358,8 +358,7 @@ def dynamic_key(transducer_key: str, frequencies: Sequence[float], steel: float,
                "frequencies": [repr(float(f)) for f in frequencies], "steel": repr(float(steel)),
                "magnets": {k: repr(float(v)) for k, v in
                            sorted({**MAGNET_CONDUCTIVITY, **(magnets or {})}.items())}}
-    text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return content_hash(payload, 16)
 
 
 def _cplx(a: np.ndarray) -> dict:

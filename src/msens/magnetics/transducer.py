@@ -26,7 +26,6 @@ Sign conventions
 
 from __future__ import annotations
 
-import hashlib
 import json
 import logging
 import math
@@ -40,7 +39,6 @@ import numpy as np
 
 from msens.errors import InputError, require
 from msens.field.build import MeshOptions
-from msens.field.cache import canonical as _canonical
 from msens.field.cache import committed_mesh_dirs, default_mesh_dir, geometry_key
 from msens.field.geometry import Coil, SensorGeometry
 from msens.field.sensor_model import (
@@ -52,6 +50,8 @@ from msens.field.sensor_model import (
 )
 from msens.field.solve import FieldSolution, solve
 from msens.io._files import atomic_write_bytes
+from msens.io.hashing import canonical as _canonical
+from msens.io.hashing import content_hash
 from msens.magnetics.approach import approach_residuals, hertz_approach_rate, hertz_stiffness
 from msens.magnetics.potentials import (
     TangentOperator,
@@ -712,8 +712,7 @@ def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
                                "h": _canonical(geometry.steel.h)}
     if geometry.reversibility != 1.0:
         payload["reversibility"] = repr(float(geometry.reversibility))
-    text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return content_hash(payload, 16)
 
 
 def _to_json(report: TransducerReport) -> dict:

@@ -196,7 +196,7 @@ def test_check_waveform_and_convert(tmp_path, capsys):
 
 def test_result_files_record_the_version_and_the_study_hash(tmp_path):
     from msens import api
-    from msens.cli import version
+    from msens.version import version
 
     root = Path(__file__).resolve().parents[1]
     study = api.load(root / "studies" / "paper-mss.toml")

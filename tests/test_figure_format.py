@@ -1,5 +1,5 @@
 """``--format png|pdf|svg``: one figure format for `msens run`, `field`, `compare`, `diagnose`
-and `design`, at one resolution (:data:`msens.plots.DPI`); ``summary.json`` is unaffected."""
+and `design`, at one resolution (:data:`msens.output.DPI`); ``summary.json`` is unaffected."""
 
 from __future__ import annotations
 

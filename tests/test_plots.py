@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from msens import api, plots
-from msens.output import OutputDir
+from msens.output import DPI, OutputDir
 from msens.study import default_study_path
 
 # a file's first bytes, by format
@@ -56,7 +56,7 @@ def test_every_run_figure_writes_each_format_with_units(result, tmp_path, name):
             assert UNIT.search(label), f"{name}: axis label {label!r} has no unit"
         d = OutputDir(tmp_path)
         for fmt in plots.FORMATS:
-            path = d.savefig(name, fig, fmt=fmt, dpi=plots.DPI)
+            path = d.savefig(name, fig, fmt=fmt, dpi=DPI)
             assert path.name == name.replace(".png", f".{fmt}")
             assert path.read_bytes()[:5].startswith(MAGIC[fmt])
     finally:

@@ -15,7 +15,7 @@ import dataclasses
 from pathlib import Path
 
 from msens import results
-from msens.output import OutputDir
+from msens.output import DPI, OutputDir
 from msens.pipeline import run_study
 from msens.results import StudyResult
 from msens.study import PAPER_TABLE2, Study, builtin_study_path, default_study_path, load_study
@@ -51,8 +51,8 @@ def run(study: Study, *, scheduler: str | None = None) -> StudyResult:
 def provenance(study: Study) -> dict:
     """What made a result file: the msens version and the study's content hash (SHA-256 of
     its canonical JSON form, so the same study gives the same hash wherever its file is)."""
-    from msens.cli import version
     from msens.io.hashing import content_hash
+    from msens.version import version
 
     return {"msens_version": version(),
             "study_sha256": content_hash(dataclasses.replace(study, source=""))}
@@ -149,7 +149,7 @@ def write_outputs(result: StudyResult, out: str | Path | OutputDir, *,
     if figures:
         for name, make in _figure_makers(result).items():
             fig = make()
-            written.append(d.savefig(name, fig, fmt=fig_format, dpi=plots.DPI))
+            written.append(d.savefig(name, fig, fmt=fig_format, dpi=DPI))
             plots.close(fig)
         field_map = _field_map(result, d, fig_format)
         if field_map is not None:
@@ -235,7 +235,7 @@ def compare(study: Study, data: Path, out: Path, *,
     written = [target.write_json("compare.json", report)]
     setup = match_setup(result, waveform)
     fig = plots.overlay(setup, shot_records(setup, waveform))
-    written.append(target.savefig("overlay.png", fig, fmt=fig_format, dpi=plots.DPI))
+    written.append(target.savefig("overlay.png", fig, fmt=fig_format, dpi=DPI))
     plots.close(fig)
     return report, written
 

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from msens.errors import InputError
+from msens.version import version
 
 EXIT_INPUT = 2
 
@@ -65,17 +66,6 @@ def _restore_logging(handler: logging.Handler, level: int) -> None:
     log = logging.getLogger("msens")
     log.removeHandler(handler)
     log.setLevel(level)
-
-
-def version() -> str:
-    """The installed msens version (from the package metadata)."""
-    from importlib.metadata import PackageNotFoundError
-    from importlib.metadata import version as _version
-
-    try:
-        return _version("msens")
-    except PackageNotFoundError:  # pragma: no cover - run from a source tree
-        return "unknown"
 
 
 def _parser() -> argparse.ArgumentParser:

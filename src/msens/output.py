@@ -18,6 +18,9 @@ import numpy as np
 
 from msens.errors import InputError
 
+#: Resolution of every raster figure msens writes (PNG; also the raster parts of PDF/SVG).
+DPI = 200
+
 MANIFEST = ".msens-manifest.json"
 
 

@@ -15,8 +15,6 @@ from msens.results import SetupResult, StudyResult
 
 _US = 1e6
 
-#: Resolution of every raster figure msens writes (PNG; also the raster parts of PDF/SVG).
-DPI = 200
 #: Figure file formats the commands can write (``--format``).
 FORMATS = ("png", "pdf", "svg")
 

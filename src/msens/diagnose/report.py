@@ -107,7 +107,7 @@ def write(passes: Sequence[Diagnosis], out: str | Path | OutputDir, *,
     """Write ``diagnosis.json`` and ``diagnosis.<fig_format>`` (png, pdf or svg; atomically,
     never over a user's file); ``provenance`` (msens version, study hash) is recorded in
     the JSON."""
-    from msens.plots import DPI
+    from msens.output import DPI
 
     d = out if isinstance(out, OutputDir) else OutputDir(out)
     written = [d.write_json("diagnosis.json",

@@ -309,7 +309,7 @@ def plot_field_map(report: FieldReport, path: str | Path, fmt: str | None = None
     path : str or Path
     fmt : {"png", "pdf", "svg"}, optional
         File format (default: from ``path``'s suffix, else PNG); rasters at
-        :data:`msens.plots.DPI`.
+        :data:`msens.output.DPI`.
 
     Returns
     -------
@@ -317,7 +317,7 @@ def plot_field_map(report: FieldReport, path: str | Path, fmt: str | None = None
     """
     import matplotlib.pyplot as plt
 
-    from msens.plots import DPI
+    from msens.output import DPI
 
     path = Path(path)
     fmt = fmt or path.suffix.lstrip(".") or "png"

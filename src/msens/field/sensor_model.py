@@ -451,7 +451,7 @@ def axis_profile(sol: FieldSolution, geometry: SensorGeometry, n: int = 401
     return z, flux_density_at(sol, np.zeros_like(z), z)[:, 1]
 
 
-def run_field_model(geometry: SensorGeometry, out_dir: str | Path | None = None, *,
+def run_field_model(geometry: SensorGeometry, *,
                     options: MeshOptions | None = None, mesh_dir: str | Path | None = None,
                     inductance: bool = True) -> FieldReport:
     """Mesh (cached), solve the bias field and post-process the sensor model.
@@ -459,9 +459,6 @@ def run_field_model(geometry: SensorGeometry, out_dir: str | Path | None = None,
     Parameters
     ----------
     geometry : SensorGeometry
-    out_dir : str or Path, optional
-        When given, :func:`msens.field.report.write_field_outputs` writes field.json, field.vtu
-        and the figures there.
     options : MeshOptions, optional
     mesh_dir : str or Path, optional
         Mesh cache directory (default :func:`msens.field.cache.default_mesh_dir`).
@@ -496,9 +493,6 @@ def run_field_model(geometry: SensorGeometry, out_dir: str | Path | None = None,
         timings_s={"mesh": t1 - t0, "bias_solve": t2 - t1, "inductance": t3 - t2,
                    "post": t4 - t3},
         solution=sol)
-    if out_dir is not None:
-        from msens.field.report import write_field_outputs
-        write_field_outputs(report, out_dir)
     return report
 
 

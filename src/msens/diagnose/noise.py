@@ -36,8 +36,9 @@ MIN_PRETRIGGER = 20
 #: variance changes over the pulse, and 7 degrees of freedom per sample of an 8-shot file
 #: are too few on their own).
 SMOOTH_S = 2e-6
-#: Largest shift between two shots of a file searched, s (the trigger's jitter).
-MAX_SHOT_SHIFT_S = 20e-6
+#: Largest shift between two shots of a file searched, s (the trigger's jitter; as
+#: :data:`msens.diagnose.objective.MAX_SHIFT_S`).
+MAX_SHOT_SHIFT_S = 80e-6
 #: MAD to standard deviation of a normal distribution.
 _MAD = 1.4826
 
@@ -137,7 +138,8 @@ def _lag(ref: np.ndarray, rec: np.ndarray, limit: int) -> int:
     return int(lags[int(np.argmax(score))])
 
 
-def ensemble(waveform: Waveform, order: list[tuple[str, int]]) -> Ensemble:
+def ensemble(waveform: Waveform, order: list[tuple[str, int]],
+             shifts: np.ndarray | None = None) -> Ensemble:
     """The aligned ensemble mean of a file's shots and its per-sample variance.
 
     Parameters
@@ -146,6 +148,10 @@ def ensemble(waveform: Waveform, order: list[tuple[str, int]]) -> Ensemble:
         One or more shots (``#k`` repeats) of the same channels.
     order : list of (kind, particle)
         The channels, in the order of the setup's sensors.
+    shifts : ndarray of int, shape (shots,), optional
+        Samples by which each shot lags the first (e.g. from each shot's own fit,
+        :mod:`msens.diagnose.shots`); default: the lag of the best cross-correlation with
+        the first shot.
 
     Returns
     -------
@@ -168,10 +174,14 @@ def ensemble(waveform: Waveform, order: list[tuple[str, int]]) -> Ensemble:
         data = data - np.median(data[..., :50], axis=-1, keepdims=True)
         var_pre = None
     limit = max(1, int(MAX_SHOT_SHIFT_S / dt))
-    shifts = np.array([0] + [_lag(data[0], data[i], limit) for i in range(1, k)], dtype=int)
-    lo, hi = int(max(0, shifts.max())), int(tau.size + min(0, shifts.min()))
-    # shot i at sample j + shift_i is the first shot at sample j
-    aligned = np.stack([data[i, :, lo - s:hi - s] for i, s in enumerate(shifts)])
+    if shifts is None:
+        shifts = [0] + [_lag(data[0], data[i], limit) for i in range(1, k)]
+    shifts = np.asarray(shifts, dtype=int)
+    if shifts.shape != (k,) or np.any(np.abs(shifts) >= tau.size // 2):
+        raise ValueError(f"internal: bad shot shifts {shifts} for {k} shots")
+    # shot i at sample j + shift_i is the first shot at sample j, for j in [lo, hi)
+    lo, hi = int(max(0, -shifts.min())), int(tau.size - max(0, shifts.max()))
+    aligned = np.stack([data[i, :, lo + s:hi + s] for i, s in enumerate(shifts)])
     tau = tau[lo:hi]
     mean = aligned.mean(axis=0)
     sigma_pre = (np.sqrt(var_pre.mean(axis=0)) if var_pre is not None

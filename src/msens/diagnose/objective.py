@@ -118,9 +118,9 @@ class WaveformObjective:
     waveform : Waveform
         Measured channels; every channel must match a sensor of ``baseline.setup``.
     baseline : SetupResult
-        The baseline model, used once to find each shot's starting time offset.
-    kinds : tuple of SensorKind
-        Observation kind of each sensor (the setup's order).
+        The baseline model, used once to find the starting time offset.
+    shifts : ndarray of int, shape (shots,), optional
+        Samples by which each shot lags the first (see :func:`msens.diagnose.noise.ensemble`).
 
     Raises
     ------
@@ -128,7 +128,8 @@ class WaveformObjective:
         When no channel carries a pulse above the noise (``MIN_SNR``).
     """
 
-    def __init__(self, waveform: Waveform, baseline: SetupResult) -> None:
+    def __init__(self, waveform: Waveform, baseline: SetupResult,
+                 shifts: np.ndarray | None = None) -> None:
         setup = baseline.setup
         self.kinds = tuple(s.kind for s in setup.sensors)
         #: Whether each sensor is a physics MsS (its model record is the DAQ voltage).
@@ -138,7 +139,7 @@ class WaveformObjective:
         t_end = float(self.t[-1])
         #: The file's shots merged: ensemble mean, per-sample variance, noise estimates.
         self.ensemble: Ensemble = ensemble(
-            waveform, [(s.kind.value, s.particle) for s in setup.sensors])
+            waveform, [(s.kind.value, s.particle) for s in setup.sensors], shifts)
         ens = self.ensemble
         # the mean is on the first shot's record time
         delay0 = align_shot(baseline, waveform, _first_shot(waveform))

@@ -64,7 +64,6 @@ from msens.diagnose.effects import get as get_effect
 from msens.diagnose.fit import EffectFit, fit_effect, refit_jointly
 from msens.diagnose.noise import shot_matrix
 from msens.diagnose.objective import FeatureObjective, WaveformObjective, check_channels
-from msens.diagnose.verdict import verdict
 from msens.diagnose.predict import (
     Predictor,
     baseline_state,
@@ -73,6 +72,8 @@ from msens.diagnose.predict import (
     positions,
     setup_result,
 )
+from msens.diagnose.shots import fit_shots
+from msens.diagnose.verdict import verdict
 from msens.errors import InputError
 from msens.features import centre_distance
 from msens.io.waveform import Waveform
@@ -523,7 +524,17 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     plain = baseline_state(ctx, gc, gw)
     base = _with_added(ctx, plain, added)
     base_result = setup_result(ctx, base, predictor)
-    objective = WaveformObjective(waveform, base_result)
+    shifts, per_shot = None, None
+    if len({c.repeat for c in waveform.channels}) > 1:
+        # each shot's own speed and delay: align the shots on their impact, and average
+        # every model over the shots' spread of speeds as the data are
+        per_shot = fit_shots(waveform, base, base_result, predictor)
+        shifts = np.round((per_shot.delays[0] - per_shot.delays) / waveform.dt).astype(int)
+        plain = dataclasses.replace(plain, velocity_spread=per_shot.spread)
+        base = _with_added(ctx, plain, added)
+        _log.info("%d shots: striker speed spread %.2g %%", len(per_shot.speeds),
+                  100 * per_shot.spread)
+    objective = WaveformObjective(waveform, base_result, shifts)
     records0 = predictor.records([base])[0]
     rss0 = objective.rss(records0)
     weights = np.ones(len(rss0))  # rss is chi^2: already over the noise
@@ -558,7 +569,7 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
         refit=refit, gamma_contact=gc, gamma_wall=gw, disagreement=disagreement,
         simulations=predictor.simulations, elapsed_s=time.perf_counter() - start,
         verdict=verdict(float(rss1.sum()), n, windows, ens.dof),
-        noise=ens.to_json(names),
+        noise={**ens.to_json(names), **(per_shot.to_json() if per_shot else {})},
         before=base, after=after, overlay=_overlay(objective, records0, records1, base_result))
 
 

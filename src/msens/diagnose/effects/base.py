@@ -79,6 +79,10 @@ class ModelState:
     physics : tuple of (PhysicsMss or None)
         Per sensor, the physics MsS it is (its record is then its DAQ voltage, V); empty
         when the setup has none.
+    velocity_spread : float
+        Relative std of the striker speed over the shots of a file (the rig's shot-to-shot
+        jitter, measured per shot): the prediction is then the mean record over that spread
+        of speeds around ``velocity``, as the shots' ensemble mean is. 0: one speed.
     """
 
     chain: Chain
@@ -87,6 +91,7 @@ class ModelState:
     kinds: tuple[SensorKind, ...]
     post: tuple[RecordOp, ...] = ()
     physics: tuple[PhysicsMss | None, ...] = ()
+    velocity_spread: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -12,13 +12,13 @@ from __future__ import annotations
 import dataclasses
 
 from msens.assemble import precompression_forces
+from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 from msens.diagnose.effects.static_precompression import (
     FLOOR_N,
     FLOOR_REASON,
     PLAUSIBLE_MAX_N,
     PLAUSIBLE_REASON,
 )
-from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 from msens.sensors import SensorKind
 from msens.study import PrecompressionSpec
 

@@ -175,7 +175,7 @@ class Diagnosis:
         The baseline and the model with the named effect (== before for none).
     overlay : list of dict
         Per sensor, for the figure: ``channel``, ``t_us`` (record time), ``data``,
-        ``before``, ``after`` (V; first shot), or for features mode the feature table.
+        ``before``, ``after`` (V; the shots' mean), or for features mode the feature table.
     """
 
     mode: str

@@ -32,7 +32,10 @@ Steps (issue 7):
    penalty already subtracted), its parameters lie inside their physical ranges (a fit
    outside is reported as implausible) and its change from the baseline reaches the
    effect's practical-significance floor (:class:`~msens.diagnose.effects.base.Parameter`).
-   Otherwise the next candidate is considered, and ``"none"`` if none qualifies.
+   Otherwise the next candidate is considered, and ``"none"`` if none qualifies. A candidate
+   must also beat by the threshold every plausible change below its floor: when a negligible
+   change (say a striker 0.5 % faster) fits better than a significant one, nothing practical
+   is missing.
 7. *Verdict.* Whether the final model explains the data: its residual against the noise, for
    the record and for each window, by an F test (:mod:`msens.diagnose.verdict`);
    ``explained`` false says that the named effect (or the baseline) still misses, and where.
@@ -239,9 +242,11 @@ class Diagnosis:
                                  "of the shots' mean, gain, offset and time offset profiled "
                                  "out; features: over the published std)",
             "score_definition": "BIC(baseline) - BIC(effect) = chi2_0 - chi2 - k ln N",
-            "naming_rule": "the best-scoring candidate with score > threshold whose "
-                           "parameters are inside their physical ranges and whose change "
-                           "reaches the effect's practical-significance floor",
+            "naming_rule": "the best-scoring candidate whose parameters are inside their "
+                           "physical ranges, whose change reaches the effect's "
+                           "practical-significance floor, and whose score exceeds the "
+                           "threshold and the best plausible below-floor candidate's score "
+                           "by the threshold",
             "n_observations": self.n_obs,
             "sigma": list(self.sigma),
             "baseline": {"gamma_contact": self.gamma_contact,
@@ -377,9 +382,13 @@ def _score(fits: list[EffectFit], rss0: np.ndarray, n_obs: np.ndarray, ctx: Cont
 
 def _decide(cands: list[Candidate], fits: list[EffectFit], threshold: float
             ) -> tuple[Candidate | None, EffectFit | None]:
-    """The best-scoring candidate above the threshold that is plausible and significant."""
+    """The best-scoring candidate that is plausible and significant and whose score beats
+    by ``threshold`` both the baseline and every plausible change below its floor (when a
+    negligible change explains the data better, nothing practical is missing)."""
+    negligible = max((c.score for c in cands if c.plausible and not c.significant),
+                     default=0.0)
     for c in cands:
-        if c.score > threshold and c.plausible and c.significant:
+        if c.plausible and c.significant and c.score - max(negligible, 0.0) > threshold:
             return c, next(f for f in fits if f.effect == c.effect)
     return None, None
 

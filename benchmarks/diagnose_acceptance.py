@@ -17,7 +17,8 @@ jitter) besides their own trigger, offset and noise.
   baseline misfit when alone) named first, the other second.
 
 Run: ``python benchmarks/diagnose_acceptance.py [--quick] [--only KIND,...]`` (KIND: effect,
-null, outside, two, physics). Progress goes to stderr, one line per case.
+null, outside, two, physics; ``--only physics`` runs the physics-MsS effect and null cases
+alone, e.g. in a second process). Progress goes to stderr, one line per case.
 """
 
 from __future__ import annotations
@@ -125,9 +126,11 @@ def _shots_of(i: int) -> tuple[int, float]:
     return ((1, 0.0), (1, 0.0), (4, 0.005), (8, 0.01))[i % 4]
 
 
-def effect_cases(bench: Bench, quick: bool, physics: bool) -> list[dict]:
+def effect_cases(bench: Bench, quick: bool, physics: bool, chain: bool) -> list[dict]:
     plan = [("bead", e, i) for e in BEAD for i in range(1 if quick else 4)]
     plan += [("mss", e, k) for k, e in enumerate(MSS4)]
+    if not chain:
+        plan = []
     if physics:
         plan += [("physics", e, i) for e in PHYSICS for i in range(1 if quick else 2)]
     cases = []
@@ -149,12 +152,14 @@ def effect_cases(bench: Bench, quick: bool, physics: bool) -> list[dict]:
     return cases
 
 
-def null_cases(bench: Bench, quick: bool, physics: bool) -> list[dict]:
+def null_cases(bench: Bench, quick: bool, physics: bool, chain: bool) -> list[dict]:
     plan = [("bead", 1, 0.0), ("bead", 1, 0.0), ("bead", 1, 0.0), ("bead", 4, 0.005),
             ("bead", 8, 0.01), ("bead", 8, 0.01), ("mss", 1, 0.0), ("mss", 8, 0.01),
             ("bead", 8, 0.02), ("mss", 4, 0.01)]
     if quick:
         plan = [("bead", 1, 0.0), ("bead", 8, 0.01)]
+    if not chain:
+        plan = []
     if physics:
         plan += [("physics", 1, 0.0), ("physics", 4, 0.01)][:1 if quick else 2]
     cases = []
@@ -228,12 +233,13 @@ def two_cases(bench: Bench, quick: bool) -> list[dict]:
 def main(quick: bool = False, only: set[str] | None = None) -> dict:
     only = only or {"effect", "null", "outside", "two", "physics"}
     physics = "physics" in only
+    chain = bool(only & {"effect", "null", "outside", "two"})  # bead and four-contact data
     bench = Bench(physics)
     cases = []
-    if "effect" in only:
-        cases += effect_cases(bench, quick, physics)
-    if "null" in only:
-        cases += null_cases(bench, quick, physics)
+    if "effect" in only or not chain:
+        cases += effect_cases(bench, quick, physics, chain)
+    if "null" in only or not chain:
+        cases += null_cases(bench, quick, physics, chain)
     if "outside" in only:
         cases += outside_cases(bench, quick)
     if "two" in only:

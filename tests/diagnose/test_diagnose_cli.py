@@ -40,7 +40,7 @@ def data(tmp_path_factory):
     write_waveform(two, d / "lacking.csv")
     # two shots, the second shorter (its cells empty at the end)
     text = (d / "shot.csv").read_text().splitlines()
-    head = [i for i, line in enumerate(text) if line.startswith("time_s")][0]
+    head = next(i for i, line in enumerate(text) if line.startswith("time_s"))
     rows = [text[head] + ",bead@13#2,bead@18#2"]
     for k, line in enumerate(text[head + 1:]):
         cells = line.split(",")

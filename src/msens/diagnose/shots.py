@@ -25,6 +25,9 @@ from msens.diagnose.predict import Predictor
 from msens.io.waveform import Waveform
 from msens.pipeline import SetupResult
 
+#: Exponent of the solitary wave's speed in the striker speed (V_s ~ F_m^(1/6) ~ v^(1/5),
+#: design.md §5): a relative speed spread s moves arrivals at time t by ~ t s / 5.
+SPEED_EXPONENT = 0.2
 #: Relative half-widths and points of the coarse and fine speed grids.
 COARSE = (0.4, 9)
 FINE = (0.03, 13)
@@ -43,7 +46,8 @@ class ShotFits:
     delays : ndarray, shape (shots,)
         Impact-to-trigger delay of each shot at that speed, s.
     spread : float
-        Relative std (ddof 1) of the speeds.
+        Relative std (ddof 1) of the speeds; 0 when it moves no arrival within the record
+        by half a sample.
     """
 
     repeats: tuple[int, ...]
@@ -111,4 +115,9 @@ def fit_shots(waveform: Waveform, base: ModelState, result: SetupResult,
     delays = np.array([o.align(o.shots[0], o.signals(r)).delay
                        for o, r in zip(objs, recs, strict=True)])
     spread = float(np.std(speeds, ddof=1) / np.mean(speeds))
+    # a spread that moves no arrival within the record by half a sample is no spread (the
+    # average over it would triple the model runs for nothing)
+    t_end, dt = float(predictor.t[-1]), float(predictor.t[1] - predictor.t[0])
+    if SPEED_EXPONENT * spread * t_end < 0.5 * dt:
+        spread = 0.0
     return ShotFits(repeats=repeats, speeds=speeds, delays=delays, spread=spread)

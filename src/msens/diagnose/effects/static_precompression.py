@@ -10,7 +10,10 @@ Baseline: no added compression (force 0). The compressed run is faster and stiff
 arrives early below it and its shape changes where a sensor sits inside it.
 
 The MsS form (the same force on the four contacts around every MsS coil at once) is
-:mod:`msens.diagnose.effects.magnetic_precompression`, which applies these same forces.
+:mod:`msens.diagnose.effects.magnetic_precompression`, which applies these same forces. On
+physics MsS data the magnets' pull comes from the field model (``magnet_remanence``), and this
+effect is not searched there: its ~1000 trial states would each need the MsS read-out (minutes
+per diagnosis).
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import dataclasses
 
 from msens.assemble import precompression_forces
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
-from msens.study import PrecompressionSpec
+from msens.study import MssModel, PrecompressionSpec
 
 NAME = "static_precompression"
 FIRST, COUNT, FORCE = "first_contact", "contact_count", "precompression_force_n"
@@ -53,6 +56,10 @@ def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:
                       reason=PLAUSIBLE_REASON, floor=FLOOR_N, floor_reason=FLOOR_REASON))
 
 
+def _applies(ctx: Context) -> bool:
+    return not any(s.model is MssModel.PHYSICS for s in ctx.setup.sensors)
+
+
 def _baseline(ctx: Context, state: ModelState) -> dict[str, float | None]:
     return {FIRST: None, COUNT: None, FORCE: 0.0}
 
@@ -69,4 +76,4 @@ def _apply(ctx: Context, state: ModelState, params) -> ModelState:
 
 EFFECT = Effect(name=NAME, description="static compression of a run of contacts "
                 "(first contact, count, N)", space=_space, baseline=_baseline, apply=_apply,
-                grid_points=6)
+                applies=_applies, grid_points=6)

@@ -18,7 +18,8 @@ jitter) besides their own trigger, offset and noise.
 
 Run: ``python benchmarks/diagnose_acceptance.py [--quick] [--only KIND,...]`` (KIND: effect,
 null, outside, two, physics; ``--only physics`` runs the physics-MsS effect and null cases
-alone, e.g. in a second process). Progress goes to stderr, one line per case.
+alone, e.g. in a second process; ``--cases A:B`` a slice of the effect cases). Progress goes to
+stderr, one line per case.
 """
 
 from __future__ import annotations
@@ -126,7 +127,8 @@ def _shots_of(i: int) -> tuple[int, float]:
     return ((1, 0.0), (1, 0.0), (4, 0.005), (8, 0.01))[i % 4]
 
 
-def effect_cases(bench: Bench, quick: bool, physics: bool, chain: bool) -> list[dict]:
+def effect_cases(bench: Bench, quick: bool, physics: bool, chain: bool,
+                 part: slice = slice(None)) -> list[dict]:
     plan = [("bead", e, i) for e in BEAD for i in range(1 if quick else 4)]
     plan += [("mss", e, k) for k, e in enumerate(MSS4)]
     if not chain:
@@ -134,7 +136,7 @@ def effect_cases(bench: Bench, quick: bool, physics: bool, chain: bool) -> list[
     if physics:
         plan += [("physics", e, i) for e in PHYSICS for i in range(1 if quick else 2)]
     cases = []
-    for n, (kind, effect, i) in enumerate(plan):
+    for n, (kind, effect, i) in list(enumerate(plan))[part]:
         seed = 1000 + 17 * n
         shots, jitter = _shots_of(i) if kind != "physics" else ((1, 0.0), (4, 0.005))[i % 2]
         wf, truth = bench.data(kind, seed, shots, jitter, draw=(effect,))
@@ -230,14 +232,15 @@ def two_cases(bench: Bench, quick: bool) -> list[dict]:
     return cases
 
 
-def main(quick: bool = False, only: set[str] | None = None) -> dict:
+def main(quick: bool = False, only: set[str] | None = None,
+         part: slice = slice(None)) -> dict:
     only = only or {"effect", "null", "outside", "two", "physics"}
     physics = "physics" in only
     chain = bool(only & {"effect", "null", "outside", "two"})  # bead and four-contact data
     bench = Bench(physics)
     cases = []
     if "effect" in only or not chain:
-        cases += effect_cases(bench, quick, physics, chain)
+        cases += effect_cases(bench, quick, physics, chain, part)
     if "null" in only or not chain:
         cases += null_cases(bench, quick, physics, chain)
     if "outside" in only:
@@ -269,4 +272,8 @@ if __name__ == "__main__":
     only = None
     if "--only" in args:
         only = set(args[args.index("--only") + 1].split(","))
-    print(json.dumps(main("--quick" in args, only), indent=1, default=float))
+    part = slice(None)
+    if "--cases" in args:  # a slice A:B of the effect cases, to share them among processes
+        a, b = args[args.index("--cases") + 1].split(":")
+        part = slice(int(a) if a else None, int(b) if b else None)
+    print(json.dumps(main("--quick" in args, only, part), indent=1, default=float))

@@ -61,8 +61,6 @@ def main() -> dict:
         if d.effect == "none":
             break
         added.append((d.effect, d.parameters))
-        if d.explained:
-            break
     predictor = Predictor(output_times(study))
     rows, skipped = [], []
     for setup in study.setups:

@@ -594,7 +594,7 @@ def _overlay(objective: WaveformObjective, records0: np.ndarray, records1: np.nd
 def diagnose_passes(waveform: Waveform, study: Study, *, passes: int = 2,
                     fit: DissipationFit | None = None, **kw) -> list[Diagnosis]:
     """Repeated diagnosis: each pass adds the previous winner to the baseline; stops at
-    ``"none"``, when the data are explained, or after ``passes`` passes."""
+    ``"none"`` or after ``passes`` passes."""
     if fit is None and study.dissipation_fit is not None:
         fit = calibrate_dissipation(study, output_times(study))
     out: list[Diagnosis] = []
@@ -602,7 +602,9 @@ def diagnose_passes(waveform: Waveform, study: Study, *, passes: int = 2,
     for _ in range(passes):
         d = diagnose(waveform, study, fit=fit, added=tuple(added), **kw)
         out.append(d)
-        if d.effect == "none" or d.explained:
+        # "explained" is a consistency test, weaker than the evidence a second effect can
+        # still have: the passes go on until nothing is named
+        if d.effect == "none":
             break
         added = list(d.refit) if d.refit else [*added, (d.effect, d.parameters)]
     return out

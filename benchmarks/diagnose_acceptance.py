@@ -220,14 +220,19 @@ def two_cases(bench: Bench, quick: bool) -> list[dict]:
         wf, truth = bench.data("bead", seed, 1, 0.0, effects=pair)
         ds, secs = bench.diagnose("bead", wf, passes=3)
         named = [d.effect for d in ds]
-        final = dict(ds[-1].refit) if ds[-1].refit else {}
+        last = [d for d in ds if d.effect != "none"]
+        final = dict(last[-1].refit) if last and last[-1].refit else \
+            ({last[-1].effect: last[-1].parameters} if last else {})
         params_ok = all(e in final and recovered(final[e], pair[e],
                                                  integer_names(e, ctx, base))
                         for e in pair)
         cases.append({"kind": "two", "truth": truth, "strength": strength,
                       "named": named, "right": named[:2] == order,
                       "parameters_within_10pct": params_ok, "final": final,
-                      "explained": [d.explained for d in ds], "seconds": secs})
+                      "explained": [d.explained for d in ds],
+                      "passes": [{"effect": d.effect, "parameters": d.parameters,
+                                  "misfit_after": d.misfit_after} for d in ds],
+                      "seconds": secs})
         _log(cases[-1])
     return cases
 

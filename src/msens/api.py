@@ -385,9 +385,15 @@ def format_diagnosis(report: dict) -> str:
              f"{'effect':<24} {'score (dBIC)':>13} {'misfit':>10}  parameters"]
     for c in report["candidates"]:
         pars = ", ".join(f"{k}={v:.4g}" for k, v in c["parameters"].items())
-        lines.append(f"{c['effect']:<24} {c['score']:>13.1f} {c['misfit']:>10.4g}  {pars}")
+        flag = ("" if c.get("plausible", True) else "  [implausible]") + \
+            ("" if c.get("significant", True) else "  [below floor]")
+        lines.append(f"{c['effect']:<24} {c['score']:>13.1f} {c['misfit']:>10.4g}  {pars}"
+                     + flag)
     for i, p in enumerate(report["passes"], 1):
         pars = ", ".join(f"{k}={v:.4g}" for k, v in p["parameters"].items())
         lines.append(f"pass {i}: {p['effect']}" + (f" ({pars})" if pars else "")
-                     + f"; misfit {p['misfit_before']:.4g} -> {p['misfit_after']:.4g}")
+                     + f"; misfit {p['misfit_before']:.4g} -> {p['misfit_after']:.4g}; "
+                     + ("explained" if p.get("explained") else "NOT explained"))
+    if "summary" in report["passes"][-1]:
+        lines.append(f"verdict: {report['passes'][-1]['summary']}")
     return "\n".join(lines)

@@ -34,6 +34,18 @@ def data(tmp_path_factory):
     dead = np.array(wf.data)
     dead[:, :] = np.random.default_rng(1).normal(0.0, 1e-4, dead.shape)
     write_waveform(Waveform(time=wf.time, data=dead, channels=wf.channels), d / "dead.csv")
+    # two shots, the second without its bead@18 channel
+    two = Waveform(time=wf.time, data=np.column_stack([wf.data, wf.data[:, 0]]),
+                   channels=(*wf.channels, type(wf.channels[0])("bead", 13, 2)))
+    write_waveform(two, d / "lacking.csv")
+    # two shots, the second shorter (its cells empty at the end)
+    text = (d / "shot.csv").read_text().splitlines()
+    head = next(i for i, line in enumerate(text) if line.startswith("time_s"))
+    rows = [text[head] + ",bead@13#2,bead@18#2"]
+    for k, line in enumerate(text[head + 1:]):
+        cells = line.split(",")
+        rows.append(line + ("," + ",".join(cells[1:]) if k < 5000 else ",,"))
+    (d / "ragged.csv").write_text("\n".join(text[:head] + rows) + "\n")
     return d
 
 
@@ -45,6 +57,7 @@ def test_diagnose_names_the_soft_wall(data, tmp_path, capsys):
     assert report["parameters"]["wall_youngs_modulus_pa"] == pytest.approx(70e9, rel=0.15)
     assert report["misfit_after"] < report["misfit_before"]
     assert report["candidates"][0]["effect"] == "wall_stiffness"
+    assert report["explained"] is True
     assert (out / "diagnosis.png").exists()
     assert "wall_stiffness" in capsys.readouterr().out
 
@@ -65,6 +78,8 @@ def test_feature_only_mode_on_table2(tmp_path):
     ["diagnose"],  # neither
     ["diagnose", "--reference", "nosuch"],
     ["diagnose", "{data}/missing.csv"],
+    ["diagnose", "{data}/lacking.csv"],  # a channel missing in one shot
+    ["diagnose", "{data}/ragged.csv"],  # shots of different lengths
 ])
 def test_bad_input_exits_2(data, tmp_path, args, capsys):
     text = builtin_study_path(PAPER_TABLE2).read_text()
@@ -73,4 +88,9 @@ def test_bad_input_exits_2(data, tmp_path, args, capsys):
     (data / "rods.toml").write_text(parts[0] + "[[setup]]" + parts[2])
     argv = [a.format(data=data) for a in args] + ["--out", str(tmp_path / "o")]
     assert main(argv) == 2
-    assert "msens: error:" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "msens: error:" in err and "Traceback" not in err
+    if "lacking" in args[-1]:
+        assert "shot #2 has no channel bead@18" in err
+    if "ragged" in args[-1]:
+        assert "bead@13#2" in err

@@ -43,13 +43,20 @@ def test_registry_holds_the_fixed_names_in_order():
 @pytest.mark.parametrize("name", NAMES)
 def test_every_effect_has_bounded_si_parameters_and_a_baseline(study, mss_study, name):
     ctx, base = (_base(mss_study, mss_study.setups[0].name) if name in PHYSICS_EFFECTS
-                 else _base(study, "mss"))
+                 else _base(study, "bead" if name == "sensor_mass" else "mss"))
     effect = get(name)
     assert effect.applies(ctx)
     space = effect.space(ctx, base)
     assert space and all(p.lower < p.upper for p in space)
     baseline = effect.baseline(ctx, base)
     assert set(baseline) == {p.name for p in space}
+    # every parameter states its physical range and why; the search reaches it or beyond
+    for p in space:
+        lo, hi = p.physical
+        assert p.reason and lo <= hi and p.floor >= 0.0
+        assert p.floor == 0.0 or p.floor_reason
+        if baseline[p.name] is not None:
+            assert p.is_plausible(baseline[p.name]), p.name  # the study itself is physical
     # applying any in-bounds value gives a new, valid state (chains validate themselves)
     # a point off the middle (a symmetric range has its baseline there)
     mid = {p.name: p.lower ** 0.7 * p.upper ** 0.3 if p.log else p.lower + 0.3 * (p.upper -

@@ -51,20 +51,23 @@ def test_objective_recovers_delay_gain_and_noise(bench):
     result = setup_result(ctx, base, predictor)
     obj = WaveformObjective(wf, result)
     records = predictor.records([base])[0]
-    aligned = obj.aligned(records)
-    for k, (a, _, _) in enumerate(aligned):
-        # within 0.2 samples (1 % noise; the synthetic record is itself interpolated)
-        assert a.delay == pytest.approx(float(wf.metadata[f"truth_delay_s_{k + 1}"]), abs=2e-8)
-        for j, s in enumerate(ctx.setup.sensors):
-            # gain from N to V: the truth gain of the synthetic channel, within noise
-            truth = float(wf.metadata[f"truth_gain_bead_{s.particle}"])
-            assert a.gains[j] == pytest.approx(truth, rel=2e-3)
-    # at the true model the residual is the noise: chi^2 per sample ~ 1 (+- ~4 sigma of the
-    # pre-trigger std estimate from 200 samples)
-    chi = float((obj.rss(records) / obj.sigma**2).sum() / obj.n_obs.sum())
-    assert chi == pytest.approx(1.0, abs=0.2)
+    ((a, _, _),) = obj.aligned(records)  # the two shots merged into their mean
+    # the mean is on the first shot's time: its delay within 0.6 samples (the second shot
+    # is aligned to whole samples, which keeps the noise white, so the mean sits up to half
+    # a sample between the two; 1 % noise)
+    assert a.delay == pytest.approx(float(wf.metadata["truth_delay_s_1"]), abs=6e-8)
+    for j, s in enumerate(ctx.setup.sensors):
+        # gain from N to V: the truth gain of the synthetic channel, within noise
+        truth = float(wf.metadata[f"truth_gain_bead_{s.particle}"])
+        assert a.gains[j] == pytest.approx(truth, rel=2e-3)
+    # at the true model the residual is the noise: chi^2 per sample ~ 1 (the noise of the
+    # mean, from the shots' scatter and never below the pre-trigger noise, is a little
+    # overestimated: ~0.9)
+    chi = float(obj.rss(records).sum() / obj.n_obs.sum())
+    assert chi == pytest.approx(0.95, abs=0.15)
     peak = np.max(np.abs(wf.data), axis=0)
-    np.testing.assert_allclose(obj.sigma, 0.01 * peak[:2], rtol=0.25)
+    np.testing.assert_allclose(obj.ensemble.sigma_pretrigger, 0.01 * peak[:2], rtol=0.25)
+    assert obj.ensemble.shots == 2
 
 
 @pytest.mark.parametrize(("effect", "params"), [
@@ -92,11 +95,16 @@ def test_null_data_names_none_and_reports_where(bench, tmp_path):
     assert all(c.score <= THRESHOLD for c in d.candidates)
     assert {c.effect for c in d.candidates} == {
         "wall_dissipation", "wall_stiffness", "striker_velocity", "contact_damping_law",
-        "daq_lowpass", "sensor_position"}  # no magnet on a bead setup
+        "daq_lowpass", "sensor_position", "static_precompression",
+        "sensor_mass"}  # no magnet on a bead setup
+    assert d.explained  # the baseline is the truth: its residual is the noise
     written = write([d], tmp_path)
     report = json.loads(written[0].read_text())
-    for key in ("effect", "parameters", "misfit_before", "misfit_after", "candidates"):
+    for key in ("effect", "parameters", "misfit_before", "misfit_after", "candidates",
+                "explained", "verdict", "noise"):
         assert key in report
+    assert report["explained"] is True and "unexplained_where" not in report["verdict"]
+    assert report["noise"]["source"].startswith("pre-trigger")
     assert set(report["candidates"][0]) >= {"effect", "misfit", "score", "parameters"}
     assert written[1].stat().st_size > 10_000  # the figure
     windows = report["disagreement"]["windows"]
@@ -144,14 +152,14 @@ def test_channel_without_a_pulse_is_an_input_error(bench):
 
 
 def test_feature_mode_on_reference_rows_that_the_model_matches(bench):
-    """Reference rows equal to a model with a faster striker: the feature mode names
-    striker_velocity and finds the speed (TOF ~ v^(-1/5))."""
+    """Reference rows equal to a model with a slower striker (friction in its guide): the
+    feature mode names striker_velocity and finds the speed (TOF ~ v^(-1/5))."""
     study, ctx, base, predictor = bench
     from msens.diagnose.effects import get
     from msens.diagnose.predict import model_features_of
     from msens.study import ReferenceRow
 
-    fast = get("striker_velocity").apply(ctx, base, {"striker_velocity_m_per_s": 0.45})
+    fast = get("striker_velocity").apply(ctx, base, {"striker_velocity_m_per_s": 0.32})
     f = model_features_of(predictor.records([fast])[0], predictor.t)
     rows = tuple(ReferenceRow(setup="bead", position=pos, tof_us=float(f.tof[j]) * 1e6,
                               tof_std_us=1.0, ar=float(f.ar[j]), ar_std=0.01)
@@ -159,5 +167,6 @@ def test_feature_mode_on_reference_rows_that_the_model_matches(bench):
     d = diagnose_reference(dataclasses.replace(study, reference=rows), "bead",
                            fit=fixed_fit(), effects=["striker_velocity", "wall_dissipation"])
     assert d.effect == "striker_velocity"
-    assert d.parameters["striker_velocity_m_per_s"] == pytest.approx(0.45, rel=0.01)
+    assert d.parameters["striker_velocity_m_per_s"] == pytest.approx(0.32, rel=0.01)
     assert d.misfit_after < 1e-2 < d.misfit_before
+    assert d.explained

@@ -5,7 +5,8 @@ The criterion minimised is the weighted residual sum over sensors, sum_c RSS_c /
 ``effect.grid_points`` per parameter (log-spaced for scale parameters) run as one batch, then
 a bounded Brent search (one parameter) or Nelder–Mead (several) between the grid neighbours
 of the best point. Integer parameters: every combination (one batch; states that need no new
-simulation share one).
+simulation share one); continuous parameters beside them are refined at the best
+combination.
 """
 
 from __future__ import annotations
@@ -110,25 +111,34 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
     best = np.array(points[int(np.argmin(crit))], dtype=float)
 
     continuous = [i for i, p in enumerate(space) if not p.integer]
-    if continuous and len(continuous) == len(space):
+    if continuous:
+        # refine the continuous parameters between their grid neighbours, the integer ones
+        # held at their best grid value
         lo, hi = [], []
-        for i, g in enumerate(grids):
+        for i in continuous:
+            g = grids[i]
             k = int(np.argmin(np.abs(g - best[i])))
             lo.append(g[max(k - 1, 0)])
             hi.append(g[min(k + 1, g.size - 1)])
 
-        def f(x) -> float:
-            return float(weights @ evaluate([np.atleast_1d(x)])[0])
+        def full(xc) -> np.ndarray:
+            x = best.copy()
+            x[continuous] = xc
+            return x
 
-        if len(space) == 1:
+        def f(xc) -> float:
+            return float(weights @ evaluate([full(np.atleast_1d(xc))])[0])
+
+        if len(continuous) == 1:
             opt = minimize_scalar(lambda x: f([x]), bounds=(lo[0], hi[0]), method="bounded",
                                   options={"xatol": XATOL})
-            x_opt = np.array([opt.x])
+            x_opt = full(np.array([opt.x]))
         else:
-            opt = minimize(f, best, method="Nelder-Mead", bounds=list(zip(lo, hi, strict=True)),
+            opt = minimize(f, best[continuous], method="Nelder-Mead",
+                           bounds=list(zip(lo, hi, strict=True)),
                            options={"xatol": XATOL, "fatol": 1e-6, "maxfev": 60})
-            x_opt = np.asarray(opt.x)
-        if f(x_opt) < f(best):
+            x_opt = full(np.asarray(opt.x))
+        if f(x_opt[continuous]) < f(best[continuous]):
             best = x_opt
     params = params_of(best)
     return EffectFit(effect=effect.name, parameters=params,

@@ -10,8 +10,8 @@ Plausible ranges (paper setup: 0.376 m/s striker, steel wall, gamma_c ~ 2.2 kg/s
 
 - ``wall_dissipation``: gamma_w uniform in [1, 8] kg/s;
 - ``wall_stiffness``: E_w log-uniform in [20, 120] GPa (polymer composites to brass);
-- ``striker_velocity``: nominal x (1 +- u), u uniform in [0.1, 0.3] (drop height off by
-  20-70 %);
+- ``striker_velocity``: nominal x (1 - u), u uniform in [0.1, 0.3] (friction in the guide;
+  a faster striker than free fall is not physical);
 - ``magnetic_precompression``: uniform in [0.5, 3] N (paper's estimate 1.8 N);
 - ``contact_damping_law``: gamma_HKK log-uniform in [1000, 4000] kg/(s m^0.5) (the linear
   gamma_c ~ 2.2 kg/s at a ~1.2 um approach);
@@ -19,23 +19,34 @@ Plausible ranges (paper setup: 0.376 m/s striker, steel wall, gamma_c ~ 2.2 kg/s
 - ``sensor_position``: one sensor (random) displaced by 1 or 2 particles (random sign);
 - ``magnet_remanence``: nominal x (1 +- u), u uniform in [0.1, 0.4] (another grade or batch);
 - ``coil_position``: one physics MsS coil (random) off by 0.5-2 mm (random sign);
-- ``cable_capacitance``: log-uniform in [0.3, 3] nF (3-30 m of RG-58).
+- ``cable_capacitance``: log-uniform in [0.3, 3] nF (3-30 m of RG-58);
+- ``static_precompression``: a run of 2-5 contacts starting anywhere from c_3 to c_24,
+  force uniform in [0.5, 3] N;
+- ``sensor_mass``: the bead mass x uniform in [1.15, 1.8].
+
+:func:`hidden_shots` makes a multi-shot file whose shots differ in striker speed (the
+rig's shot-to-shot jitter) besides noise and trigger; :func:`outside_case` makes data with an
+effect that the library does not hold (:data:`OUTSIDE`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
+from scipy.integrate import solve_ivp
 
+from msens.chain.contact import hertz_sphere_flat, hertz_sphere_sphere
+from msens.chain.integrate import ChainResult, _initial_state, _numpy_forces
 from msens.diagnose.effects import Context, ModelState, get
 from msens.diagnose.effects.coil_position import names as coil_names
 from msens.diagnose.effects.sensor_position import names as position_names
 from msens.diagnose.predict import Predictor, setup_result
-from msens.io.waveform import Waveform
+from msens.io.waveform import Channel, Waveform
 from msens.study import Study
-from msens.synth import RigEffects, synthesize
+from msens.synth import RigEffects, synthesize, truth_gain_key
 
 
 def _log_uniform(rng: np.random.Generator, lo: float, hi: float) -> float:
@@ -49,9 +60,8 @@ def draw(effect: str, ctx: Context, base: ModelState, rng: np.random.Generator) 
     if effect == "wall_stiffness":
         return {"wall_youngs_modulus_pa": _log_uniform(rng, 20e9, 120e9)}
     if effect == "striker_velocity":
-        sign = rng.choice([-1.0, 1.0])
         return {"striker_velocity_m_per_s":
-                float(base.velocity * (1.0 + sign * rng.uniform(0.1, 0.3)))}
+                float(base.velocity * (1.0 - rng.uniform(0.1, 0.3)))}
     if effect == "magnetic_precompression":
         return {"precompression_force_n": float(rng.uniform(0.5, 3.0))}
     if effect == "contact_damping_law":
@@ -68,6 +78,11 @@ def draw(effect: str, ctx: Context, base: ModelState, rng: np.random.Generator) 
         return params
     if effect == "cable_capacitance":
         return {"cable_capacitance_f": _log_uniform(rng, 0.3e-9, 3e-9)}
+    if effect == "static_precompression":
+        return {"first_contact": int(rng.integers(3, 25)), "contact_count": int(rng.integers(2, 6)),
+                "precompression_force_n": float(rng.uniform(0.5, 3.0))}
+    if effect == "sensor_mass":
+        return {"sensor_mass_kg": float(ctx.study.chain.bead_mass_kg * rng.uniform(1.15, 1.8))}
     if effect == "sensor_position":
         params = dict(zip(position_names(ctx), (int(p) for p in base.particles), strict=True))
         space = {p.name: p for p in get(effect).space(ctx, base)}
@@ -134,3 +149,178 @@ def without_precompression(study: Study) -> Study:
     ``magnetic_precompression``)."""
     setups = tuple(dataclasses.replace(s, precompression=()) for s in study.setups)
     return dataclasses.replace(study, setups=setups)
+
+
+# ------------------------------------------------------------------ shot ensembles
+
+def hidden_shots(ctx: Context, base: ModelState, predictor: Predictor,
+                 effects: Mapping[str, Mapping[str, float]] | None = None, *, seed: int = 0,
+                 shots: int = 8, velocity_jitter: float = 0.01, noise: float = 0.01,
+                 draw_effects: tuple[str, ...] = (),
+                 state_of=None) -> tuple[Waveform, dict[str, dict]]:
+    """A multi-shot file whose shots differ as a rig's do: each shot its own striker speed
+    (nominal x (1 + e), e normal with std ``velocity_jitter``), trigger delay, offset and
+    noise; one gain per channel for all shots (the same sensor and amplifier).
+
+    Parameters
+    ----------
+    ctx, base, predictor, effects, seed, draw_effects
+        As in :func:`hidden_case`.
+    shots : int
+    velocity_jitter : float
+        Relative std of the striker speed between shots.
+    noise : float
+        White noise std as a fraction of each channel's peak.
+    state_of : callable (ModelState) -> (ModelState, Predictor), optional
+        A change outside the library applied last (:func:`outside_case`).
+
+    Returns
+    -------
+    waveform : Waveform
+        Channels ``<kind>@<particle>#k``, k = 1..shots, on a common time axis.
+    truth : dict
+        Effect name -> parameters; ``"velocities"`` -> the shots' striker speeds.
+    """
+    rng = np.random.default_rng(seed)
+    truth = {k: dict(v) for k, v in (effects or {}).items()}
+    for name in draw_effects:
+        truth[name] = draw(name, ctx, base, rng)
+    state = base
+    for name, params in truth.items():
+        state = get(name).apply(ctx, state, params)
+    sim = predictor
+    if state_of is not None:
+        state, sim = state_of(state)
+    speeds = state.velocity * (1.0 + velocity_jitter * rng.standard_normal(shots))
+    waves = []
+    for k in range(shots):
+        shot = dataclasses.replace(state, velocity=float(speeds[k]))
+        waves.append(synthesize(setup_result(ctx, shot, sim),
+                                RigEffects(seed=seed * 1000 + k, noise=noise)))
+    # one gain per channel: every shot rescaled to the first shot's gains
+    n = min(w.time.size for w in waves)
+    first = waves[0]
+    columns, channels = [], []
+    for k, w in enumerate(waves):
+        for j, ch in enumerate(w.channels):
+            key = truth_gain_key(ch.kind, ch.particle)
+            scale = float(first.metadata[key]) / float(w.metadata[key])
+            columns.append(w.data[:n, j] * scale)
+            channels.append(Channel(ch.kind, ch.particle, k + 1))
+    truth["velocities"] = {f"shot_{k + 1}": float(v) for k, v in enumerate(speeds)}
+    meta = {"units": "V", "synthetic": "true", "shots": str(shots)}
+    return Waveform(time=first.time[:n], data=np.column_stack(columns),
+                    channels=tuple(channels), metadata=meta), truth
+
+
+# ------------------------------------------------------------------ outside the library
+
+#: Effects the library does not hold, for checking that the diagnosis says so.
+OUTSIDE = {
+    "foreign_bead": "a glass bead (2500 kg/m^3, 63 GPa) in place of bead 8",
+    "heavy_striker": "a striker twice a bead's mass",
+    "small_wall_bead": "a 3.97 mm bead (5/32 in) in place of the last bead on the wall",
+    "worn_contact": "contact c_9 at 0.3 of its Hertz stiffness (a flattened, yielded contact)",
+    "clipping": "the amplifiers clip at 70 % of each channel's peak",
+    "tube_drag": "viscous drag of 0.5 kg/s on every bead (beads rubbing on the tube)",
+}
+
+
+@dataclass
+class DragPredictor(Predictor):
+    """A predictor whose chain has viscous drag ``drag`` (kg/s) on every particle but the
+    striker, integrated by SciPy (``solve_ivp``, DOP853; the contact forces of
+    :func:`msens.chain.integrate._numpy_forces`): the chain kernel has no per-particle drag.
+    Slow (seconds per run); for making test data only."""
+
+    drag: float = 0.0
+
+    def _simulate(self, states, needs=None):
+        out = []
+        for s in states:
+            res = _simulate_drag(s.chain, s.velocity, self.t, self.drag)
+            self.simulations += 1
+            out.append((res.force, None, res.approach))
+        return out
+
+
+def _simulate_drag(chain, velocity: float, t: np.ndarray, drag: float):
+    n = chain.n_particles
+    u0, v0 = _initial_state(chain, velocity)
+    load = chain.load()
+    c = np.full(n, drag)
+    c[0] = 0.0  # the striker falls free inside the guide
+
+    def rhs(_t, y):
+        u, v = y[:n], y[n:]
+        f = _numpy_forces(chain, u, v)
+        a = load - c * v
+        a[1:] += f[:-1]
+        a -= f
+        return np.concatenate([v, a / chain.mass])
+
+    d_scale = 1e-6
+    atol = np.concatenate([np.full(n, 1e-9 * d_scale), np.full(n, 1e-9)])
+    sol = solve_ivp(rhs, (0.0, float(t[-1])), np.concatenate([u0, v0]), method="DOP853",
+                    t_eval=t, rtol=1e-8, atol=atol)
+    if not sol.success:
+        raise RuntimeError(f"solve_ivp failed: {sol.message}")
+    u, v = sol.y[:n], sol.y[n:]
+    gap = np.concatenate([u[:-1] - u[1:], u[-1:]])
+    return ChainResult(t=t, force=_numpy_forces(chain, u, v).T.copy(), approach=gap.T.copy())
+
+
+@dataclass(frozen=True)
+class _Clip:
+    """Saturation of each record at ``level`` times its own peak."""
+
+    level: float
+
+    def __call__(self, records: np.ndarray, dt: float) -> np.ndarray:
+        peak = np.max(np.abs(records), axis=-1, keepdims=True)
+        return np.clip(records, -self.level * peak, self.level * peak)
+
+
+def outside_state(name: str, ctx: Context, state: ModelState, predictor: Predictor
+                  ) -> tuple[ModelState, Predictor]:
+    """The model state (and the predictor to run it) with the outside effect ``name``."""
+    c = ctx.study.chain
+    chain = state.chain
+    mass, stiff = np.array(chain.mass), np.array(chain.stiffness)
+    r = 0.5 * c.bead_diameter_m
+    if name == "foreign_bead":
+        k = 7  # bead 8 (0-based 7), between the striker and the first sensor
+        mass[k] *= 2500.0 / (c.bead_mass_kg / (np.pi / 6 * c.bead_diameter_m**3))
+        a = hertz_sphere_sphere(c.youngs_modulus_pa, c.poisson_ratio, r, 63e9, 0.24, r)
+        stiff[k - 1] = stiff[k] = a
+    elif name == "heavy_striker":
+        mass[0] *= 2.0
+    elif name == "small_wall_bead":
+        rs = 0.5 * 3.97e-3
+        mass[-1] *= (rs / r) ** 3
+        stiff[-2] = hertz_sphere_sphere(c.youngs_modulus_pa, c.poisson_ratio, r,
+                                        c.youngs_modulus_pa, c.poisson_ratio, rs)
+        stiff[-1] = hertz_sphere_flat(c.youngs_modulus_pa, c.poisson_ratio, rs,
+                                      c.wall.youngs_modulus_pa, c.wall.poisson_ratio)
+    elif name == "worn_contact":
+        stiff[8] *= 0.3
+    elif name == "clipping":
+        return dataclasses.replace(state, post=(*state.post, _Clip(0.7))), predictor
+    elif name == "tube_drag":
+        return state, DragPredictor(predictor.t, drag=0.5)
+    else:
+        raise ValueError(f"unknown outside effect {name!r}; known: {', '.join(OUTSIDE)}")
+    chain = dataclasses.replace(chain, mass=mass, stiffness=stiff)
+    return dataclasses.replace(state, chain=chain), predictor
+
+
+def outside_case(name: str, ctx: Context, base: ModelState, predictor: Predictor, *,
+                 seed: int = 0, shots: int = 1, velocity_jitter: float = 0.0,
+                 noise: float = 0.01) -> Waveform:
+    """Synthetic data of ``base`` with the outside effect ``name`` (:data:`OUTSIDE`)."""
+    if shots > 1:
+        return hidden_shots(ctx, base, predictor, seed=seed, shots=shots,
+                            velocity_jitter=velocity_jitter, noise=noise,
+                            state_of=lambda s: outside_state(name, ctx, s, predictor))[0]
+    state, sim = outside_state(name, ctx, base, predictor)
+    return synthesize(setup_result(ctx, state, sim), RigEffects(seed=seed, noise=noise))

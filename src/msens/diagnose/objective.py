@@ -1,19 +1,22 @@
 """How far a predicted set of sensor records is from the measurement.
 
-Two objectives share one interface (``rss(records) -> (sensors,)``, ``n_obs``, ``sigma``):
+Two objectives share one interface (``rss(records) -> (sensors,)``: chi^2 per sensor,
+``n_obs``, ``sigma``):
 
-- :class:`WaveformObjective`: the measured channels of every shot against the model's
-  channel signals (force for bead and rod, dF/dt for the four-contact MsS, paper Eq. 5).
-  Per shot one time offset D (impact to trigger) common to all channels — a single offset
-  keeps the delays between sensors, which carry the speed — and per shot and channel one
-  gain and one DC offset, all profiled out: for a given D, gain (kept >= 0) and offset are
-  the linear least-squares fit y ~ g m + b (the pre-trigger mean removes the offset only to
-  ~noise / sqrt(pre-trigger samples), which over a whole record would otherwise cost chi^2 of
-  order tens and bias shape parameters), and D is found by an FFT cross-correlation over
-  +-``MAX_SHIFT_S`` followed by a bounded Brent refinement of the exact residual. The model
-  is interpolated onto the data's own sample times, so the data's noise stays white and
-  independent (what the BIC assumes). The channel's noise ``sigma`` is the standard
-  deviation of its pre-trigger samples.
+- :class:`WaveformObjective`: the measured channels against the model's channel signals
+  (force for bead and rod, dF/dt for the four-contact MsS, paper Eq. 5). The shots of a file
+  are first merged into their aligned ensemble mean, whose per-sample variance comes from
+  the pre-trigger record and the shot-to-shot scatter, never from a fit
+  (:func:`msens.diagnose.noise.ensemble`). Against it, one time offset D (impact to trigger)
+  common to all channels — a single offset keeps the delays between sensors, which carry the
+  speed — and per channel one gain and one DC offset, all profiled out: for a given D, gain
+  (kept >= 0) and offset are the weighted linear least-squares fit y ~ g m + b (the
+  pre-trigger mean removes the offset only to ~noise / sqrt(pre-trigger samples), which over
+  a whole record would otherwise cost chi^2 of order tens and bias shape parameters), and D
+  is found by an FFT cross-correlation over +-``MAX_SHIFT_S`` followed by a bounded Brent
+  refinement of the exact residual. The model is interpolated onto the data's own sample
+  times, so the data's noise stays independent (what the BIC assumes). ``rss`` is the
+  residual weighted by each sample's inverse variance (chi^2), so ``sigma`` is 1.
 - :class:`FeatureObjective`: published features (TOF and AR per sensor, e.g. the paper's
   Table 2) against the model's, each residual divided by the published shot-to-shot std.
 """
@@ -27,6 +30,7 @@ from scipy import fft
 from scipy.optimize import minimize_scalar
 
 from msens.compare import align_shot
+from msens.diagnose.noise import MIN_PRETRIGGER, Ensemble, ensemble
 from msens.diagnose.predict import feature_records, model_features_of, signal
 from msens.errors import InputError
 from msens.io.waveform import Channel, Waveform
@@ -37,15 +41,14 @@ from msens.study import MssModel, ReferenceRow, SetupSpec
 #: Largest change of the impact-to-trigger offset searched per candidate model, s. A 3x
 #: faster striker moves the first arrival by less than this.
 MAX_SHIFT_S = 80e-6
-#: Fewest pre-trigger samples for a noise estimate.
-MIN_PRETRIGGER = 20
 #: A channel is usable when its largest excursion exceeds this many noise stds.
 MIN_SNR = 8.0
 
 
 @dataclass(frozen=True)
 class Shot:
-    """One shot's channels, baseline-free, in the order of the setup's sensors.
+    """The measured channels a model is fitted to (a file's ensemble mean), baseline-free, in
+    the order of the setup's sensors.
 
     Attributes
     ----------
@@ -54,15 +57,18 @@ class Shot:
     y : ndarray, shape (sensors, n)
         Measured signals, V.
     sigma : ndarray, shape (sensors,)
-        Pre-trigger noise std, V (NaN when the record has too few pre-trigger samples).
+        Pre-trigger noise std of one shot, V (NaN without a pre-trigger record).
     delay0 : float
         Impact-to-trigger offset found against the baseline model, s (model t = tau + D).
+    w : ndarray, shape (sensors, n)
+        Inverse variance of each sample of ``y``, 1/V^2.
     """
 
     tau: np.ndarray
     y: np.ndarray
     sigma: np.ndarray
     delay0: float
+    w: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -99,9 +105,9 @@ def check_channels(waveform: Waveform) -> None:
                              f"against pre-trigger noise {noise:.3g} V; needs > {MIN_SNR:g}x)")
 
 
-def _shots(waveform: Waveform) -> list[list[Channel]]:
-    repeats = sorted({c.repeat for c in waveform.channels})
-    return [[c for c in waveform.channels if c.repeat == r] for r in repeats]
+def _first_shot(waveform: Waveform) -> list[Channel]:
+    first = min(c.repeat for c in waveform.channels)
+    return [c for c in waveform.channels if c.repeat == first]
 
 
 class WaveformObjective:
@@ -112,9 +118,9 @@ class WaveformObjective:
     waveform : Waveform
         Measured channels; every channel must match a sensor of ``baseline.setup``.
     baseline : SetupResult
-        The baseline model, used once to find each shot's starting time offset.
-    kinds : tuple of SensorKind
-        Observation kind of each sensor (the setup's order).
+        The baseline model, used once to find the starting time offset.
+    shifts : ndarray of int, shape (shots,), optional
+        Samples by which each shot lags the first (see :func:`msens.diagnose.noise.ensemble`).
 
     Raises
     ------
@@ -122,7 +128,8 @@ class WaveformObjective:
         When no channel carries a pulse above the noise (``MIN_SNR``).
     """
 
-    def __init__(self, waveform: Waveform, baseline: SetupResult) -> None:
+    def __init__(self, waveform: Waveform, baseline: SetupResult,
+                 shifts: np.ndarray | None = None) -> None:
         setup = baseline.setup
         self.kinds = tuple(s.kind for s in setup.sensors)
         #: Whether each sensor is a physics MsS (its model record is the DAQ voltage).
@@ -130,43 +137,35 @@ class WaveformObjective:
         self.t = baseline.history.t
         self.dt = float(self.t[1] - self.t[0])
         t_end = float(self.t[-1])
-        self.shots: list[Shot] = []
-        for channels in _shots(waveform):
-            by_key = {(c.kind, c.particle): c for c in channels}
-            order = [by_key[(s.kind.value, s.particle)] for s in setup.sensors]
-            delay0 = align_shot(baseline, waveform, channels)
-            tau = waveform.time
-            keep = tau + delay0 <= t_end - MAX_SHIFT_S - 5 * self.dt
-            pre = tau < 0.0
-            ys, sig = [], []
-            for ch in order:
-                v = np.asarray(waveform.channel(ch), dtype=float)
-                base = v[pre].mean() if pre.sum() >= MIN_PRETRIGGER else np.median(v[:50])
-                v = v - base
-                ys.append(v[keep])
-                sig.append(float(np.std(v[pre], ddof=1)) if pre.sum() >= MIN_PRETRIGGER
-                           else np.nan)
-            self.shots.append(Shot(tau=tau[keep], y=np.array(ys), sigma=np.array(sig),
-                                   delay0=float(delay0)))
+        #: The file's shots merged: ensemble mean, per-sample variance, noise estimates.
+        self.ensemble: Ensemble = ensemble(
+            waveform, [(s.kind.value, s.particle) for s in setup.sensors], shifts)
+        ens = self.ensemble
+        # the mean is on the first shot's record time
+        delay0 = align_shot(baseline, waveform, _first_shot(waveform))
+        keep = ens.tau + delay0 <= t_end - MAX_SHIFT_S - 5 * self.dt
+        self.shots: list[Shot] = [Shot(tau=ens.tau[keep], y=ens.y[:, keep],
+                                       sigma=ens.sigma_pretrigger, delay0=float(delay0),
+                                       w=1.0 / ens.var[:, keep])]
         self._check_usable(waveform, setup)
-        sig = np.array([s.sigma for s in self.shots])
-        #: Pre-trigger noise std per sensor (RMS over shots), V; NaN if unknown.
-        self.sigma = np.sqrt(np.mean(sig**2, axis=0))
-        #: Samples per sensor over all shots.
-        self.n_obs = np.full(len(self.kinds), sum(s.tau.size for s in self.shots), dtype=float)
-        self._weights = np.where(np.isfinite(self.sigma), 1.0 / self.sigma**2, 1.0)
+        #: chi^2 is already in units of the noise: 1 per sensor.
+        self.sigma = np.ones(len(self.kinds))
+        #: Samples per sensor.
+        self.n_obs = np.full(len(self.kinds), float(self.shots[0].tau.size))
+        #: Mean inverse variance per sensor, 1/V^2 (weights of the coarse alignment).
+        self._weights = self.shots[0].w.mean(axis=1)
 
     def _check_usable(self, waveform: Waveform, setup: SetupSpec) -> None:
         for j, spec in enumerate(setup.sensors):
             for s in self.shots:
                 y = s.y[j]
-                noise = s.sigma[j] if np.isfinite(s.sigma[j]) else 0.0
+                noise = float(np.sqrt(np.mean(1.0 / s.w[j])))
                 peak = float(np.max(np.abs(y))) if y.size else 0.0
                 if not (np.isfinite(peak) and peak > 0.0 and peak > MIN_SNR * noise):
                     raise InputError(
                         f"channel {spec.kind.value}@{spec.particle} has no usable pulse "
                         f"(peak {peak:.3g} V against noise {noise:.3g} V; needs > {MIN_SNR:g}x "
-                        f"the pre-trigger noise)")
+                        f"the noise of the shots' mean)")
 
     # ---------------------------------------------------------------- evaluation
 
@@ -178,19 +177,20 @@ class WaveformObjective:
     def _rss_at(self, shot: Shot, sig: np.ndarray, delay: float) -> Alignment:
         m = np.array([np.interp(shot.tau + delay, self.t, s, left=0.0, right=0.0)
                       for s in sig])
-        # least squares y ~ g m + b per channel (2x2 normal equations), g kept >= 0
-        n = float(shot.tau.size)
-        sm, sy = m.sum(axis=1), shot.y.sum(axis=1)
-        mm = np.einsum("ij,ij->i", m, m)
-        ym = np.einsum("ij,ij->i", shot.y, m)
-        yy = np.einsum("ij,ij->i", shot.y, shot.y)
-        det = n * mm - sm**2
-        ok = det > 1e-12 * n * np.maximum(mm, 1e-300)
-        g = np.where(ok, (n * ym - sm * sy) / np.where(ok, det, 1.0), 0.0)
+        # weighted least squares y ~ g m + b per channel (2x2 normal equations), g kept >= 0
+        w, y = shot.w, shot.y
+        s0 = w.sum(axis=1)
+        sm, sy = (w * m).sum(axis=1), (w * y).sum(axis=1)
+        mm = np.einsum("ij,ij,ij->i", w, m, m)
+        ym = np.einsum("ij,ij,ij->i", w, y, m)
+        yy = np.einsum("ij,ij,ij->i", w, y, y)
+        det = s0 * mm - sm**2
+        ok = det > 1e-12 * s0 * np.maximum(mm, 1e-300)
+        g = np.where(ok, (s0 * ym - sm * sy) / np.where(ok, det, 1.0), 0.0)
         g = np.maximum(g, 0.0)
-        b = (sy - g * sm) / n
-        rss = yy + g**2 * mm + n * b**2 - 2 * g * ym - 2 * b * sy + 2 * g * b * sm
-        return Alignment(delay=delay, gains=g, offsets=b, rss=np.maximum(rss, 0.0))
+        b = (sy - g * sm) / s0
+        chi2 = yy + g**2 * mm + s0 * b**2 - 2 * g * ym - 2 * b * sy + 2 * g * b * sm
+        return Alignment(delay=delay, gains=g, offsets=b, rss=np.maximum(chi2, 0.0))
 
     def align(self, shot: Shot, sig: np.ndarray) -> Alignment:
         """Best time offset and gains of ``shot`` for model signals ``sig`` (sensors, nt)."""
@@ -207,13 +207,13 @@ class WaveformObjective:
         limit = int(MAX_SHIFT_S / self.dt)
         score[np.abs(lags) > limit] = -np.inf
         d1 = shot.delay0 + lags[int(np.argmax(score))] * self.dt
-        opt = minimize_scalar(lambda d: float(self._weights @ self._rss_at(shot, sig, d).rss),
+        opt = minimize_scalar(lambda d: float(self._rss_at(shot, sig, d).rss.sum()),
                               bounds=(d1 - 1.5 * self.dt, d1 + 1.5 * self.dt),
                               method="bounded", options={"xatol": 1e-3 * self.dt})
         return self._rss_at(shot, sig, float(opt.x))
 
     def rss(self, records: np.ndarray) -> np.ndarray:
-        """Residual sum of squares per sensor over all shots, V^2, shape (sensors,).
+        """chi^2 per sensor: residual squares over each sample's variance, shape (sensors,).
 
         Parameters
         ----------

@@ -1,9 +1,10 @@
 """Write a diagnosis: ``diagnosis.json`` and ``diagnosis.png``.
 
 The figure shows where the baseline disagrees (chi^2 per sample in each sensor's incident and
-reflected window and elsewhere, before and after the named effect; or, in feature mode, each
-feature's residual in units of its std) and, for waveforms, the first shot of every channel
-over the baseline and the corrected model.
+reflected window and elsewhere, before and after the named effect, with the largest value that
+noise alone reaches; or, in feature mode, each feature's residual in units of its std), whether
+the data are explained, and, for waveforms, the shots' mean of every channel over the baseline
+and the corrected model.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ def report(passes: Sequence[Diagnosis]) -> dict:
     """``diagnosis.json``: the first pass in full, and a summary of every pass."""
     out = passes[0].to_json()
     out["passes"] = [{"effect": d.effect, "parameters": d.parameters,
+                      "explained": d.explained, "summary": d.summary(),
                       "misfit_before": d.misfit_before, "misfit_after": d.misfit_after,
                       "best_score": d.candidates[0].score if d.candidates else None,
                       "joint_refit": [{"effect": n, "parameters": p} for n, p in d.refit]}
@@ -71,7 +73,7 @@ def figure(d: Diagnosis) -> Figure:
         ax.axhline(0, color="k", lw=0.8)
         ax.set_ylabel("(model − measured) / std (–)")
         ax.legend(fontsize=8)
-        ax.set_title(f"setup {d.setup}: {_label(d)}", fontsize=9)
+        ax.set_title(f"setup {d.setup}: {_label(d)}\n{d.summary()}", fontsize=8)
         fig.tight_layout()
         return fig
     channels = d.overlay
@@ -84,13 +86,16 @@ def figure(d: Diagnosis) -> Figure:
     ax.set_xticks(x, [f"{r['window']}\n{r['channel']}" for r in rows], fontsize=7)
     ax.set_yscale("log")
     ax.axhline(1.0, color="k", lw=0.8, ls=":")
+    # the largest chi^2 per sample that noise alone reaches (the verdict's test)
+    limits = [w["limit"] for w in d.verdict["windows"]]
+    ax.scatter(x, limits, marker="_", s=300, color="k", zorder=3, label="noise limit")
     ax.set_ylabel("χ² per sample (–)")
     ax.legend(fontsize=8)
     ax.set_title(f"setup {d.setup}: disagreement mostly at the {d.disagreement['where']}\n"
-                 f"{_label(d)}; misfit {d.misfit_before:.3g} -> {d.misfit_after:.3g}",
-                 fontsize=9)
+                 f"{_label(d)}; misfit {d.misfit_before:.3g} -> {d.misfit_after:.3g}\n"
+                 f"{d.summary()}", fontsize=8)
     for ax, ch in zip(axes[1:, 0], channels, strict=True):
-        ax.plot(ch["t_us"], ch["data"], color="0.6", lw=0.7, label="measured (shot 1)")
+        ax.plot(ch["t_us"], ch["data"], color="0.6", lw=0.7, label="measured (mean of the shots)")
         ax.plot(ch["t_us"], ch["before"], "b--", lw=1.0, label="baseline")
         if d.effect != "none":  # otherwise "after" is the baseline drawn again
             ax.plot(ch["t_us"], ch["after"], "r-", lw=1.0, label=f"with {d.effect}")

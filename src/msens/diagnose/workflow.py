@@ -9,34 +9,44 @@ Steps (issue 7):
    re-fitted to the data under diagnosis: a free gamma_c would absorb the dissipative effects
    the workflow is meant to tell apart. Effects named in ``added`` (earlier passes) are
    applied on top.
-2. *Calibration of the record.* Per shot one impact-to-trigger offset and per shot and
-   channel one gain (paper Eq. 11), profiled out of every comparison
+2. *Calibration of the record.* One impact-to-trigger offset and per channel one gain
+   (paper Eq. 11) and offset, profiled out of every comparison
    (:class:`~msens.diagnose.objective.WaveformObjective`; the starting offset comes from
    :func:`msens.compare.align_shot`).
 3. *Where.* Feature residuals (TOF, AR, width, incident-peak time, pre-peak trough, speed
    between the sensors; from :func:`msens.compare.shot_records`) and the residual per time
    window (incident and reflected pulse of each sensor, and the rest) as chi^2 per sample.
-4. *Which.* Every applicable effect of the library is fitted (batched grid + bounded
+4. *Noise.* Estimated before any fit (:mod:`msens.diagnose.noise`): the shots of the file
+   are aligned and averaged, and each sample of the mean carries the variance of the
+   shot-to-shot scatter (never below the pre-trigger noise) over the number of shots, or the
+   pre-trigger noise for one shot. Residuals are measured against it (chi^2). Flooring the
+   noise by the best candidate's residual would make every winner look like noise; it is
+   not done.
+5. *Which.* Every applicable effect of the library is fitted (batched grid + bounded
    refinement, :func:`~msens.diagnose.fit.fit_effect`) and scored by the drop of the Bayesian
    information criterion against the baseline,
-   ``score = chi2_baseline - chi2_effect - k ln N`` (Gaussian noise of known sigma: BIC =
-   chi2 + k ln N up to a constant), with k the effect's parameter count and N the number of
-   samples. sigma per channel is the pre-trigger noise std, floored by the RMS residual of the
-   best candidate (``sigma^2 = max(sigma_pre^2, RSS_best / n)``): where the best model still
-   misses by more than the noise, the leftover misfit counts as noise and the evidence is
-   judged against it, so model error cannot pose as evidence.
-5. *Decision.* The best-scoring effect is named only when its score exceeds
-   ``THRESHOLD`` = 10 ("very strong" evidence on the Kass & Raftery (1995) scale of 2 ln B;
-   with the BIC penalty already subtracted): otherwise ``"none"``.
-6. *Gap.* The named effect is added, the model rerun, and the misfit (chi^2 per sample)
+   ``score = chi2_baseline - chi2_effect - k ln N``, with k the effect's parameter count and
+   N the number of samples.
+6. *Decision.* The best-scoring effect is named only when its score exceeds ``THRESHOLD`` =
+   10 ("very strong" evidence on the Kass & Raftery (1995) scale of 2 ln B; with the BIC
+   penalty already subtracted), its parameters lie inside their physical ranges (a fit
+   outside is reported as implausible) and its change from the baseline reaches the
+   effect's practical-significance floor (:class:`~msens.diagnose.effects.base.Parameter`).
+   Otherwise the next candidate is considered, and ``"none"`` if none qualifies. A candidate
+   must also beat by the threshold every plausible change below its floor: when a negligible
+   change (say a striker 0.5 % faster) fits better than a significant one, nothing practical
+   is missing.
+7. *Verdict.* Whether the final model explains the data: its residual against the noise, for
+   the record and for each window, by an F test (:mod:`msens.diagnose.verdict`);
+   ``explained`` false says that the named effect (or the baseline) still misses, and where.
+8. *Gap.* The named effect is added, the model rerun, and the misfit (chi^2 per sample)
    before and after reported. In later passes (``added`` not empty) the parameters of the
    earlier effects and the new one are first refined together, since each earlier fit
    absorbed part of the effects not yet named.
 
 A feature-only mode (:func:`diagnose_reference`) takes a study's ``[reference]`` rows (e.g. the
 paper's Table 2: TOF and AR per sensor, with their shot-to-shot std) as the measurement;
-chi^2 is the sum of squared residuals over the published std, N the number of features, and
-the noise floor is not applied (the std is given).
+chi^2 is the sum of squared residuals over the published std and N the number of features.
 """
 
 from __future__ import annotations
@@ -55,6 +65,7 @@ from msens.compare import model_record, setup_spec_channels, shot_records, smoot
 from msens.diagnose.effects import Context, Effect, ModelState, registry
 from msens.diagnose.effects import get as get_effect
 from msens.diagnose.fit import EffectFit, fit_effect, refit_jointly
+from msens.diagnose.noise import shot_matrix
 from msens.diagnose.objective import FeatureObjective, WaveformObjective, check_channels
 from msens.diagnose.predict import (
     Predictor,
@@ -64,6 +75,8 @@ from msens.diagnose.predict import (
     positions,
     setup_result,
 )
+from msens.diagnose.shots import fit_shots
+from msens.diagnose.verdict import verdict
 from msens.errors import InputError
 from msens.features import centre_distance
 from msens.io.waveform import Waveform
@@ -96,6 +109,12 @@ class Candidate:
     score : float
         BIC drop against the baseline (> 0 favours the effect).
     n_parameters : int
+    plausible : bool
+        Every fitted parameter inside its physical range.
+    significant : bool
+        The change from the baseline reaches the effect's practical-significance floor.
+    notes : tuple of str
+        Why the candidate is implausible or below its floor (empty otherwise).
     """
 
     effect: str
@@ -105,6 +124,16 @@ class Candidate:
     misfit: float
     score: float
     n_parameters: int
+    plausible: bool = True
+    significant: bool = True
+    notes: tuple[str, ...] = ()
+
+    def to_json(self) -> dict:
+        """The candidate's entry in ``diagnosis.json``."""
+        return {"effect": self.effect, "misfit": self.misfit, "score": self.score,
+                "parameters": self.parameters, "baseline": self.baseline,
+                "n_parameters": self.n_parameters, "plausible": self.plausible,
+                "significant": self.significant, "notes": list(self.notes)}
 
 
 @dataclass(frozen=True)
@@ -139,11 +168,17 @@ class Diagnosis:
         Where the baseline misses: features and windows (see :func:`diagnose`).
     simulations : int
     elapsed_s : float
+    verdict : dict
+        Whether the final model (the named effect, or the baseline for none) explains the
+        data: ``explained`` and the residual/noise test per window
+        (:func:`msens.diagnose.verdict.verdict`).
+    noise : dict
+        The noise estimate, independent of every fit (waveform mode; empty for features).
     before, after : ModelState
         The baseline and the model with the named effect (== before for none).
     overlay : list of dict
         Per sensor, for the figure: ``channel``, ``t_us`` (record time), ``data``,
-        ``before``, ``after`` (V; first shot), or for features mode the feature table.
+        ``before``, ``after`` (V; the shots' mean), or for features mode the feature table.
     """
 
     mode: str
@@ -163,27 +198,55 @@ class Diagnosis:
     disagreement: dict
     simulations: int
     elapsed_s: float
+    verdict: dict
+    noise: dict
     before: ModelState = field(repr=False)
     after: ModelState = field(repr=False)
     overlay: list = field(repr=False, default_factory=list)
+
+    @property
+    def explained(self) -> bool:
+        """Whether the final model's residual is consistent with the noise."""
+        return bool(self.verdict["explained"])
+
+    def summary(self) -> str:
+        """One sentence: what is named and whether it explains the data."""
+        where = self.verdict.get("unexplained_where")
+        at = (f"; the residual is {where['residual_over_noise']:.2g} x the noise at the "
+              f"{where['window']} window of {where['channel']}" if where else "")
+        if self.effect == "none":
+            if self.explained:
+                return "nothing is missing: the model explains the data within the noise"
+            return "no plausible library effect explains the data" + at
+        if self.explained:
+            return f"{self.effect} explains the data within the noise"
+        return f"{self.effect} is supported but does not explain the data" + at
 
     def to_json(self) -> dict:
         """The content of ``diagnosis.json``."""
         return {
             "effect": self.effect,
             "parameters": self.parameters,
+            "explained": self.explained,
+            "summary": self.summary(),
             "misfit_before": self.misfit_before,
             "misfit_after": self.misfit_after,
-            "candidates": [{"effect": c.effect, "misfit": c.misfit, "score": c.score,
-                            "parameters": c.parameters, "baseline": c.baseline,
-                            "n_parameters": c.n_parameters} for c in self.candidates],
+            "verdict": self.verdict,
+            "noise": self.noise,
+            "candidates": [c.to_json() for c in self.candidates],
             "mode": self.mode,
             "setup": self.setup,
             "threshold_delta_bic": self.threshold,
-            "misfit_definition": "chi^2 per observation: sum of squared residuals over "
-                                 "sigma^2 (waveform: per sample, gain and time offset "
-                                 "profiled out; features: over the published std)",
+            "misfit_definition": "chi^2 per observation: squared residuals over the noise "
+                                 "variance estimated without any fit (waveform: per sample "
+                                 "of the shots' mean, gain, offset and time offset profiled "
+                                 "out; features: over the published std)",
             "score_definition": "BIC(baseline) - BIC(effect) = chi2_0 - chi2 - k ln N",
+            "naming_rule": "the best-scoring candidate whose parameters are inside their "
+                           "physical ranges, whose change reaches the effect's "
+                           "practical-significance floor, and whose score exceeds the "
+                           "threshold and the best plausible below-floor candidate's score "
+                           "by the threshold",
             "n_observations": self.n_obs,
             "sigma": list(self.sigma),
             "baseline": {"gamma_contact": self.gamma_contact,
@@ -269,32 +332,64 @@ def _log_decision(cands: list[Candidate], winner: Candidate | None, threshold: f
 
 # ------------------------------------------------------------------------ scoring
 
-def _score(fits: list[EffectFit], rss0: np.ndarray, n_obs: np.ndarray, sigma: np.ndarray,
-           floor: bool, ctx: Context, base: ModelState
-           ) -> tuple[list[Candidate], np.ndarray, float]:
-    all_rss = np.array([rss0, *[f.rss for f in fits]])
-    sig2 = np.where(np.isfinite(sigma), sigma**2, 0.0)
-    if floor:
-        best = int(np.argmin((all_rss / np.where(sig2 > 0, sig2, 1.0)).sum(axis=1)))
-        sig2 = np.maximum(sig2, all_rss[best] / n_obs)
+def judge(effect: Effect, ctx: Context, base: ModelState, params: Mapping[str, float]
+          ) -> tuple[bool, bool, tuple[str, ...]]:
+    """(plausible, significant, notes) of an effect's fitted parameters.
+
+    Plausible: every parameter inside its physical range. Significant: some parameter with
+    a baseline value moved from it by at least its floor (an effect whose parameters have no
+    baseline value, e.g. another law, is significant).
+    """
+    space = effect.space(ctx, base)
+    ref = effect.baseline(ctx, base)
+    notes = []
+    plausible = True
+    for p in space:
+        v = float(params[p.name])
+        if not p.is_plausible(v):
+            plausible = False
+            lo, hi = p.physical
+            notes.append(f"implausible: {p.name} = {v:.4g} outside its physical range "
+                         f"[{lo:.4g}, {hi:.4g}] ({p.reason})")
+    moves = [(p, float(params[p.name]) - float(ref[p.name])) for p in space
+             if ref.get(p.name) is not None]
+    significant = not moves or any(abs(d) > 0 and abs(d) >= p.floor for p, d in moves)
+    if not significant:
+        notes.append("below the practical-significance floor: " + "; ".join(
+            f"{p.name} changed by {d:+.3g} < {p.floor:.3g} ({p.floor_reason})"
+            for p, d in moves))
+    return plausible, significant, tuple(notes)
+
+
+def _score(fits: list[EffectFit], rss0: np.ndarray, n_obs: np.ndarray, ctx: Context,
+           base: ModelState) -> tuple[list[Candidate], float]:
+    # rss are chi^2 already (residuals over the fit-free noise), per sensor
     n = float(n_obs.sum())
-    chi0 = float((rss0 / sig2).sum())
+    chi0 = float(rss0.sum())
     cands = []
     for f in fits:
-        chi = float((f.rss / sig2).sum())
+        effect = get_effect(f.effect)
+        chi = float(f.rss.sum())
+        plausible, significant, notes = judge(effect, ctx, base, f.parameters)
         cands.append(Candidate(
             effect=f.effect, parameters=f.parameters,
-            baseline=get_effect(f.effect).baseline(ctx, base), chi2=chi, misfit=chi / n,
-            score=chi0 - chi - f.n_parameters * np.log(n), n_parameters=f.n_parameters))
+            baseline=effect.baseline(ctx, base), chi2=chi, misfit=chi / n,
+            score=chi0 - chi - f.n_parameters * np.log(n), n_parameters=f.n_parameters,
+            plausible=plausible, significant=significant, notes=notes))
     cands.sort(key=lambda c: -c.score)
-    return cands, np.sqrt(sig2), chi0 / n
+    return cands, chi0 / n
 
 
 def _decide(cands: list[Candidate], fits: list[EffectFit], threshold: float
             ) -> tuple[Candidate | None, EffectFit | None]:
-    if cands and cands[0].score > threshold:
-        fit = next(f for f in fits if f.effect == cands[0].effect)
-        return cands[0], fit
+    """The best-scoring candidate that is plausible and significant and whose score beats
+    by ``threshold`` both the baseline and every plausible change below its floor (when a
+    negligible change explains the data better, nothing practical is missing)."""
+    negligible = max((c.score for c in cands if c.plausible and not c.significant),
+                     default=0.0)
+    for c in cands:
+        if c.plausible and c.significant and c.score - max(negligible, 0.0) > threshold:
+            return c, next(f for f in fits if f.effect == c.effect)
     return None, None
 
 
@@ -352,14 +447,13 @@ def _feature_residuals(result, waveform: Waveform) -> dict:
 
 
 def _windows(objective: WaveformObjective, records_before: np.ndarray,
-             records_after: np.ndarray, result, sigma: np.ndarray) -> list[dict]:
-    """chi^2 per sample in the incident and reflected window of each sensor, and elsewhere."""
+             records_after: np.ndarray, result) -> list[dict]:
+    """chi^2 per sample (residual over the fit-free noise) in the incident and reflected
+    window of each sensor, and elsewhere, before and after."""
     feats = model_features_of(feature_records(records_before, objective.physics, objective.t),
                               objective.t)
     rows = []
-    per = []
-    for records in (records_before, records_after):
-        per.append(objective.aligned(records))
+    per = [objective.aligned(r) for r in (records_before, records_after)]
     for j, sensor in enumerate(result.sensors):
         name = f"{sensor.sensor.kind.value}@{sensor.sensor.particle}"
         w = WINDOW_WIDTHS * float(feats.width[j])
@@ -373,16 +467,20 @@ def _windows(objective: WaveformObjective, records_before: np.ndarray,
             inside["elsewhere"] = ~(inside["incident"] | inside["reflected"])
             masks.append(inside)
         for window in ("incident", "reflected", "elsewhere"):
-            vals = []
+            vals, count = [], 0
             for aligned in per:
-                num = den = 0.0
+                num = 0.0
+                count = 0
                 for shot, (_, _, m), mk in zip(objective.shots, aligned, masks, strict=True):
-                    r = (shot.y[j] - m[j])[mk[window]]
-                    num += float(np.sum(r**2)) / sigma[j] ** 2
-                    den += r.size
-                vals.append(num / den if den else float("nan"))
-            rows.append({"channel": name, "window": window, "chi2_per_sample_before": vals[0],
-                         "chi2_per_sample_after": vals[1]})
+                    sel = mk[window]
+                    r = (shot.y[j] - m[j])[sel]
+                    num += float(np.sum(shot.w[j][sel] * r**2))
+                    count += r.size
+                vals.append(num / count if count else float("nan"))
+            if count:
+                rows.append({"channel": name, "window": window, "n_samples": count,
+                             "chi2_per_sample_before": vals[0],
+                             "chi2_per_sample_after": vals[1]})
     return rows
 
 
@@ -425,6 +523,7 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     start = time.perf_counter()
     setup = match_setup_spec(study, waveform)
     check_channels(waveform)
+    shot_matrix(waveform, [(s.kind.value, s.particle) for s in setup.sensors])  # fail early
     ctx = Context(study, setup)
     gc, gw = baseline_dissipation(study, fit)
     _log.info("diagnosis of setup %s: baseline model (gamma_c = %.3g kg/s, gamma_w = %.3g "
@@ -434,15 +533,23 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     plain = baseline_state(ctx, gc, gw)
     base = _with_added(ctx, plain, added)
     base_result = setup_result(ctx, base, predictor)
-    objective = WaveformObjective(waveform, base_result)
+    shifts, per_shot = None, None
+    if len({c.repeat for c in waveform.channels}) > 1:
+        # each shot's own speed and delay: align the shots on their impact, and average
+        # every model over the shots' spread of speeds as the data are
+        per_shot = fit_shots(waveform, base, base_result, predictor)
+        shifts = np.round((per_shot.delays[0] - per_shot.delays) / waveform.dt).astype(int)
+        plain = dataclasses.replace(plain, velocity_spread=per_shot.spread)
+        base = _with_added(ctx, plain, added)
+        _log.info("%d shots: striker speed spread %.2g %%", len(per_shot.speeds),
+                  100 * per_shot.spread)
+    objective = WaveformObjective(waveform, base_result, shifts)
     records0 = predictor.records([base])[0]
     rss0 = objective.rss(records0)
-    sigma = objective.sigma
-    weights = np.where(np.isfinite(sigma), 1.0 / sigma**2, objective.n_obs / rss0)
+    weights = np.ones(len(rss0))  # rss is chi^2: already over the noise
     fits = _fit_candidates(_candidate_effects(ctx, effects, added), ctx, base, predictor,
                            objective, weights)
-    cands, sig, misfit0 = _score(fits, rss0, objective.n_obs,
-                                 np.where(np.isfinite(sigma), sigma, np.nan), True, ctx, base)
+    cands, misfit0 = _score(fits, rss0, objective.n_obs, ctx, base)
     winner, wfit = _decide(cands, fits, threshold)
     _log_decision(cands, winner, threshold)
     after = wfit.state if wfit is not None else base
@@ -456,17 +563,22 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     records1 = predictor.records([after])[0]  # rerun with the effect added
     rss1 = objective.rss(records1)
     n = float(objective.n_obs.sum())
-    windows = _windows(objective, records0, records1, base_result, sig)
+    windows = _windows(objective, records0, records1, base_result)
+    ens = objective.ensemble
+    names = [f"{s.kind.value}@{s.particle}" for s in setup.sensors]
     disagreement = {"where": _where(windows), "windows": windows,
                     "features": _feature_residuals(base_result, waveform)}
     return Diagnosis(
         mode="waveform", setup=setup.name, effect=winner.effect if winner else "none",
         parameters=dict(winner.parameters) if winner else {},
-        misfit_before=misfit0, misfit_after=float((rss1 / sig**2).sum()) / n,
+        misfit_before=misfit0, misfit_after=float(rss1.sum()) / n,
         candidates=tuple(cands), threshold=threshold, n_obs=int(n),
-        sigma=tuple(float(s) for s in sig), added=tuple((k, dict(v)) for k, v in added),
+        sigma=tuple(float(np.sqrt(np.mean(1.0 / w))) for w in objective.shots[0].w),
+        added=tuple((k, dict(v)) for k, v in added),
         refit=refit, gamma_contact=gc, gamma_wall=gw, disagreement=disagreement,
         simulations=predictor.simulations, elapsed_s=time.perf_counter() - start,
+        verdict=verdict(float(rss1.sum()), n, windows, ens.dof),
+        noise={**ens.to_json(names), **(per_shot.to_json() if per_shot else {})},
         before=base, after=after, overlay=_overlay(objective, records0, records1, base_result))
 
 
@@ -490,6 +602,8 @@ def diagnose_passes(waveform: Waveform, study: Study, *, passes: int = 2,
     for _ in range(passes):
         d = diagnose(waveform, study, fit=fit, added=tuple(added), **kw)
         out.append(d)
+        # "explained" is a consistency test, weaker than the evidence a second effect can
+        # still have: the passes go on until nothing is named
         if d.effect == "none":
             break
         added = list(d.refit) if d.refit else [*added, (d.effect, d.parameters)]
@@ -537,7 +651,7 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
     weights = np.ones(len(where))
     fits = _fit_candidates(_candidate_effects(ctx, effects, added), ctx, base, predictor,
                            objective, weights)
-    cands, sig, misfit0 = _score(fits, rss0, objective.n_obs, objective.sigma, False, ctx, base)
+    cands, misfit0 = _score(fits, rss0, objective.n_obs, ctx, base)
     winner, wfit = _decide(cands, fits, threshold)
     _log_decision(cands, winner, threshold)
     after = wfit.state if wfit is not None else base
@@ -545,16 +659,23 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
     n = float(objective.n_obs.sum())
     table = _feature_table(objective, records0, records1, setup, where)
     worst = max(table, key=lambda r: abs(r["residual_before"]))
+    # each feature is one window; the published std is taken as known (dof infinite)
+    rows = [{"channel": r["channel"], "window": r["feature"], "n_samples": 1,
+             "chi2_per_sample_before": r["residual_before"] ** 2,
+             "chi2_per_sample_after": r["residual_after"] ** 2} for r in table]
     return Diagnosis(
         mode="features", setup=setup.name, effect=winner.effect if winner else "none",
         parameters=dict(winner.parameters) if winner else {},
         misfit_before=misfit0, misfit_after=float(objective.rss(records1).sum()) / n,
         candidates=tuple(cands), threshold=threshold, n_obs=int(n),
-        sigma=tuple(float(s) for s in sig), added=tuple((k, dict(v)) for k, v in added),
+        sigma=tuple(float(s) for s in objective.sigma),
+        added=tuple((k, dict(v)) for k, v in added),
         refit=(), gamma_contact=gc, gamma_wall=gw,
         disagreement={"where": f"{worst['feature']} at {worst['channel']}",
                       "features": table},
         simulations=predictor.simulations, elapsed_s=time.perf_counter() - start,
+        verdict=verdict(float(objective.rss(records1).sum()), n, rows, float("inf")),
+        noise={"source": "the published shot-to-shot std of each feature"},
         before=base, after=after, overlay=table)
 
 

@@ -79,6 +79,10 @@ class ModelState:
     physics : tuple of (PhysicsMss or None)
         Per sensor, the physics MsS it is (its record is then its DAQ voltage, V); empty
         when the setup has none.
+    velocity_spread : float
+        Relative std of the striker speed over the shots of a file (the rig's shot-to-shot
+        jitter, measured per shot): the prediction is then the mean record over that spread
+        of speeds around ``velocity``, as the shots' ensemble mean is. 0: one speed.
     """
 
     chain: Chain
@@ -87,6 +91,7 @@ class ModelState:
     kinds: tuple[SensorKind, ...]
     post: tuple[RecordOp, ...] = ()
     physics: tuple[PhysicsMss | None, ...] = ()
+    velocity_spread: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -103,6 +108,17 @@ class Parameter:
         Search (grid and refinement) in log space: for scale parameters.
     integer : bool
         Integer parameter: searched exhaustively on lower..upper, no refinement.
+    plausible : tuple of float, optional
+        Physical range (lower, upper), SI: a fit outside it is reported as implausible and
+        not named. Default: the search bounds. The search may reach beyond it on purpose, so
+        that an impossible optimum is seen as such instead of being clipped to the bound.
+    reason : str
+        Why the physical range is what it is (source or argument), for reports.
+    floor : float
+        Practical-significance floor: the smallest change from the baseline value, SI,
+        that a rig can set or hold (below it the effect is not named). 0: any change.
+    floor_reason : str
+        Where the floor comes from.
     """
 
     name: str
@@ -110,10 +126,29 @@ class Parameter:
     upper: float
     log: bool = False
     integer: bool = False
+    plausible: tuple[float, float] | None = None
+    reason: str = ""
+    floor: float = 0.0
+    floor_reason: str = ""
 
     def __post_init__(self) -> None:
         if not self.lower < self.upper or (self.log and self.lower <= 0):
             raise ValueError(f"bad bounds for {self.name}: [{self.lower}, {self.upper}]")
+        if self.plausible is not None and not self.plausible[0] <= self.plausible[1]:
+            raise ValueError(f"bad physical range for {self.name}: {self.plausible}")
+        if not self.floor >= 0.0:
+            raise ValueError(f"bad significance floor for {self.name}: {self.floor}")
+
+    @property
+    def physical(self) -> tuple[float, float]:
+        """The physical range (lower, upper), SI."""
+        return self.plausible if self.plausible is not None else (self.lower, self.upper)
+
+    def is_plausible(self, value: float) -> bool:
+        """Whether ``value`` lies in the physical range (1e-9 relative slack for rounding)."""
+        lo, hi = self.physical
+        slack = 1e-9 * max(abs(lo), abs(hi), 1e-300)
+        return lo - slack <= value <= hi + slack
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,11 @@ def _applies(ctx: Context) -> bool:
 
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:
-    return (Parameter(PARAM, 30e-12, 5e-9, log=True),)
+    c0 = float(ctx.study.electronics.cable_capacitance_f)
+    return (Parameter(PARAM, 30e-12, 5e-9, log=True, plausible=(0.0, 10e-9),
+                      reason="up to 100 m of RG-58 (100 pF/m)", floor=max(0.2 * c0, 20e-12),
+                      floor_reason="20 % of the nominal capacitance (at least 20 pF: a "
+                      "connector or a lead's worth)"),)
 
 
 def _baseline(ctx: Context, state: ModelState) -> dict[str, float | None]:

@@ -34,7 +34,10 @@ def _applies(ctx: Context) -> bool:
 
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:
-    return tuple(Parameter(n, -SPAN_M, SPAN_M) for n in names(ctx))
+    return tuple(Parameter(n, -SPAN_M, SPAN_M, reason="within half a bead diameter of the "
+                           "nominal position", floor=0.25e-3,
+                           floor_reason="0.25 mm: a coil placed by eye on the tube")
+                 for n in names(ctx))
 
 
 def _baseline(ctx: Context, state: ModelState) -> dict[str, float | None]:

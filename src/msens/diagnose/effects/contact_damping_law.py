@@ -23,7 +23,9 @@ PARAM = "gamma_hkk_kg_per_s_m05"
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:
     # a linear gamma_c of 1-5 kg/s at the ~1 um approach of a 5-10 N pulse is ~1e3-5e3
-    return (Parameter(PARAM, 50.0, 5e4, log=True),)
+    return (Parameter(PARAM, 50.0, 5e4, log=True,
+                      reason="the range of a linear gamma_c of 0.05-50 kg/s at the ~1 um "
+                      "approach of the pulse; a law change has no baseline value to floor"),)
 
 
 def _baseline(ctx: Context, state: ModelState) -> dict[str, float | None]:

@@ -17,7 +17,11 @@ PARAM = "lowpass_tau_s"
 
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:
-    return (Parameter(PARAM, 0.05e-6, 20e-6, log=True),)
+    dt = 1.0 / float(ctx.study.simulation.sample_rate_hz)
+    return (Parameter(PARAM, 0.05e-6, 20e-6, log=True, plausible=(0.0, 50e-6),
+                      reason="a DAQ or amplifier band above 3 kHz (the pulses last ~20 us)",
+                      floor=dt, floor_reason="one sample interval: a shorter time constant "
+                      "is not resolved by the sampling"),)
 
 
 def _baseline(ctx: Context, state: ModelState) -> dict[str, float | None]:

@@ -26,7 +26,11 @@ def _applies(ctx: Context) -> bool:
 
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:
-    return (Parameter(PARAM, NODES[0], NODES[-1]),)
+    return (Parameter(PARAM, NODES[0], NODES[-1],
+                      reason="the field models' span of remanences (another grade or batch, "
+                      "ageing, temperature)", floor=0.03,
+                      floor_reason="3 %: the remanence tolerance of one magnet grade, about "
+                      "the same as 15 K of temperature change for ceramic grades"),)
 
 
 def _baseline(ctx: Context, state: ModelState) -> dict[str, float | None]:

@@ -13,6 +13,12 @@ import dataclasses
 
 from msens.assemble import precompression_forces
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
+from msens.diagnose.effects.static_precompression import (
+    FLOOR_N,
+    FLOOR_REASON,
+    PLAUSIBLE_MAX_N,
+    PLAUSIBLE_REASON,
+)
 from msens.sensors import SensorKind
 from msens.study import PrecompressionSpec
 
@@ -29,7 +35,8 @@ def _applies(ctx: Context) -> bool:
 
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:
-    return (Parameter(PARAM, 0.0, 10.0),)
+    return (Parameter(PARAM, 0.0, 10.0, plausible=(0.0, PLAUSIBLE_MAX_N),
+                      reason=PLAUSIBLE_REASON, floor=FLOOR_N, floor_reason=FLOOR_REASON),)
 
 
 def _baseline(ctx: Context, state: ModelState) -> dict[str, float | None]:

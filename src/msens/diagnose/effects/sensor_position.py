@@ -36,7 +36,9 @@ def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:
     out = []
     for name, p, kind in zip(names(ctx), state.particles, state.kinds, strict=True):
         lo, hi = (3, n - 1) if kind is SensorKind.MSS else (2, n)
-        out.append(Parameter(name, max(lo, p - SPAN), min(hi, p + SPAN), integer=True))
+        out.append(Parameter(name, max(lo, p - SPAN), min(hi, p + SPAN), integer=True,
+                             reason="a particle of the chain (an MsS needs a contact on each "
+                             "side)", floor=1.0, floor_reason="one particle"))
     return tuple(out)
 
 

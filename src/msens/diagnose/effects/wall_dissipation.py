@@ -19,7 +19,12 @@ PARAM = "gamma_wall_kg_per_s"
 
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:
-    return (Parameter(PARAM, 0.05, 30.0, log=True),)
+    # critical damping of the wall contact at a ~5 N pulse: 2 sqrt(k m), k = 1.5 A_w
+    # delta^(1/2) ~ 1.2e7 N/m for a steel bead on steel, m = 0.45 g: ~150 kg/s
+    return (Parameter(PARAM, 0.05, 30.0, log=True, plausible=(0.0, 150.0),
+                      reason="0 to the critical damping of the wall contact (~150 kg/s)",
+                      floor=0.2, floor_reason="below 0.2 kg/s the reflected pulse drops by "
+                      "less than ~1 %, inside its shot-to-shot scatter"),)
 
 
 def _baseline(ctx: Context, state: ModelState) -> dict[str, float | None]:

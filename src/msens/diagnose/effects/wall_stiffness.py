@@ -21,7 +21,11 @@ PARAM = "wall_youngs_modulus_pa"
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:
     # 2 GPa (hard polymer) to 1000 GPa (tungsten carbide is ~600 GPa)
-    return (Parameter(PARAM, 2e9, 1000e9, log=True),)
+    return (Parameter(PARAM, 2e9, 1000e9, log=True, plausible=(1e9, 1200e9),
+                      reason="1 GPa (hard polymer) to 1200 GPa (diamond, the stiffest solid)",
+                      floor=0.05 * float(ctx.study.chain.wall.youngs_modulus_pa),
+                      floor_reason="5 %: the spread of the modulus within one steel or alloy "
+                      "grade"),)
 
 
 def _baseline(ctx: Context, state: ModelState) -> dict[str, float | None]:

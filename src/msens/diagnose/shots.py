@@ -23,7 +23,7 @@ from msens.diagnose.effects.base import ModelState
 from msens.diagnose.objective import WaveformObjective
 from msens.diagnose.predict import Predictor
 from msens.io.waveform import Waveform
-from msens.pipeline import SetupResult
+from msens.results import SetupResult
 
 #: Exponent of the solitary wave's speed in the striker speed (V_s ~ F_m^(1/6) ~ v^(1/5),
 #: design.md §5): a relative speed spread s moves arrivals at time t by ~ t s / 5.

@@ -312,6 +312,8 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
         raise InputError(f"--shots must be from 1 to 10000, got {shots}")
     if not 0.0 <= noise <= 1.0:
         raise InputError(f"--noise must be from 0 to 1 (fraction of the peak), got {noise}")
+    if not 0 <= seed < 2**63:  # numpy's generators take non-negative seeds
+        raise InputError(f"--seed must be from 0 to 2**63 - 1, got {seed}")
     names = [s.name for s in study.setups]
     name = setup or names[0]
     if name not in names:
@@ -438,8 +440,10 @@ def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str |
            workers: int | None = None, progress: bool = True, fig_format: str = "png"):
     """Sweep coil/magnet designs of the study's MsS (:mod:`msens.design`); writes
     ``designs.csv``, ``pareto.<fig_format>`` and ``recommendation.json`` into ``out``."""
+    from msens import budget
     from msens.design import load_sweep, run_design
 
+    budget.check(study)
     return run_design(study, load_sweep(sweep), out, scheduler=scheduler, workers=workers,
                       progress=progress, provenance=provenance(study),
                       fig_format=_check_format(fig_format))
@@ -462,6 +466,7 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
     """
     import json
 
+    from msens import budget
     from msens.diagnose import diagnose_passes, diagnose_reference
     from msens.diagnose.report import FILES
     from msens.diagnose.report import write as write_diagnosis
@@ -475,6 +480,7 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
         raise InputError(f"--passes must be from 1 to 7, got {passes}")
     target = OutputDir(out)
     target.check(_figure_names(FILES, _check_format(fig_format)))
+    budget.check(study)
     if data is not None:
         results = diagnose_passes(read_waveform(data), study, passes=passes)
     else:

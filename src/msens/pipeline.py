@@ -19,6 +19,7 @@ from msens.calibrate import DissipationFit, fit_dissipation
 from msens.chain.equilibrium import static_contact_forces
 from msens.chain.integrate import ChainResult, simulate
 from msens.chain.model import Chain
+from msens.errors import InputError
 from msens.features import PulseFeatures, centre_distance, pulse_features, wave_speed
 from msens.sensors import SensorKind, observe, time_derivative
 from msens.study import MssModel, ReferenceRow, SensorSpec, SetupSpec, Study
@@ -352,6 +353,29 @@ def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
                        responses=responses)
 
 
+#: Smallest peak of a sensor's force, relative to the striker contact's, that counts as a
+#: pulse: below it the wave has not arrived (or has died out) and the features would be
+#: fitted to round-off (a pulse of 1e-17 N "found" at a sensor the wave never reached).
+MIN_ARRIVAL_FRACTION = 1e-3
+
+
+def check_arrivals(study: Study, result: SetupResult) -> None:
+    """Refuse (InputError naming ``simulation.t_end_s``) a run in which the wave never
+    reached one of the setup's sensors: its features would be confident nonsense."""
+    force = result.history.force
+    striker = float(np.max(np.abs(force[:, 0] - result.static_force[0])))
+    for r in result.sensors:
+        dynamic = r.force - r.force[0]
+        peak = float(np.max(np.abs(dynamic))) if dynamic.size else 0.0
+        if not peak >= MIN_ARRIVAL_FRACTION * striker:
+            raise InputError(
+                f"{study.source}: no pulse reached the {r.sensor.kind.value}@"
+                f"{r.sensor.particle} sensor of setup {result.setup.name!r} within "
+                f"'simulation.t_end_s' = {study.simulation.t_end_s:g} s (its peak force change "
+                f"is {peak:.3g} N against {striker:.3g} N at the striker contact): lengthen "
+                "t_end_s so the wave reaches every sensor and its reflection comes back")
+
+
 def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:
     """Paper Eq. 10 on the study's calibration setup, or None if it asks for none."""
     spec = study.dissipation_fit
@@ -466,6 +490,9 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
     -------
     StudyResult
     """
+    from msens import budget
+
+    budget.check(study)  # before any work: refuse what would exhaust memory or time
     t = output_times(study)
     fit = fit if fit is not None else calibrate_dissipation(study, t)
     gc = fit.gamma_c if fit is not None else study.chain.gamma_contact
@@ -476,7 +503,9 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
         chain, history = simulate_setup(study, setup, t, gamma_contact=gc, gamma_wall=gw,
                                         extra=(static_forces or {}).get(setup.name),
                                         transducers=transducers)
-        setups.append(observe_setup(setup, chain, history, transducers=transducers,
-                                    study=study, responses=setup_responses(study, setup)))
+        observed = observe_setup(setup, chain, history, transducers=transducers,
+                                 study=study, responses=setup_responses(study, setup))
+        check_arrivals(study, observed)
+        setups.append(observed)
     return StudyResult(study=study, gamma_contact=gc, gamma_wall=gw, fit=fit,
                        setups=tuple(setups))

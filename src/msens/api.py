@@ -347,16 +347,30 @@ def compare(study: Study, data: Path, out: Path, *,
         has no pulse to compare.
     """
     from msens import plots
-    from msens.compare import check_units, match_setup, match_setup_spec, shot_records
+    from msens.compare import (
+        check_signal,
+        check_units,
+        match_setup,
+        match_setup_spec,
+        shot_records,
+    )
     from msens.compare import compare as compare_records
     from msens.io.read import read_waveform
 
     target = OutputDir(out)
     target.check(["compare.json", f"overlay.{_check_format(fig_format)}"])
+    from msens.diagnose.objective import check_channels as check_pulses
+    from msens.signalcheck import check_amplitudes, check_shots
+
     waveform = read_waveform(data)
+    source = str(getattr(data, "path", data))
     check_units(waveform)
+    check_shots(waveform, source)
+    check_amplitudes(waveform, source)
+    check_pulses(waveform)  # the same "no signal" rule as diagnose
     match_setup_spec(study, waveform)
     result = run_study(study)
+    check_signal(match_setup(result, waveform), waveform, source)
     report = compare_records(result, waveform)
     report["data"] = str(data)
     report["provenance"] = provenance(study)
@@ -482,7 +496,9 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
     target.check(_figure_names(FILES, _check_format(fig_format)))
     budget.check(study)
     if data is not None:
-        results = diagnose_passes(read_waveform(data), study, passes=passes)
+        waveform = read_waveform(data)
+        _check_measurement(study, waveform, str(getattr(data, "path", data)))
+        results = diagnose_passes(waveform, study, passes=passes)
     else:
         results, added = [], []
         for _ in range(passes):
@@ -495,6 +511,22 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
                               fig_format=fig_format)
     report = json.loads(written[0].read_text())
     return report, written
+
+
+def _check_measurement(study: Study, waveform, source: str) -> None:
+    """The checks ``compare`` makes on a measured waveform, for ``diagnose``: complete shots,
+    plausible amplitudes, and records neither inverted nor time-scaled against the model
+    (one model run, seconds)."""
+    from msens.compare import check_signal, check_units, match_setup, match_setup_spec
+    from msens.diagnose.objective import check_channels as check_pulses
+    from msens.signalcheck import check_amplitudes, check_shots
+
+    check_units(waveform)
+    check_shots(waveform, source)
+    check_amplitudes(waveform, source)
+    check_pulses(waveform)
+    match_setup_spec(study, waveform)
+    check_signal(match_setup(run_study(study), waveform), waveform, source)
 
 
 def format_diagnosis(report: dict) -> str:

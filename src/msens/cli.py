@@ -296,6 +296,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:  # a bug: say so, never dressed up as bad input
         return _internal_error(exc, debug="--debug" in (sys.argv if argv is None else argv))
     finally:
+        from msens.io import dirlock
+
+        dirlock.release_all()  # main() may run many times in one process (tests, scripts)
         if logging_state is not None:
             _restore_logging(*logging_state)
 

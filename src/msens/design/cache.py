@@ -12,10 +12,10 @@ import dataclasses
 import enum
 import hashlib
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
+
+from msens.io.atomic import atomic_write_bytes, clean_stale
 
 #: Bumped whenever a design function changes what it computes; part of every key.
 RESULT_VERSION = "msens.design/2"
@@ -48,19 +48,6 @@ def content_key(*parts: Any) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and :func:`os.replace`."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 class ResultCache:
     """Directory of ``<key>.json`` results.
 
@@ -72,6 +59,7 @@ class ResultCache:
 
     def __init__(self, directory: str | Path):
         self.directory = Path(directory)
+        clean_stale(self.directory)  # temporary files of a killed sweep
 
     def path(self, key: str) -> Path:
         return self.directory / f"{key}.json"

@@ -359,15 +359,14 @@ def compare(study: Study, data: Path, out: Path, *,
 
     target = OutputDir(out)
     target.check(["compare.json", f"overlay.{_check_format(fig_format)}"])
-    from msens.diagnose.objective import check_channels as check_pulses
-    from msens.signalcheck import check_amplitudes, check_shots
+    from msens.signalcheck import check_amplitudes, check_pulses, check_shots
 
     waveform = read_waveform(data)
     source = str(getattr(data, "path", data))
     check_units(waveform)
     check_shots(waveform, source)
     check_amplitudes(waveform, source)
-    check_pulses(waveform)  # the same "no signal" rule as diagnose
+    check_pulses(waveform, source)  # no signal is an error, in compare as in diagnose
     match_setup_spec(study, waveform)
     result = run_study(study)
     check_signal(match_setup(result, waveform), waveform, source)
@@ -518,13 +517,12 @@ def _check_measurement(study: Study, waveform, source: str) -> None:
     plausible amplitudes, and records neither inverted nor time-scaled against the model
     (one model run, seconds)."""
     from msens.compare import check_signal, check_units, match_setup, match_setup_spec
-    from msens.diagnose.objective import check_channels as check_pulses
-    from msens.signalcheck import check_amplitudes, check_shots
+    from msens.signalcheck import check_amplitudes, check_pulses, check_shots
 
     check_units(waveform)
     check_shots(waveform, source)
     check_amplitudes(waveform, source)
-    check_pulses(waveform)
+    check_pulses(waveform, source)
     match_setup_spec(study, waveform)
     check_signal(match_setup(run_study(study), waveform), waveform, source)
 

@@ -463,6 +463,14 @@ def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_conta
         extra = magnetic if extra is None else extra + magnetic
     chain = build_chain(study, setup, gamma_contact=gamma_contact, gamma_wall=gamma_wall,
                         static_force=extra)
+    try:
+        static_contact_forces(chain)
+    except ValueError as exc:  # the magnets' pull is a consequence of the study's sensors
+        raise InputError(f"{study.source}: setup {setup.name!r}: {exc}: the bias magnets of "
+                         "its [[sensor]] tables pull the beads apart more than gravity and "
+                         "[[precompression]] hold them together; use a weaker magnet "
+                         "('sensor.magnet.grade'), move it ('axial_offset_m') or add "
+                         "precompression") from None
     # the silent wait of a first run: numba compiles the kernel once per install (~0.5-1.5 min)
     _log.info("setup %s: simulating the chain (%d particles, %.3g ms; the first run after "
               "installing also compiles the chain kernel, about a minute)", setup.name,

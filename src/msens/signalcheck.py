@@ -21,14 +21,18 @@ from msens.io.waveform import Waveform
 #: is meant. Outside, the numbers are a scaling mistake, and arithmetic on them under- or
 #: overflows.
 AMPLITUDE_RANGE_V = (1e-15, 1e6)
+#: Smallest ratio of a record's largest excursion to its noise that counts as a pulse.
+#: Gaussian noise alone reaches about 4-5 sigma in 10^4-10^5 samples.
+MIN_SNR = 8.0
 #: A record is called inverted when its cross-correlation with the model reaches this many
 #: times further negative than positive. A bipolar pulse (an MsS voltage, dF/dt) correlates
 #: with itself at +1 and with its shifted copy at about -1/2, so a ratio of 1.5 separates
 #: the two orientations with margin.
 INVERSION_RATIO = 1.5
-#: Largest ratio between the measured and the model pulse's duration (autocorrelation
-#: half-width) not called a time-scale error. Physics changes a pulse's duration weakly
-#: (the solitary wave's width is about five bead diameters at any amplitude), so a factor
+#: Largest ratio between the measured and the model pulse's duration (full width at half
+#: maximum of the largest excursion) not called a time-scale error. Physics changes a
+#: pulse's duration weakly (the solitary wave's width is about five bead diameters at any
+#: amplitude), so a factor
 #: 1.6 is beyond what a wrong precompression or damping can do, while a wrong time unit or
 #: sample rate gives factors of 2 to 1e6.
 MAX_DURATION_RATIO = 1.6
@@ -69,27 +73,65 @@ def check_amplitudes(waveform: Waveform, source: str) -> None:
                              "or an empty channel?)")
 
 
+def noise_level(values: np.ndarray) -> float:
+    """Standard deviation of a record's white noise, from its sample-to-sample differences
+    (median absolute deviation, robust to the pulse: a pulse sampled at MHz rates changes
+    little from one sample to the next, wherever it lies in the record)."""
+    d = np.diff(np.asarray(values, dtype=float))
+    return float(np.median(np.abs(d - np.median(d))) / 0.6745 / np.sqrt(2.0))
+
+
+def check_pulses(waveform: Waveform, source: str) -> None:
+    """Each channel must rise above its noise by :data:`MIN_SNR`: a record of noise only
+    has no pulse to compare (metrics of noise are not a comparison)."""
+    for j, ch in enumerate(waveform.channels):
+        v = waveform.data[:, j]
+        excursion = float(np.max(np.abs(v - np.median(v))))
+        noise = noise_level(v)
+        if not excursion > MIN_SNR * noise:
+            raise InputError(f"{source}: channel {ch.name} has no pulse: its largest excursion "
+                             f"{excursion:.3g} V is not above {MIN_SNR:g} x its noise "
+                             f"({noise:.3g} V)")
+
+
 def _baseline_free(values: np.ndarray) -> np.ndarray:
     head = values[: max(1, values.size // 20)]  # the first 5 %: before the pulse arrives
     return values - float(np.mean(head))
 
 
-def half_width(values: np.ndarray, dt: float) -> float:
-    """Autocorrelation half-width of a record, s: the first lag at which its normalised
-    autocorrelation falls below 1/2 (a pulse's duration scale; white noise adds at lag 0
-    only)."""
-    v = _baseline_free(np.asarray(values, dtype=float))
-    ac = fftconvolve(v, v[::-1], mode="full")[v.size - 1:]
-    if not ac[0] > 0.0:
+def pulse_width(values: np.ndarray, dt: float) -> float:
+    """Full width at half maximum of a record's largest excursion from its median, s (a
+    pulse's duration; the median is the baseline of a record that is mostly quiet)."""
+    v = np.asarray(values, dtype=float)
+    v = v - float(np.median(v))
+    k = int(np.argmax(np.abs(v)))
+    level = 0.5 * v[k]
+    if level == 0.0:
         return float("nan")
-    below = np.flatnonzero(ac[1:] < 0.5 * ac[0])
-    return float((below[0] + 1) * dt) if below.size else float("nan")
+    above = np.sign(level) * v > abs(level)
+    left = k
+    while left > 0 and above[left - 1]:
+        left -= 1
+    right = k
+    while right < v.size - 1 and above[right + 1]:
+        right += 1
+    return float((right - left + 1) * dt)
 
 
-def orientation(measured: np.ndarray, model: np.ndarray) -> float:
-    """Ratio of the most negative to the most positive cross-correlation of two records on
-    one time grid (> :data:`INVERSION_RATIO`: the measured record is upside down)."""
-    a, b = _baseline_free(measured), _baseline_free(model)
+def _slope(values: np.ndarray, span: int) -> np.ndarray:
+    """Differences of a record smoothed over ``span`` samples (a moving mean): the pulses'
+    edges, without the plateaus, baselines and drifts a record may hold between them."""
+    v = np.asarray(values, dtype=float)
+    if span > 1:
+        v = np.convolve(v, np.ones(span) / span, mode="valid")
+    return np.diff(v)
+
+
+def orientation(measured: np.ndarray, model: np.ndarray, span: int = 1) -> float:
+    """Ratio of the most negative to the most positive cross-correlation of the slopes of
+    two records on one time grid (> :data:`INVERSION_RATIO`: the measured record is upside
+    down); ``span`` samples of smoothing first."""
+    a, b = _slope(measured, span), _slope(model, span)
     c = fftconvolve(a, b[::-1], mode="full")
     top = float(np.max(c))
     return float(-np.min(c) / top) if top > 0.0 else float("inf")
@@ -111,7 +153,7 @@ def check_against_model(channel: str, source: str, t_data: np.ndarray, data: np.
     """
     dt_model = float(t_model[1] - t_model[0])
     dt_data = float(t_data[1] - t_data[0])
-    w_model, w_data = half_width(model, dt_model), half_width(data, dt_data)
+    w_model, w_data = pulse_width(model, dt_model), pulse_width(data, dt_data)
     if np.isfinite(w_model) and np.isfinite(w_data) and w_model > 0 and w_data > 0:
         ratio = w_data / w_model
         if not 1.0 / MAX_DURATION_RATIO <= ratio <= MAX_DURATION_RATIO:
@@ -125,7 +167,8 @@ def check_against_model(channel: str, source: str, t_data: np.ndarray, data: np.
     if inside.sum() < 8:
         return
     resampled = np.interp(t_model[inside], t_data, data)
-    ratio = orientation(resampled, model[inside])
+    span = max(1, int(0.25 * w_model / dt_model)) if np.isfinite(w_model) else 1
+    ratio = orientation(resampled, model[inside], span)
     if ratio > INVERSION_RATIO:
         raise InputError(
             f"{source}: channel {channel} looks inverted: it matches the model upside down "

@@ -393,10 +393,15 @@ def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:
             bar.update(1)
             return build_chain(study, setup, gamma_contact=gc, gamma_wall=gw)
 
-        fit = fit_dissipation(
-            make_chain,
-            sensors=(particles[0], particles[-1]), ar_top=spec.ar_top, ar_bottom=spec.ar_bottom,
-            velocity=study.striker.velocity_m_per_s, t_out=t, kind=kind)
+        try:
+            fit = fit_dissipation(
+                make_chain, sensors=(particles[0], particles[-1]), ar_top=spec.ar_top,
+                ar_bottom=spec.ar_bottom, velocity=study.striker.velocity_m_per_s, t_out=t,
+                kind=kind)
+        except InputError as exc:  # name the study's keys behind the fit
+            raise InputError(f"{study.source}: 'calibration.dissipation' on setup "
+                             f"{setup.name!r}: {exc} (the run ends at 'simulation.t_end_s' = "
+                             f"{study.simulation.t_end_s:g} s)") from None
     _log.info("calibrated gamma_c = %.3g kg/s, gamma_w = %.3g kg/s (%d chain runs, %.1f s)",
               fit.gamma_c, fit.gamma_w, fit.n_simulations, time.perf_counter() - start)
     return fit

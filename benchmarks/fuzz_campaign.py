@@ -343,6 +343,15 @@ def cases(args: argparse.Namespace, work: Path):
                 "--out", str(out), "--workers", "1"]
 
 
+def refusal(message: str) -> str:
+    """The kind of an input error: the key it names, else its text without file names."""
+    import re
+
+    text = re.sub(r"/\S+", "<file>", message.removeprefix("msens: error: "))
+    key = re.search(r"'([A-Za-z_][^']*)'", text)
+    return f"key {re.sub(r'[0-9]+', '#', key.group(1))}" if key else text[:70]
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--cases", type=int, default=2000)
@@ -376,8 +385,8 @@ def main() -> int:
     for r in results:
         if r["outcome"] == "ok":
             accepted[r["category"]].append(r["note"])
-    refused_by = Counter(r["message"].split(": ")[2][:60] if r.get("message", "").count(": ") >= 2
-                         else "" for r in results if r["outcome"] == "input")
+    refused_by = Counter(refusal(r.get("message") or "") for r in results
+                         if r["outcome"] == "input")
     report = {
         "cases": len(results), "seed": args.seed, "counts": dict(counts),
         "over_60_s": len(over), "max_seconds": max(r["seconds"] for r in results),

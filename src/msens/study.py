@@ -943,15 +943,15 @@ def _reference(t: Table | None, setups: tuple[SetupSpec, ...]) -> tuple[Referenc
             setup=_two_sensor_setup(rt, "setup", setups),
             position=rt.string("position", required=True, choices=["top", "bottom"]),
             # a time of flight and an amplitude ratio are > 0 (errors are relative to them);
-            # an AR above 10 would mean the pulse grew tenfold in a dissipative chain
+            # an AR below 1e-3 is a pulse lost in any instrument's noise, one above 10 a
+            # pulse grown tenfold in a dissipative chain; a TOF of 1 s is a 300 m chain
             tof_us=rt.number("tof_us", required=True, low=0.0, high=1e6, low_open=True),
             tof_std_us=rt.number("tof_std_us", 0.0, low=0.0, high=1e6),
-            ar=rt.number("ar", required=True, low=0.0, high=10.0, low_open=True),
+            ar=rt.number("ar", required=True, low=1e-3, high=10.0),
             ar_std=rt.number("ar_std", 0.0, low=0.0, high=10.0),
             model_tof_us=rt.number("model_tof_us", None, low=0.0, high=1e6, low_open=True,
                                    allow_none=True),
-            model_ar=rt.number("model_ar", None, low=0.0, high=10.0, low_open=True,
-                               allow_none=True),
+            model_ar=rt.number("model_ar", None, low=1e-3, high=10.0, allow_none=True),
         ))
         rt.finish()
     t.finish()

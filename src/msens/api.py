@@ -364,10 +364,10 @@ def compare(study: Study, data: Path, out: Path, *,
     waveform = read_waveform(data)
     source = str(getattr(data, "path", data))
     check_units(waveform)
+    match_setup_spec(study, waveform)
     check_shots(waveform, source)
     check_amplitudes(waveform, source)
     check_pulses(waveform, source)  # no signal is an error, in compare as in diagnose
-    match_setup_spec(study, waveform)
     result = run_study(study)
     check_signal(match_setup(result, waveform), waveform, source)
     report = compare_records(result, waveform)
@@ -520,10 +520,10 @@ def _check_measurement(study: Study, waveform, source: str) -> None:
     from msens.signalcheck import check_amplitudes, check_pulses, check_shots
 
     check_units(waveform)
+    match_setup_spec(study, waveform)
     check_shots(waveform, source)
     check_amplitudes(waveform, source)
     check_pulses(waveform, source)
-    match_setup_spec(study, waveform)
     check_signal(match_setup(run_study(study), waveform), waveform, source)
 
 

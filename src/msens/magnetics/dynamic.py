@@ -47,7 +47,7 @@ from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
 from scipy.interpolate import PchipInterpolator
 
 from msens.electronics import ReadoutCircuit, coil_transfer_function
-from msens.errors import require
+from msens.errors import internal, require
 from msens.field.eddy import SIGMA_1018, HarmonicOperator, dissipated_power
 from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import coil_current_density, coil_resistance
@@ -268,7 +268,7 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
     freqs = np.asarray([float(f) for f in frequencies])
     require(freqs.size >= 2 and freqs[0] == 0.0 and bool(np.all(np.diff(freqs) > 0)),
             f"frequencies must increase from 0 Hz (at least two), got {freqs.tolist()}")
-    require(model.rhs is not None, "internal: MechanismPotentials without source loads (rhs)")
+    internal(model.rhs is not None, "internal: MechanismPotentials without source loads (rhs)")
     sol = model.solution
     mesh = sol.problem.mesh
     if sigma is None:

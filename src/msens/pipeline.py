@@ -19,6 +19,7 @@ from msens.calibrate import DissipationFit, fit_dissipation
 from msens.chain.equilibrium import static_contact_forces
 from msens.chain.integrate import ChainResult, simulate
 from msens.chain.model import Chain
+from msens.chain.model import DampingLaw as Damping
 from msens.errors import InputError
 from msens.features import PulseFeatures, centre_distance, pulse_features, wave_speed
 from msens.sensors import SensorKind, observe, time_derivative
@@ -376,6 +377,27 @@ def check_arrivals(study: Study, result: SetupResult) -> None:
                 "t_end_s so the wave reaches every sensor and its reflection comes back")
 
 
+def check_speeds(study: Study, result: SetupResult) -> None:
+    """Refuse (InputError naming the damping keys) a modelled wave faster than sound in the
+    bead material, sqrt(E / rho): a chain of spheres only slows a pulse down, so a faster one
+    means the contacts' dashpots, not their elasticity, carry the force (gamma far above the
+    contacts' critical damping)."""
+    c = study.chain
+    rho = c.bead_mass_kg / (np.pi / 6.0 * c.bead_diameter_m**3)
+    c_bar = float(np.sqrt(c.youngs_modulus_pa / rho))
+    fastest = np.nanmax([abs(result.speed_incident), abs(result.speed_reflected), 0.0])
+    if fastest > c_bar:
+        keys = ("'chain.gamma_contact_kg_per_s' and 'gamma_wall_kg_per_s'"
+                if c.damping is not Damping.HERTZ_KUWABARA_KONO else
+                "'chain.hkk_contact_kg_per_s_sqrt_m' and 'hkk_wall_kg_per_s_sqrt_m'")
+        raise InputError(
+            f"{study.source}: setup {result.setup.name!r}: the modelled wave travels at "
+            f"{fastest:.4g} m/s between its sensors, faster than sound in the bead material "
+            f"(sqrt(E/rho) = {c_bar:.4g} m/s): the contacts' damping ({keys} = "
+            f"{c.gamma_contact:g}, {c.gamma_wall:g}) carries the force instead of their "
+            "elasticity; lower it")
+
+
 def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:
     """Paper Eq. 10 on the study's calibration setup, or None if it asks for none."""
     spec = study.dissipation_fit
@@ -519,6 +541,7 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
         observed = observe_setup(setup, chain, history, transducers=transducers,
                                  study=study, responses=setup_responses(study, setup))
         check_arrivals(study, observed)
+        check_speeds(study, observed)
         setups.append(observed)
     return StudyResult(study=study, gamma_contact=gc, gamma_wall=gw, fit=fit,
                        setups=tuple(setups))

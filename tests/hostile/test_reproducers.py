@@ -176,3 +176,16 @@ def test_internal_error_is_reported_as_a_bug(monkeypatch, capsys):
     assert "Traceback" not in err
     assert main(["--debug", "verify"]) == 1
     assert "Traceback" in capsys.readouterr().err
+
+
+def test_overdamped_chain_faster_than_sound_is_refused(tmp_path, capsys):
+    """gamma_contact = 2000 kg/s passes the dashpot bound but makes the dashpots carry the
+    force: the modelled wave would outrun sound in steel (it reported 6,000 m/s)."""
+    from tests.hostile.conftest import TWENTY
+
+    path = tmp_path / "s.toml"
+    path.write_text(TWENTY.replace("gamma_contact_kg_per_s = 4.7",
+                                   "gamma_contact_kg_per_s = 2000"))
+    code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
+                        capsys, seconds=20)
+    assert_input_error(code, err, "faster than sound", "'chain.gamma_contact_kg_per_s'")

@@ -320,6 +320,18 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
         raise InputError(f"--setup must be one of {', '.join(names)}, got {name!r}")
     if out.exists():
         raise InputError(f"refusing to overwrite '{out}'")
+    from msens import plausible
+
+    chosen_setup = study.setup(name)
+    samples = round(study.simulation.t_end_s * study.simulation.sample_rate_hz) + 1
+    # the shots' records and the rig effects' working copies (about four) in float64
+    need = 4 * 8 * shots * samples * len(chosen_setup.sensors)
+    if need > plausible.MEMORY_BUDGET_BYTES:
+        raise InputError(f"--shots {shots} of {samples:,} samples x "
+                         f"{len(chosen_setup.sensors)} channels need about "
+                         f"{need / 2**30:.3g} GiB; the budget is "
+                         f"{plausible.MEMORY_BUDGET_BYTES / 2**30:g} GiB: fewer shots, or a "
+                         "shorter 'simulation.t_end_s'")
     result = run_study(study)
     chosen = next(s for s in result.setups if s.setup.name == name)
     meta = {"study": study.name}

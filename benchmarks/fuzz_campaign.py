@@ -88,7 +88,8 @@ def run_case(argv: list[str], timeout: float, mem_gb: float) -> dict:
             os.kill(pid, signal.SIGKILL)
             os.waitpid(pid, 0)
             os.close(r)
-            return {"outcome": "timeout", "seconds": time.monotonic() - start}
+            return {"outcome": "timeout", "seconds": time.monotonic() - start,
+                    "cpu_seconds": float("nan")}
         ready, _, _ = select.select([r], [], [], min(left, 1.0))
         if ready:
             chunk = os.read(r, 1 << 16)
@@ -96,12 +97,13 @@ def run_case(argv: list[str], timeout: float, mem_gb: float) -> dict:
                 break
             data += chunk
     os.close(r)
-    _, status = os.waitpid(pid, 0)
+    _, status, usage = os.wait4(pid, 0)
     seconds = time.monotonic() - start
+    cpu = usage.ru_utime + usage.ru_stime  # the bound that a loaded machine does not blur
     try:
         res = json.loads(data)
     except ValueError:
-        return {"outcome": "crash", "seconds": seconds, "status": status}
+        return {"outcome": "crash", "seconds": seconds, "cpu_seconds": cpu, "status": status}
     err = res["stderr"]
     errors = [line for line in err.splitlines() if line.startswith("msens: error:")]
     if res["traceback"]:
@@ -114,7 +116,7 @@ def run_case(argv: list[str], timeout: float, mem_gb: float) -> dict:
         outcome = "input"
     else:
         outcome = "other"
-    return {"outcome": outcome, "seconds": seconds, "code": res["code"],
+    return {"outcome": outcome, "seconds": seconds, "cpu_seconds": cpu, "code": res["code"],
             "message": errors[0] if errors else err.strip().splitlines()[-1:] and
             err.strip().splitlines()[-1], "traceback": res["traceback"]}
 
@@ -356,10 +358,14 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--cases", type=int, default=2000)
     p.add_argument("--seed", type=int, default=24)
-    p.add_argument("--timeout", type=float, default=60.0)
+    p.add_argument("--timeout", type=float, default=180.0,
+                   help="wall-clock limit per case, s (the 60 s bound is checked on CPU time, "
+                        "which a loaded machine does not stretch)")
     p.add_argument("--mem-gb", type=float, default=6.0)
     p.add_argument("--work", default="/tmp/msens-fuzz")
     p.add_argument("--out", default="fuzz-report.json")
+    p.add_argument("--stop-at", type=float, default=None,
+                   help="stop (and report) after this many seconds")
     args = p.parse_args()
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
@@ -376,11 +382,19 @@ def main() -> int:
         if res["outcome"] not in ("ok", "input"):
             print(f"[{i}] {res['outcome']}: {category} {note}: {argv}\n"
                   f"    {res.get('message')}\n{res.get('traceback', '')[-800:]}", flush=True)
-        if i % 100 == 0:
+        if i % 50 == 0:
             counts = Counter(r["outcome"] for r in results)
             print(f"{i} cases, {time.monotonic() - start:.0f} s: {dict(counts)}", flush=True)
+            write_report(results, args)
+        if args.stop_at is not None and time.monotonic() - start > args.stop_at:
+            break
+    return write_report(results, args)
+
+
+def write_report(results: list[dict], args: argparse.Namespace) -> int:
+    """Write the report of ``results`` to ``args.out``; 0 if nothing bad happened."""
     counts = Counter(r["outcome"] for r in results)
-    over = [r for r in results if r["seconds"] > 60.0]
+    over = [r for r in results if not r["cpu_seconds"] <= 60.0]
     accepted: dict[str, list[str]] = defaultdict(list)
     for r in results:
         if r["outcome"] == "ok":
@@ -389,7 +403,8 @@ def main() -> int:
                          if r["outcome"] == "input")
     report = {
         "cases": len(results), "seed": args.seed, "counts": dict(counts),
-        "over_60_s": len(over), "max_seconds": max(r["seconds"] for r in results),
+        "over_60_s_cpu": len(over), "max_cpu_seconds": max(r["cpu_seconds"] for r in results),
+        "max_wall_seconds": max(r["seconds"] for r in results),
         "by_category": {c: dict(Counter(r["outcome"] for r in results if r["category"] == c))
                         for c in sorted({r["category"] for r in results})},
         "bad": [r for r in results if r["outcome"] not in ("ok", "input")],
@@ -397,7 +412,8 @@ def main() -> int:
         "top_refusals": refused_by.most_common(40),
     }
     Path(args.out).write_text(json.dumps(report, indent=1, default=str))
-    print(json.dumps({k: report[k] for k in ("cases", "counts", "over_60_s", "max_seconds")}))
+    print(json.dumps({k: report[k] for k in ("cases", "counts", "over_60_s_cpu",
+                                              "max_cpu_seconds", "max_wall_seconds")}))
     return 0 if not report["bad"] and not over else 1
 
 

@@ -257,8 +257,8 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
     Rates are :func:`numpy.gradient` (second order, also on non-uniform times).
     """
     t = np.asarray(t, dtype=float)
-    internal(t.ndim == 1 and t.size >= 2, "internal: t must be 1-D with at least 2 samples")
-    internal(bool(np.all(np.diff(t) > 0)), "internal: t must be strictly increasing")
+    require(t.ndim == 1 and t.size >= 2, "internal: t must be 1-D with at least 2 samples")
+    require(bool(np.all(np.diff(t) > 0)), "internal: t must be strictly increasing")
     require(np.ndim(force) == 2 and np.shape(force)[0] == t.size,
             f"internal: force must have shape (nt={t.size}, n_contacts), got "
             f"{np.shape(force)}")

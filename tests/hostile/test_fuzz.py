@@ -296,6 +296,8 @@ def test_fuzz_sweep_specs(index):
 def test_fuzz_long(record, tmp_path, capsys, monkeypatch):
     """Every fuzz test above with the slow group's example counts."""
     monkeypatch.setitem(_LONG, "on", True)
+    for sub in ("run", "wave", "npz", "tdms"):
+        (tmp_path / sub).mkdir()
     for name in sorted(SHIPPED):
         test_fuzz_shipped_study_keys(name)
     test_fuzz_study_keys_through_run(tmp_path / "run", capsys)

@@ -783,13 +783,17 @@ def _simulation(t: Table | None) -> SimulationSpec:
         return SimulationSpec()
     d = SimulationSpec()
     spec = SimulationSpec(
-        t_end_s=t.number("t_end_s", d.t_end_s, low=0.0, high=1.0, low_open=True),
+        # a solitary wave needs ~10 us to cross a mm bead: a shorter run sees nothing
+        t_end_s=t.number("t_end_s", d.t_end_s, low=1e-6, high=1.0),
         sample_rate_hz=t.number("sample_rate_hz", d.sample_rate_hz, low=P.SAMPLE_RATE_HZ[0],
                                 high=P.SAMPLE_RATE_HZ[1]),
         dt_s=t.number("dt_s", None, low=P.DT_S[0], high=P.DT_S[1], allow_none=True),
     )
     if spec.t_end_s * spec.sample_rate_hz > 5e7:
         raise t.error("t_end_s", "times sample_rate_hz gives more than 5e7 samples")
+    if spec.t_end_s * spec.sample_rate_hz < 100:  # no pulse can be resolved in fewer
+        raise t.error("t_end_s", f"= {spec.t_end_s:g} s at sample_rate_hz = "
+                                 f"{spec.sample_rate_hz:g} Hz gives fewer than 100 samples")
     t.finish()
     return spec
 

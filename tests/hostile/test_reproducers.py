@@ -189,3 +189,13 @@ def test_overdamped_chain_faster_than_sound_is_refused(tmp_path, capsys):
     code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
                         capsys, seconds=20)
     assert_input_error(code, err, "faster than sound", "'chain.gamma_contact_kg_per_s'")
+
+
+@pytest.mark.parametrize(("t_end", "fragment"), [("1e-41", ">= 1e-06"),
+                                                  ("2e-6", "fewer than 100 samples")])
+def test_run_too_short_for_any_sample(tiny, tmp_path, capsys, t_end, fragment):
+    """Found by the fuzz campaign: t_end_s = 1e-41 s left one output sample."""
+    path = tiny(("t_end_s = 3.0e-4", f"t_end_s = {t_end}"))
+    code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
+                        capsys, seconds=10)
+    assert_input_error(code, err, "'simulation.t_end_s'", fragment)

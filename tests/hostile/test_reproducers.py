@@ -70,8 +70,8 @@ def test_memory_budget_names_keys_and_estimate(tiny, tmp_path, capsys):
 
 
 def test_too_short_run_is_not_fitted(tiny, tmp_path, capsys):
-    """t_end_s = 10 us: the wave never reaches the sensors; no features of round-off."""
-    path = tiny(("t_end_s = 3.0e-4", "t_end_s = 1e-5"))
+    """t_end_s = 25 us: the wave never reaches the sensors; no features of round-off."""
+    path = tiny(("t_end_s = 3.0e-4", "t_end_s = 2.5e-5"))
     code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
                         capsys, seconds=10)
     assert_input_error(code, err, "no pulse reached", "'simulation.t_end_s'")

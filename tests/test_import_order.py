@@ -20,13 +20,13 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "msens"
 #: Stage of every top-level unit, lowest first.
 STAGES = {
     0: ("errors", "units", "version", "materials", "magnetostriction_data", "tomlreader",
-        "output", "parallel", "processing", "features", "sensors", "coil", "electronics",
+        "parallel", "processing", "features", "sensors", "coil", "electronics",
         "beadmesh", "longwave", "plausible"),
-    1: ("io", "mechanics", "magnetoelastic", "beadstress", "signalcheck"),
+    1: ("io", "output", "mechanics", "magnetoelastic", "beadstress", "signalcheck"),
     2: ("chain",),
-    3: ("study", "budget"),
+    3: ("study",),
     4: ("field", "assemble", "calibrate"),
-    5: ("steel_law", "fieldsetup"),
+    5: ("steel_law", "fieldsetup", "budget"),
     6: ("magnetics",),
     7: ("results",),
     8: ("pipeline", "synth", "compare"),

@@ -86,7 +86,7 @@ def test_none_removes_a_key():
         ({"striker.drop_heigth_m": 0.01}, r"with striker.drop_heigth_m=0.01: unknown key "
                                           r"'striker.drop_heigth_m'; allowed keys here"),
         ({"strikr.drop_height_m": 0.01}, r"unknown key 'strikr'"),
-        ({"striker.drop_height_m": -0.01}, r"'striker.drop_height_m' must be > 0, got -0.01"),
+        ({"striker.drop_height_m": -0.01}, r"'striker.drop_height_m' must be >= 1e-06, got -0.01"),
         ({"sensor[1].coil.turns": 0}, r"'sensor\[1\].coil.turns' must be >= 1, got 0"),
         ({"sensor[1].coil.turns": 900.5}, r"'sensor\[1\].coil.turns' must be an integer"),
         ({"chain.beads": "many"}, r"'chain.beads' must be an integer"),

@@ -186,12 +186,26 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
         raise InputError(f"--shots must be from 1 to 10000, got {shots}")
     if not 0.0 <= noise <= 1.0:
         raise InputError(f"--noise must be from 0 to 1 (fraction of the peak), got {noise}")
+    if not 0 <= seed < 2**63:  # numpy's generators take non-negative seeds
+        raise InputError(f"--seed must be from 0 to 2**63 - 1, got {seed}")
     names = [s.name for s in study.setups]
     name = setup or names[0]
     if name not in names:
         raise InputError(f"--setup must be one of {', '.join(names)}, got {name!r}")
     if out.exists():
         raise InputError(f"refusing to overwrite '{out}'")
+    from msens import plausible
+
+    chosen_setup = study.setup(name)
+    samples = round(study.simulation.t_end_s * study.simulation.sample_rate_hz) + 1
+    # the shots' records and the rig effects' working copies (about four) in float64
+    need = 4 * 8 * shots * samples * len(chosen_setup.sensors)
+    if need > plausible.MEMORY_BUDGET_BYTES:
+        raise InputError(f"--shots {shots} of {samples:,} samples x "
+                         f"{len(chosen_setup.sensors)} channels need about "
+                         f"{need / 2**30:.3g} GiB; the budget is "
+                         f"{plausible.MEMORY_BUDGET_BYTES / 2**30:g} GiB: fewer shots, or a "
+                         "shorter 'simulation.t_end_s'")
     result = run_study(study)
     chosen = next(s for s in result.setups if s.setup.name == name)
     meta = {"study": study.name}
@@ -219,16 +233,29 @@ def compare(study: Study, data: Path, out: Path, *,
         has no pulse to compare.
     """
     from msens import plots
-    from msens.compare import check_units, match_setup, match_setup_spec, shot_records
+    from msens.compare import (
+        check_signal,
+        check_units,
+        match_setup,
+        match_setup_spec,
+        shot_records,
+    )
     from msens.compare import compare as compare_records
     from msens.io.read import read_waveform
 
     target = OutputDir(out)
     target.check(["compare.json", f"overlay.{_check_format(fig_format)}"])
+    from msens.signalcheck import check_amplitudes, check_pulses, check_shots
+
     waveform = read_waveform(data)
+    source = str(getattr(data, "path", data))
     check_units(waveform)
     match_setup_spec(study, waveform)
+    check_shots(waveform, source)
+    check_amplitudes(waveform, source)
+    check_pulses(waveform, source)  # no signal is an error, in compare as in diagnose
     result = run_study(study)
+    check_signal(match_setup(result, waveform), waveform, source)
     report = compare_records(result, waveform)
     report["data"] = str(data)
     report["provenance"] = provenance(study)
@@ -323,9 +350,11 @@ def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str |
            workers: int | None = None, progress: bool = True, fig_format: str = "png"):
     """Sweep coil/magnet designs of the study's MsS (:mod:`msens.design`); writes
     ``designs.csv``, ``pareto.<fig_format>`` and ``recommendation.json`` into ``out``."""
+    from msens import budget
     from msens.design import load_sweep, run_design
 
     _magnetostatic_only(study, "design")
+    budget.check(study)
     return run_design(study, load_sweep(sweep), out, scheduler=scheduler, workers=workers,
                       progress=progress, provenance=provenance(study),
                       fig_format=_check_format(fig_format))
@@ -348,6 +377,7 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
     """
     import json
 
+    from msens import budget
     from msens.diagnose import diagnose_passes, diagnose_reference
     from msens.diagnose.report import FILES
     from msens.diagnose.report import write as write_diagnosis
@@ -362,8 +392,11 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
     _magnetostatic_only(study, "diagnose")
     target = OutputDir(out)
     target.check(_figure_names(FILES, _check_format(fig_format)))
+    budget.check(study)
     if data is not None:
-        results = diagnose_passes(read_waveform(data), study, passes=passes)
+        waveform = read_waveform(data)
+        _check_measurement(study, waveform, str(getattr(data, "path", data)))
+        results = diagnose_passes(waveform, study, passes=passes)
     else:
         results, added = [], []
         for _ in range(passes):
@@ -376,6 +409,21 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
                               fig_format=fig_format)
     report = json.loads(written[0].read_text())
     return report, written
+
+
+def _check_measurement(study: Study, waveform, source: str) -> None:
+    """The checks ``compare`` makes on a measured waveform, for ``diagnose``: complete shots,
+    plausible amplitudes, and records neither inverted nor time-scaled against the model
+    (one model run, seconds)."""
+    from msens.compare import check_signal, check_units, match_setup, match_setup_spec
+    from msens.signalcheck import check_amplitudes, check_pulses, check_shots
+
+    check_units(waveform)
+    match_setup_spec(study, waveform)
+    check_shots(waveform, source)
+    check_amplitudes(waveform, source)
+    check_pulses(waveform, source)
+    check_signal(match_setup(run_study(study), waveform), waveform, source)
 
 
 def format_diagnosis(report: dict) -> str:

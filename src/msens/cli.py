@@ -23,6 +23,10 @@ from msens.errors import InputError
 from msens.version import version
 
 EXIT_INPUT = 2
+#: Exit status of an internal error (a bug in msens, not bad input).
+EXIT_INTERNAL = 1
+#: Environment variable that makes an internal error print its traceback (as ``--debug``).
+DEBUG_ENV = "MSENS_DEBUG"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -73,6 +77,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"msens {version()}")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress messages or bars on stderr (warnings and errors only)")
+    p.add_argument("--debug", action="store_true",
+                   help=f"print the traceback of an internal error (also {DEBUG_ENV}=1)")
     sub = p.add_subparsers(dest="command", parser_class=_Parser)
 
     check = sub.add_parser("check-waveform", help="validate waveform files (CSV, NPZ, TDMS)")
@@ -243,6 +249,20 @@ def _convert(args: argparse.Namespace) -> int:
     return 0
 
 
+def _internal_error(exc: BaseException, *, debug: bool) -> int:
+    """Report an internal error in one line (the traceback with ``--debug`` or
+    ``MSENS_DEBUG=1``); returns :data:`EXIT_INTERNAL`."""
+    if debug or os.environ.get(DEBUG_ENV, "") not in ("", "0"):
+        import traceback
+
+        traceback.print_exception(exc, file=sys.stderr)
+    text = " ".join(str(exc).split())[:300]  # bounded: an exception may carry raw data
+    print(f"msens: internal error ({type(exc).__name__}: {text}); this is a bug in msens, not "
+          f"in your input: please report it to the msens maintainers with the command line (run "
+          f"again with --debug or {DEBUG_ENV}=1 for the traceback)", file=sys.stderr)
+    return EXIT_INTERNAL
+
+
 _COMMANDS = {"check-waveform": _check_waveform, "convert": _convert, "run": _run,
              "field": _field, "verify": _verify, "synth": _synth, "compare": _compare,
              "diagnose": _diagnose, "design": _design}
@@ -266,7 +286,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("msens: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:  # a bug: say so, never dressed up as bad input
+        return _internal_error(exc, debug="--debug" in (sys.argv if argv is None else argv))
     finally:
+        from msens.io import dirlock
+
+        dirlock.release_all()  # main() may run many times in one process (tests, scripts)
         if logging_state is not None:
             _restore_logging(*logging_state)
 

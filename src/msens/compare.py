@@ -164,6 +164,22 @@ def model_record(sensor: SensorResult, t: np.ndarray) -> np.ndarray:
     return sensor.force
 
 
+def check_signal(setup: SetupResult, waveform: Waveform, source: str) -> None:
+    """Refuse a waveform whose first shot is the model's upside down or on a scaled time
+    axis (:func:`msens.signalcheck.check_against_model`), naming the channel."""
+    from msens.signalcheck import check_against_model
+
+    for j, ch in enumerate(waveform.channels):
+        if ch.repeat != 1:
+            continue
+        sensor = _sensor(setup, ch)
+        # the quantity the instrument records: a voltage shape (dF/dt for a four-contact
+        # MsS, the DAQ voltage for a physics MsS) or the force itself (bead, rod)
+        model = sensor.voltage_shape if sensor.voltage_shape is not None else sensor.force
+        check_against_model(ch.name, source, waveform.time, waveform.data[:, j],
+                            setup.history.t, model)
+
+
 def _model_force(setup: SetupResult, sensor: SensorResult) -> np.ndarray:
     return model_record(sensor, setup.history.t)
 

@@ -21,3 +21,18 @@ def require(condition: bool, message: str) -> None:
     """Raise :class:`InputError` with ``message`` unless ``condition`` holds."""
     if not condition:
         raise InputError(message)
+
+
+class InternalError(RuntimeError):
+    """A broken invariant of msens itself (a bug), never the user's input.
+
+    The command line reports it as an internal error (exit status 1) with a pointer to
+    report it, not as bad input.
+    """
+
+
+def internal(condition: bool, message: str) -> None:
+    """Raise :class:`InternalError` with ``message`` unless ``condition`` holds (for checks
+    of msens's own invariants; user input is checked with :func:`require`)."""
+    if not condition:
+        raise InternalError(message)

@@ -91,9 +91,20 @@ def geometry_from_study(study: Study, setup: SetupSpec | None = None) -> SensorG
         particle outside the modelled chain (checked by :class:`SensorGeometry`).
     """
     setup = setup or mss_setup(study)
-    units = tuple(sensor_unit(s) for s in setup.sensors if s.kind is SensorKind.MSS)
-    if not units:
+    if not any(s.kind is SensorKind.MSS for s in setup.sensors):
         raise InputError(f"{study.source}: setup {setup.name!r} has no MsS sensor")
+    try:
+        return _geometry(study, setup)
+    except InputError as exc:  # name the study and the keys the geometry comes from
+        hint = (" (give a larger 'field.air_radius_m', or smaller coil and magnet radii)"
+                if "air box" in str(exc) else "")
+        raise InputError(f"{study.source}: the field model of setup {setup.name!r} (its "
+                         f"[[sensor]] coil and magnet tables and [field]): {exc}{hint}"
+                         ) from None
+
+
+def _geometry(study: Study, setup: SetupSpec) -> SensorGeometry:
+    units = tuple(sensor_unit(s) for s in setup.sensors if s.kind is SensorKind.MSS)
     f = study.field
     count = study.chain.n_particles
     first, last = f.beads if f.beads is not None else (2, count)

@@ -2,14 +2,15 @@
 
 msens keeps a manifest (``.msens-manifest.json``) of the files it wrote into a directory.
 A later run may replace those, but a file that exists and is not in the manifest is the
-user's: writing over it is refused with an :class:`~msens.errors.InputError`.
+user's: writing over it is refused with an :class:`~msens.errors.InputError`. One command
+at a time writes into a directory (:mod:`msens.io.dirlock`); every file is written by
+:func:`msens.io.atomic.atomic_write`.
 """
 
 from __future__ import annotations
 
 import json
-import os
-import tempfile
+import weakref
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -17,28 +18,13 @@ from typing import Any
 import numpy as np
 
 from msens.errors import InputError
+from msens.io import dirlock
+from msens.io.atomic import atomic_write, clean_stale
 
 #: Resolution of every raster figure msens writes (PNG; also the raster parts of PDF/SVG).
 DPI = 200
 
 MANIFEST = ".msens-manifest.json"
-
-
-def atomic_write(path: Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it into place
-    (with the permissions a new file gets under the umask: mkstemp's are 0600)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def _json_default(obj: Any) -> Any:
@@ -64,10 +50,11 @@ def _finite(obj: Any) -> Any:
     return obj
 
 
-def to_json(data: Any) -> str:
+def to_json(data: Any, *, sort_keys: bool = False) -> str:
     """Strict JSON text of ``data`` (numpy arrays and scalars allowed): non-finite numbers
     become null by value, so text such as "NaN" inside a string is kept as it is."""
-    return json.dumps(_finite(data), indent=2, default=_json_default, allow_nan=False)
+    return json.dumps(_finite(data), indent=2, default=_json_default, allow_nan=False,
+                      sort_keys=sort_keys)
 
 
 class OutputDir:
@@ -87,6 +74,10 @@ class OutputDir:
             self.path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InputError(f"--out '{self.path}' cannot be created: {exc}") from None
+        # one command at a time in a folder: a second one is told the folder is in use
+        key = dirlock.acquire(self.path)
+        weakref.finalize(self, dirlock.release, key)
+        clean_stale(self.path)  # temporary files of a killed run
         self._manifest_path = self.path / MANIFEST
         self._owned = set(self._read_manifest())
 

@@ -18,6 +18,8 @@ from msens.calibrate import DissipationFit, fit_dissipation
 from msens.chain.equilibrium import static_contact_forces
 from msens.chain.integrate import ChainResult, simulate
 from msens.chain.model import Chain
+from msens.chain.model import DampingLaw as Damping
+from msens.errors import InputError
 from msens.features import centre_distance, pulse_features, wave_speed
 from msens.results import SensorResult, SetupResult, StudyResult
 from msens.sensors import SensorKind, observe, time_derivative
@@ -107,6 +109,50 @@ def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
                        responses=responses)
 
 
+#: Smallest peak of a sensor's force, relative to the striker contact's, that counts as a
+#: pulse: below it the wave has not arrived (or has died out) and the features would be
+#: fitted to round-off (a pulse of 1e-17 N "found" at a sensor the wave never reached).
+MIN_ARRIVAL_FRACTION = 1e-3
+
+
+def check_arrivals(study: Study, result: SetupResult) -> None:
+    """Refuse (InputError naming ``simulation.t_end_s``) a run in which the wave never
+    reached one of the setup's sensors: its features would be confident nonsense."""
+    force = result.history.force
+    striker = float(np.max(np.abs(force[:, 0] - result.static_force[0])))
+    for r in result.sensors:
+        dynamic = r.force - r.force[0]
+        peak = float(np.max(np.abs(dynamic))) if dynamic.size else 0.0
+        if not peak >= MIN_ARRIVAL_FRACTION * striker:
+            raise InputError(
+                f"{study.source}: no pulse reached the {r.sensor.kind.value}@"
+                f"{r.sensor.particle} sensor of setup {result.setup.name!r} within "
+                f"'simulation.t_end_s' = {study.simulation.t_end_s:g} s (its peak force change "
+                f"is {peak:.3g} N against {striker:.3g} N at the striker contact): lengthen "
+                "t_end_s so the wave reaches every sensor and its reflection comes back")
+
+
+def check_speeds(study: Study, result: SetupResult) -> None:
+    """Refuse (InputError naming the damping keys) a modelled wave faster than sound in the
+    bead material, sqrt(E / rho): a chain of spheres only slows a pulse down, so a faster one
+    means the contacts' dashpots, not their elasticity, carry the force (gamma far above the
+    contacts' critical damping)."""
+    c = study.chain
+    rho = c.bead_mass_kg / (np.pi / 6.0 * c.bead_diameter_m**3)
+    c_bar = float(np.sqrt(c.youngs_modulus_pa / rho))
+    fastest = np.nanmax([abs(result.speed_incident), abs(result.speed_reflected), 0.0])
+    if fastest > c_bar:
+        keys = ("'chain.gamma_contact_kg_per_s' and 'gamma_wall_kg_per_s'"
+                if c.damping is not Damping.HERTZ_KUWABARA_KONO else
+                "'chain.hkk_contact_kg_per_s_sqrt_m' and 'hkk_wall_kg_per_s_sqrt_m'")
+        raise InputError(
+            f"{study.source}: setup {result.setup.name!r}: the modelled wave travels at "
+            f"{fastest:.4g} m/s between its sensors, faster than sound in the bead material "
+            f"(sqrt(E/rho) = {c_bar:.4g} m/s): the contacts' damping ({keys} = "
+            f"{c.gamma_contact:g}, {c.gamma_wall:g}) carries the force instead of their "
+            "elasticity; lower it")
+
+
 def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:
     """Paper Eq. 10 on the study's calibration setup, or None if it asks for none."""
     spec = study.dissipation_fit
@@ -124,10 +170,15 @@ def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:
             bar.update(1)
             return build_chain(study, setup, gamma_contact=gc, gamma_wall=gw)
 
-        fit = fit_dissipation(
-            make_chain,
-            sensors=(particles[0], particles[-1]), ar_top=spec.ar_top, ar_bottom=spec.ar_bottom,
-            velocity=study.striker.velocity_m_per_s, t_out=t, kind=kind)
+        try:
+            fit = fit_dissipation(
+                make_chain, sensors=(particles[0], particles[-1]), ar_top=spec.ar_top,
+                ar_bottom=spec.ar_bottom, velocity=study.striker.velocity_m_per_s, t_out=t,
+                kind=kind)
+        except InputError as exc:  # name the study's keys behind the fit
+            raise InputError(f"{study.source}: 'calibration.dissipation' on setup "
+                             f"{setup.name!r}: {exc} (the run ends at 'simulation.t_end_s' = "
+                             f"{study.simulation.t_end_s:g} s)") from None
     _log.info("calibrated gamma_c = %.3g kg/s, gamma_w = %.3g kg/s (%d chain runs, %.1f s)",
               fit.gamma_c, fit.gamma_w, fit.n_simulations, time.perf_counter() - start)
     return fit
@@ -193,6 +244,14 @@ def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_conta
         extra = magnetic if extra is None else extra + magnetic
     chain = build_chain(study, setup, gamma_contact=gamma_contact, gamma_wall=gamma_wall,
                         static_force=extra)
+    try:
+        static_contact_forces(chain)
+    except ValueError as exc:  # the magnets' pull is a consequence of the study's sensors
+        raise InputError(f"{study.source}: setup {setup.name!r}: {exc}: the bias magnets of "
+                         "its [[sensor]] tables pull the beads apart more than gravity and "
+                         "[[precompression]] hold them together; use a weaker magnet "
+                         "('sensor.magnet.grade'), move it ('axial_offset_m') or add "
+                         "precompression") from None
     # the silent wait of a first run: numba compiles the kernel once per install (~0.5-1.5 min)
     _log.info("setup %s: simulating the chain (%d particles, %.3g ms; the first run after "
               "installing also compiles the chain kernel, about a minute)", setup.name,
@@ -222,6 +281,9 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
     -------
     StudyResult
     """
+    from msens import budget
+
+    budget.check(study)  # before any work: refuse what would exhaust memory or time
     t = output_times(study)
     fit = fit if fit is not None else calibrate_dissipation(study, t)
     gc = fit.gamma_c if fit is not None else study.chain.gamma_contact
@@ -232,9 +294,11 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
         chain, history = simulate_setup(study, setup, t, gamma_contact=gc, gamma_wall=gw,
                                         extra=(static_forces or {}).get(setup.name),
                                         transducers=transducers)
-        setups.append(observe_setup(setup, chain, history, transducers=transducers,
-                                    study=study,
-                                    responses=setup_responses(study, setup,
-                                                              scheduler=scheduler)))
+        observed = observe_setup(setup, chain, history, transducers=transducers,
+                                 study=study,
+                                 responses=setup_responses(study, setup, scheduler=scheduler))
+        check_arrivals(study, observed)
+        check_speeds(study, observed)
+        setups.append(observed)
     return StudyResult(study=study, gamma_contact=gc, gamma_wall=gw, fit=fit,
                        setups=tuple(setups))

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from msens import plausible as P
 from msens.chain.model import DampingLaw as Damping
 from msens.errors import InputError
 from msens.materials import (
@@ -547,26 +548,58 @@ def _chain(t: Table) -> ChainSpec:
     wall = WallSpec()
     if wall_t is not None:
         wall = WallSpec(
-            youngs_modulus_pa=wall_t.number("youngs_modulus_pa", wall.youngs_modulus_pa,
-                                            low=0.0, low_open=True),
+            youngs_modulus_pa=_modulus(wall_t, wall.youngs_modulus_pa),
             poisson_ratio=wall_t.number("poisson_ratio", wall.poisson_ratio, low=-1.0,
                                         high=0.5, low_open=True),
         )
         wall_t.finish()
+    diameter = t.number("bead_diameter_m", d.bead_diameter_m, low=P.BEAD_DIAMETER_M[0],
+                        high=P.BEAD_DIAMETER_M[1])
+    mass = t.number("bead_mass_kg", d.bead_mass_kg, low=0.0, low_open=True)
+    density = mass / (math.pi / 6.0 * diameter**3)
+    lo, hi = P.BEAD_DENSITY_KG_PER_M3
+    if not lo <= density <= hi:
+        raise t.error("bead_mass_kg", f"= {mass:g} kg with bead_diameter_m = {diameter:g} m "
+                                      f"is a bead density of {density:.3g} kg/m^3; solids lie "
+                                      f"between {lo:g} and {hi:g} kg/m^3 (a typo in the mass "
+                                      "or the diameter?)")
+    for key, value in (("gamma_contact_kg_per_s" if law is not Damping.HERTZ_KUWABARA_KONO
+                        else "hkk_contact_kg_per_s_sqrt_m", gc),
+                       ("gamma_wall_kg_per_s" if law is not Damping.HERTZ_KUWABARA_KONO
+                        else "hkk_wall_kg_per_s_sqrt_m", gw)):
+        _check_dashpot(t, key, value, mass, law)
     return ChainSpec(
-        beads=t.integer("beads", d.beads, low=2, high=10000),
-        bead_diameter_m=t.number("bead_diameter_m", d.bead_diameter_m, low=0.0, high=1.0,
-                                 low_open=True),
-        bead_mass_kg=t.number("bead_mass_kg", d.bead_mass_kg, low=0.0, high=100.0,
-                              low_open=True),
+        beads=t.integer("beads", d.beads, low=P.BEADS[0], high=P.BEADS[1]),
+        bead_diameter_m=diameter,
+        bead_mass_kg=mass,
         material=t.string("material", d.material),
-        youngs_modulus_pa=t.number("youngs_modulus_pa", d.youngs_modulus_pa, low=0.0,
-                                   low_open=True),
+        youngs_modulus_pa=_modulus(t, d.youngs_modulus_pa),
         poisson_ratio=t.number("poisson_ratio", d.poisson_ratio, low=-1.0, high=0.5,
                                low_open=True),
-        gravity_m_per_s2=t.number("gravity", d.gravity_m_per_s2, low=0.0, high=1000.0),
+        gravity_m_per_s2=t.number("gravity", d.gravity_m_per_s2, low=P.GRAVITY_M_PER_S2[0],
+                                  high=P.GRAVITY_M_PER_S2[1]),
         damping=law, gamma_contact=gc, gamma_wall=gw, wall=wall,
     )
+
+
+def _modulus(t: Table, default: float) -> float:
+    """``youngs_modulus_pa`` of table ``t`` within :data:`msens.plausible.YOUNGS_MODULUS_PA`."""
+    return t.number("youngs_modulus_pa", default, low=P.YOUNGS_MODULUS_PA[0],
+                    high=P.YOUNGS_MODULUS_PA[1])
+
+
+def _check_dashpot(t: Table, key: str, gamma: float, mass: float, law: Damping) -> None:
+    """Refuse a damping coefficient whose dashpot time m/(2 gamma) is below
+    :data:`msens.plausible.MIN_DASHPOT_TIME_S` (see there why)."""
+    hkk = law is Damping.HERTZ_KUWABARA_KONO
+    scale = math.sqrt(P.HKK_REFERENCE_APPROACH_M) if hkk else 1.0  # to kg/s
+    high = 0.5 * mass / P.MIN_DASHPOT_TIME_S
+    if gamma * scale > high:
+        limit = high / scale
+        raise t.error(key, f"must be <= {limit:.3g} for beads of {mass:g} kg, got {gamma:g}: "
+                           f"its dashpot would stop a bead in under "
+                           f"{P.MIN_DASHPOT_TIME_S:g} s, faster than any bead contact "
+                           "vibrates (the chain would carry no wave)")
 
 
 def _striker(t: Table) -> StrikerSpec:
@@ -574,10 +607,11 @@ def _striker(t: Table) -> StrikerSpec:
     if has_h == has_v:
         raise t.error("drop_height_m", "or 'striker.velocity_m_per_s': give exactly one")
     if has_h:
-        h = t.number("drop_height_m", low=0.0, high=10.0, low_open=True)
+        h = t.number("drop_height_m", low=P.DROP_HEIGHT_M[0], high=P.DROP_HEIGHT_M[1])
         t.finish()
         return StrikerSpec(velocity_m_per_s=math.sqrt(2.0 * G0 * h), drop_height_m=h)
-    v = t.number("velocity_m_per_s", low=0.0, high=100.0, low_open=True)
+    v = t.number("velocity_m_per_s", low=P.STRIKER_VELOCITY_M_PER_S[0],
+                 high=P.STRIKER_VELOCITY_M_PER_S[1])
     t.finish()
     return StrikerSpec(velocity_m_per_s=v)
 
@@ -597,8 +631,7 @@ def _insert(t: Table, chain: ChainSpec) -> InsertSpec:
         particle=_particle(t, "particle", chain),
         kind=t.string("kind", "rod", choices=["rod"]),
         mass_kg=t.number("mass_kg", d.mass_kg, low=0.0, high=100.0, low_open=True),
-        youngs_modulus_pa=t.number("youngs_modulus_pa", d.youngs_modulus_pa, low=0.0,
-                                   low_open=True),
+        youngs_modulus_pa=_modulus(t, d.youngs_modulus_pa),
         poisson_ratio=t.number("poisson_ratio", d.poisson_ratio, low=-1.0, high=0.5,
                                low_open=True),
         length_m=t.number("length_m", d.length_m, low=0.0, high=1.0, low_open=True),
@@ -615,20 +648,50 @@ def _precompression(t: Table, chain: ChainSpec) -> PrecompressionSpec:
     if not ok or not 1 <= contacts[0] <= contacts[1] <= n - 1:
         raise t.error("contacts", f"must be [first, last] contact numbers with "
                                   f"1 <= first <= last <= {n - 1}, got {contacts!r}")
-    force = t.number("force_N", required=True, low=0.0)
+    force = t.number("force_N", required=True, low=0.0, high=1e6)  # 1 MN crushes any bead
+    _check_static_load(t, "force_N", force, chain)
     t.finish()
     return PrecompressionSpec(first=contacts[0], last=contacts[1], force_n=force)
 
 
-def _coil(t: Table) -> CoilSpec:
+def _check_static_load(t: Table, key: str, force: float, chain: ChainSpec) -> None:
+    """Refuse a static contact load that would yield the beads: Hertz's law, which the chain
+    and field models use, holds only below :data:`msens.plausible.MAX_CONTACT_PRESSURE_PA`."""
+    if force <= 0.0:
+        return
+    from msens.beadstress import hertz_contact  # scikit-fem: only when a load is given
+
+    _, p0 = hertz_contact(chain.bead_diameter_m / 2.0, chain.youngs_modulus_pa,
+                          chain.poisson_ratio, force)
+    if not p0 <= P.MAX_CONTACT_PRESSURE_PA:  # also NaN: the force overflowed
+        raise t.error(key, f"= {force:g} N presses two beads with a peak Hertz pressure of "
+                           f"{p0 / 1e9:.3g} GPa, above the {P.MAX_CONTACT_PRESSURE_PA / 1e9:g} "
+                           "GPa where steels yield (Hertz contact, which the models assume, "
+                           "no longer holds)")
+
+
+def _offset(t: Table, chain: ChainSpec) -> float:
+    """``axial_offset_m`` of a coil or magnet: within half a bead of its particle."""
+    high = P.MAX_AXIAL_OFFSET_BEADS * chain.bead_diameter_m
+    offset = t.number("axial_offset_m", 0.0)
+    if abs(offset) > high:
+        raise t.error("axial_offset_m", f"must be within +-{high:g} m (half a bead "
+                                        f"diameter) of its particle, got {offset:g} m: "
+                                        "further, it sits nearer the next particle; name that "
+                                        "particle instead")
+    return offset
+
+
+def _coil(t: Table, chain: ChainSpec) -> CoilSpec:
     d = CoilSpec()
     spec = CoilSpec(
         turns=t.integer("turns", d.turns, low=1, high=10**6),
-        length_m=t.number("length_m", d.length_m, low=0.0, high=1.0, low_open=True),
-        inner_radius_m=t.number("inner_radius_m", d.inner_radius_m, low=0.0, high=1.0,
-                                low_open=True),
+        length_m=t.number("length_m", d.length_m, low=P.SENSOR_SIZE_M[0],
+                          high=P.SENSOR_SIZE_M[1]),
+        inner_radius_m=t.number("inner_radius_m", d.inner_radius_m, low=P.SENSOR_SIZE_M[0],
+                                high=P.SENSOR_SIZE_M[1]),
         wire=t.string("wire", d.wire),
-        axial_offset_m=t.number("axial_offset_m", 0.0, low=-1.0, high=1.0),
+        axial_offset_m=_offset(t, chain),
         packing_factor=t.number("packing_factor", None, low=0.0, high=0.907, low_open=True,
                                 allow_none=True),
     )
@@ -639,11 +702,12 @@ def _coil(t: Table) -> CoilSpec:
     return spec
 
 
-def _magnet(t: Table) -> MagnetSpec:
+def _magnet(t: Table, chain: ChainSpec) -> MagnetSpec:
     dims = {}
     for key in ("inner_radius_m", "outer_radius_m", "length_m", "pole_inner_radius_m",
                 "pole_outer_radius_m", "pole_thickness_m"):
-        dims[key] = t.number(key, None, low=0.0, high=1.0, low_open=True, allow_none=True)
+        dims[key] = t.number(key, None, low=P.SENSOR_SIZE_M[0], high=P.SENSOR_SIZE_M[1],
+                             allow_none=True)
     grade = t.string("grade", None, choices=sorted(MAGNET_GRADES))
     br = t.number("remanence_T", None, low=0.0, high=2.0, low_open=True, allow_none=True)
     mu = t.number("recoil_permeability", None, low=1.0, high=100.0, allow_none=True)
@@ -657,7 +721,7 @@ def _magnet(t: Table) -> MagnetSpec:
             raise t.error("remanence_T", "and 'recoil_permeability' must be given together")
     spec = MagnetSpec(enabled=t.boolean("enabled", True), grade=grade, remanence_t=br,
                       recoil_permeability=mu,
-                      axial_offset_m=t.number("axial_offset_m", 0.0, low=-1.0, high=1.0),
+                      axial_offset_m=_offset(t, chain),
                       **dims)
     t.finish()
     return spec
@@ -674,8 +738,8 @@ def _sensor(t: Table, chain: ChainSpec) -> SensorSpec:
             raise t.error("particle", f"of a four-contact MsS must be at most "
                                       f"{chain.n_particles - 1}, got {particle}")
         ct, mt = t.table("coil"), t.table("magnet")
-        coil = _coil(ct) if ct is not None else CoilSpec()
-        magnet = _magnet(mt) if mt is not None else MagnetSpec()
+        coil = _coil(ct, chain) if ct is not None else CoilSpec()
+        magnet = _magnet(mt, chain) if mt is not None else MagnetSpec()
     t.finish()
     return SensorSpec(kind=kind, particle=particle, model=model, coil=coil, magnet=magnet)
 
@@ -686,14 +750,27 @@ def _setup(t: Table, name: str, chain: ChainSpec, inserts: list[Table],
     sens = tuple(_sensor(s, chain) for s in sensors)
     if not sens:
         raise t.error("sensor", "is missing: a setup needs at least one [[sensor]]")
-    seen = set()
+    seen: dict[int, SensorKind] = {}
     for s in sens:
-        if (s.kind, s.particle) in seen:
-            raise t.error("sensor", f"lists {s.kind.value}@{s.particle} twice")
-        seen.add((s.kind, s.particle))
+        if s.particle in seen:
+            # two sensors on one particle read the same force: Eq. 10 and the wave speed
+            # would take one particle as both top and bottom
+            raise t.error("sensor", f"lists {seen[s.particle].value}@{s.particle} and "
+                                    f"{s.kind.value}@{s.particle}: one sensor per particle")
+        seen[s.particle] = s.kind
     rods = {i.particle for i in ins}
     if len(rods) != len(ins):
         raise t.error("insert", "replaces the same particle twice")
+    # the chain model has sphere-sphere and sphere-flat contacts only
+    for r in sorted(rods):
+        if r + 1 in rods:
+            raise t.error("insert", f"rods at particles {r} and {r + 1} touch flat on flat, "
+                                    "which the chain model does not have; keep a bead "
+                                    "between two rods")
+    if chain.n_particles in rods:
+        raise t.error("insert", f"rod at particle {chain.n_particles} would stand on the "
+                                "wall (flat on flat, not modelled); the last particle must "
+                                "be a bead")
     for s in sens:
         if s.kind is SensorKind.ROD and s.particle not in rods:
             raise t.error("sensor", f"rod sensor at particle {s.particle} needs an "
@@ -728,12 +805,17 @@ def _simulation(t: Table | None) -> SimulationSpec:
         return SimulationSpec()
     d = SimulationSpec()
     spec = SimulationSpec(
-        t_end_s=t.number("t_end_s", d.t_end_s, low=0.0, high=1.0, low_open=True),
-        sample_rate_hz=t.number("sample_rate_hz", d.sample_rate_hz, low=1e3, high=1e10),
-        dt_s=t.number("dt_s", None, low=0.0, high=1e-5, low_open=True, allow_none=True),
+        # a solitary wave needs ~10 us to cross a mm bead: a shorter run sees nothing
+        t_end_s=t.number("t_end_s", d.t_end_s, low=1e-6, high=1.0),
+        sample_rate_hz=t.number("sample_rate_hz", d.sample_rate_hz, low=P.SAMPLE_RATE_HZ[0],
+                                high=P.SAMPLE_RATE_HZ[1]),
+        dt_s=t.number("dt_s", None, low=P.DT_S[0], high=P.DT_S[1], allow_none=True),
     )
     if spec.t_end_s * spec.sample_rate_hz > 5e7:
         raise t.error("t_end_s", "times sample_rate_hz gives more than 5e7 samples")
+    if spec.t_end_s * spec.sample_rate_hz < 100:  # no pulse can be resolved in fewer
+        raise t.error("t_end_s", f"= {spec.t_end_s:g} s at sample_rate_hz = "
+                                 f"{spec.sample_rate_hz:g} Hz gives fewer than 100 samples")
     t.finish()
     return spec
 
@@ -743,19 +825,22 @@ def _electronics(t: Table | None) -> ElectronicsSpec:
         return ElectronicsSpec()
     d = ElectronicsSpec()
     spec = ElectronicsSpec(
-        cable_capacitance_f=t.number("cable_capacitance_F", d.cable_capacitance_f, low=0.0,
-                                     high=1e-3),
+        cable_capacitance_f=t.number("cable_capacitance_F", d.cable_capacitance_f,
+                                     low=P.CAPACITANCE_F[0], high=P.CAPACITANCE_F[1]),
         input_resistance_ohm=t.number("input_resistance_ohm", d.input_resistance_ohm,
-                                      low=0.0, low_open=True),
-        input_capacitance_f=t.number("input_capacitance_F", d.input_capacitance_f, low=0.0,
-                                     high=1e-3),
-        sample_rate_hz=t.number("sample_rate_hz", d.sample_rate_hz, low=1e3, high=1e10),
+                                      low=P.INPUT_RESISTANCE_OHM[0],
+                                      high=P.INPUT_RESISTANCE_OHM[1]),
+        input_capacitance_f=t.number("input_capacitance_F", d.input_capacitance_f,
+                                     low=P.CAPACITANCE_F[0], high=P.CAPACITANCE_F[1]),
+        sample_rate_hz=t.number("sample_rate_hz", d.sample_rate_hz, low=P.SAMPLE_RATE_HZ[0],
+                                high=P.SAMPLE_RATE_HZ[1]),
         johnson_noise=t.boolean("johnson_noise", d.johnson_noise),
         temperature_k=t.number("temperature_K", d.temperature_k, low=0.0, high=1000.0),
         adc_bits=t.integer("adc_bits", 0, low=0, high=32) or None,
-        adc_range_v=t.number("adc_range_V", None, low=0.0, low_open=True, allow_none=True),
+        adc_range_v=t.number("adc_range_V", None, low=P.ADC_RANGE_V[0],
+                             high=P.ADC_RANGE_V[1], allow_none=True),
         input_noise_v_per_rthz=t.number("input_noise_V_per_rtHz", 0.0, low=0.0, high=1e-3),
-        seed=t.integer("seed", 0, low=0),
+        seed=t.integer("seed", 0, low=P.SEED[0], high=P.SEED[1]),
     )
     if (spec.adc_bits is None) != (spec.adc_range_v is None):
         raise t.error("adc_bits", "and 'adc_range_V' must be given together")
@@ -779,7 +864,10 @@ def _field(t: Table | None, chain: ChainSpec, source: str) -> FieldSpec:
     def opt(key: str, high: float) -> float | None:
         return t.number(key, None, low=0.0, high=high, allow_none=True)
 
-    spec = FieldSpec(beads=beads, contact_load_n=opt("contact_load_N", 1e4),
+    load = opt("contact_load_N", 1e4)
+    if load is not None:
+        _check_static_load(t, "contact_load_N", load, chain)
+    spec = FieldSpec(beads=beads, contact_load_n=load,
                      min_flat_radius_m=opt("min_flat_radius_m", 1e-2),
                      contact_gap_m=opt("contact_gap_m", 1e-3),
                      air_radius_m=opt("air_radius_m", 100.0),
@@ -896,12 +984,16 @@ def _reference(t: Table | None, setups: tuple[SetupSpec, ...]) -> tuple[Referenc
         rows.append(ReferenceRow(
             setup=_two_sensor_setup(rt, "setup", setups),
             position=rt.string("position", required=True, choices=["top", "bottom"]),
-            tof_us=rt.number("tof_us", required=True, low=0.0),
-            tof_std_us=rt.number("tof_std_us", 0.0, low=0.0),
-            ar=rt.number("ar", required=True, low=0.0),
-            ar_std=rt.number("ar_std", 0.0, low=0.0),
-            model_tof_us=rt.number("model_tof_us", None, low=0.0, allow_none=True),
-            model_ar=rt.number("model_ar", None, low=0.0, allow_none=True),
+            # a time of flight and an amplitude ratio are > 0 (errors are relative to them);
+            # an AR below 1e-3 is a pulse lost in any instrument's noise, one above 10 a
+            # pulse grown tenfold in a dissipative chain; a TOF of 1 s is a 300 m chain
+            tof_us=rt.number("tof_us", required=True, low=0.0, high=1e6, low_open=True),
+            tof_std_us=rt.number("tof_std_us", 0.0, low=0.0, high=1e6),
+            ar=rt.number("ar", required=True, low=1e-3, high=10.0),
+            ar_std=rt.number("ar_std", 0.0, low=0.0, high=10.0),
+            model_tof_us=rt.number("model_tof_us", None, low=0.0, high=1e6, low_open=True,
+                                   allow_none=True),
+            model_ar=rt.number("model_ar", None, low=1e-3, high=10.0, allow_none=True),
         ))
         rt.finish()
     t.finish()

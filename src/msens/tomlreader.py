@@ -153,11 +153,19 @@ class Table:
 
 
 def read_document(text: str, *, source: str, schema: str) -> Table:
-    """Parse a TOML document and check its ``schema`` key; the root :class:`Table`."""
+    """Parse a TOML document and check its ``schema`` key; the root :class:`Table`.
+
+    A leading UTF-8 byte-order mark (as some Windows editors write) is ignored, as in the
+    CSV reader.
+    """
+    text = text.removeprefix("\ufeff")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{source}: not valid TOML: {exc}") from None
+    except RecursionError:  # tomllib parses nested arrays and inline tables recursively
+        raise InputError(f"{source}: not valid TOML for msens: arrays or tables nested too "
+                         "deeply (a study nests at most a few levels)") from None
     return document_table(data, source=source, schema=schema)
 
 

@@ -33,9 +33,7 @@ module (:mod:`msens.chain.kernel.cache_guard`).
 
 from __future__ import annotations
 
-import os
 import sys
-import tempfile
 from fractions import Fraction
 from pathlib import Path
 
@@ -192,10 +190,9 @@ def step_source() -> str:
 
 def write(path: Path = TARGET) -> None:
     """Write :func:`step_source` to ``path`` atomically."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as f:
-        f.write(step_source())
-    os.replace(tmp, path)
+    from msens.io.atomic import atomic_write_text
+
+    atomic_write_text(path, step_source())
 
 
 if __name__ == "__main__":

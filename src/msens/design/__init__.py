@@ -13,7 +13,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,7 +29,7 @@ from msens.design.sweep import (
     validate_designs,
 )
 from msens.fieldsetup import geometry_from_study
-from msens.output import OutputDir
+from msens.output import OutputDir, to_json
 from msens.study import Study
 
 
@@ -131,7 +130,7 @@ def write_results(spec: SweepSpec, designs, rows, out: OutputDir, *, computed: i
         out.record(f)
     atomic_write_bytes(paths[0], csv_text(designs, rows).encode())
     pareto_plot(designs, rows, paths[1], rec.get("design"), spec.recommend.objective)
-    atomic_write_bytes(paths[2], (json.dumps(rec, indent=2, sort_keys=True) + "\n").encode())
+    atomic_write_bytes(paths[2], (to_json(rec, sort_keys=True) + "\n").encode())
     failed = sum(r["status"] != "ok" for r in rows)
     return DesignResult(out=out.path, files=tuple(paths), recommendation=rec,
                         designs=len(rows), failed=failed, computed=computed, kind=spec.kind)

@@ -9,11 +9,10 @@ moment leaves valid entries for the designs that finished and none for the other
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
+from msens.io.atomic import atomic_write_bytes, clean_stale
 from msens.io.hashing import content_hash
 
 #: Bumped whenever a design function changes what it computes; part of every key.
@@ -24,19 +23,6 @@ def content_key(*parts: Any) -> str:
     """SHA-256 (hex) of the canonical JSON (:mod:`msens.io.hashing`) of ``parts`` and
     :data:`RESULT_VERSION`."""
     return content_hash([RESULT_VERSION, *parts])
-
-
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and :func:`os.replace`."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 class ResultCache:
@@ -50,6 +36,7 @@ class ResultCache:
 
     def __init__(self, directory: str | Path):
         self.directory = Path(directory)
+        clean_stale(self.directory)  # temporary files of a killed sweep
 
     def path(self, key: str) -> Path:
         return self.directory / f"{key}.json"

@@ -230,8 +230,9 @@ def _range(t: Table, key: str, raw: dict) -> list[float]:
     start, stop = float(raw["start"]), float(raw["stop"])
     if "num" in raw:
         num = raw["num"]
-        if not isinstance(num, int) or num < 0:
-            raise InputError(f"{where}.num must be a non-negative integer, got {num!r}")
+        if isinstance(num, bool) or not isinstance(num, int) or not 0 <= num <= MAX_DESIGNS:
+            raise InputError(f"{where}.num must be an integer from 0 to {MAX_DESIGNS}, got "
+                             f"{num!r}")
         if num == 1:
             return [start] if start == stop else []
         return [start + (stop - start) * i / (num - 1) for i in range(num)]

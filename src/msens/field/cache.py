@@ -12,12 +12,12 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import tempfile
 from pathlib import Path
 
 from msens.field.build import MeshOptions, build_mesh
 from msens.field.geometry import SensorGeometry
 from msens.io import hashing
+from msens.io.atomic import atomic_write, atomic_write_text, clean_stale
 
 #: Version of the mesh builder's output; part of every cache key.
 BUILDER_VERSION = "sensor-mesh/3"
@@ -71,25 +71,6 @@ def default_mesh_dir() -> Path:
     return Path(cache) / "msens" / "meshes"
 
 
-def _publish(tmp: str, path: Path) -> None:
-    """Give ``tmp`` the usual permissions (mkstemp makes it 0600) and move it onto ``path``."""
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
-    os.replace(tmp, path)
-
-
-def _atomic_write_text(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        _publish(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def cached_mesh(geometry: SensorGeometry, options: MeshOptions | None = None,
                 directory: str | Path | None = None) -> Path:
     """Path of the mesh of ``geometry``, building it first when absent.
@@ -119,15 +100,9 @@ def cached_mesh(geometry: SensorGeometry, options: MeshOptions | None = None,
     path = directory / name
     if path.is_file():
         return path
-    fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".sensor-{key}.", suffix=".msh")
-    os.close(fd)
-    try:
-        build_mesh(geometry, tmp, options)
-        _publish(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    clean_stale(directory)  # the temporary files of builds that were killed
+    atomic_write(path, lambda tmp: build_mesh(geometry, str(tmp), options))
     meta = {"key": key, "builder": BUILDER_VERSION, "geometry": canonical(geometry),
             "options": canonical(options)}
-    _atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=1, sort_keys=True))
+    atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=1, sort_keys=True))
     return path

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import gmsh
 import numpy as np
 
-from msens.errors import require
+from msens.errors import internal, require
 from msens.field.mesh import AxiMesh, facets_of_lines, from_arrays, generate_sized
 
 
@@ -193,7 +193,7 @@ def layered_sphere_mesh(radius: float, layer: SkinLayer, r_out: float,
 
         def triangles(surf: int) -> np.ndarray:
             types, _, nodes = gmsh.model.mesh.getElements(2, surf)
-            require(list(types) == [2], "internal: gmsh made non-triangle elements")
+            internal(list(types) == [2], "internal: gmsh made non-triangle elements")
             return np.array([index[int(g)] for g in nodes[0]], dtype=np.int64).reshape(-1, 3)
 
         def arc_nodes(curve: int) -> np.ndarray:

@@ -11,7 +11,7 @@
   When pyvista cannot render, the figure is skipped and :func:`write_field_outputs` returns the
   reason under ``"field_3d.png"`` instead of a path.
 
-All files are written atomically (temporary file in the same directory, then os.replace).
+All files are written atomically (:func:`msens.io.atomic.atomic_write`).
 """
 
 from __future__ import annotations
@@ -19,7 +19,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -27,24 +26,15 @@ import numpy as np
 
 from msens.field.forms import flux_density_qp
 from msens.field.sensor_model import FieldReport
+from msens.io.atomic import atomic_write
 
 SCHEMA = "msens.field/1"
 
 
 def _atomic(path: Path, write: Callable[[str], None]) -> Path:
-    """Call ``write(tmp_path)`` then move the temporary file onto ``path``."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        write(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual permissions
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    """Call ``write(tmp_path)`` then move the temporary file onto ``path``
+    (:func:`msens.io.atomic.atomic_write`)."""
+    return atomic_write(path, lambda tmp: write(str(tmp)))
 
 
 def _finite(x: float) -> float | None:

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
 from msens.errors import InputError
+from msens.io.atomic import atomic_write_bytes as _atomic_bytes
 
 
 def read_bytes(path: str | os.PathLike[str]) -> bytes:
@@ -23,11 +23,9 @@ def read_bytes(path: str | os.PathLike[str]) -> bytes:
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], content: bytes, overwrite: bool) -> Path:
-    """Write ``content`` to ``path`` atomically: temp file in the same folder, then rename.
+    """Write ``content`` to ``path`` atomically (:func:`msens.io.atomic.atomic_write`).
 
-    With ``overwrite=False`` an existing file is never replaced (the final step is a
-    hard link, which fails atomically if the name exists; where hard links are not
-    supported, an existence check followed by a rename).
+    With ``overwrite=False`` an existing file is never replaced.
 
     Raises
     ------
@@ -39,32 +37,4 @@ def atomic_write_bytes(path: str | os.PathLike[str], content: bytes, overwrite: 
         raise InputError(f"{p}: folder {p.parent} does not exist")
     if p.exists() and not overwrite:
         raise InputError(f"{p}: file exists; pass overwrite=True to replace it")
-    fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(content)
-            fh.flush()
-            os.fsync(fh.fileno())
-        umask = os.umask(0)  # mkstemp makes 0600: give the file the usual permissions
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        if overwrite:
-            os.replace(tmp, p)
-        else:
-            _link_new(tmp, p)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return p
-
-
-def _link_new(tmp: str, path: Path) -> None:
-    try:
-        os.link(tmp, path)
-    except FileExistsError:
-        raise InputError(f"{path}: file exists; pass overwrite=True to replace it") from None
-    except OSError:
-        # No hard links here (some network/FAT file systems): check, then rename.
-        if path.exists():
-            raise InputError(f"{path}: file exists; pass overwrite=True to replace it") from None
-        os.replace(tmp, path)
+    return _atomic_bytes(p, content, overwrite=overwrite)

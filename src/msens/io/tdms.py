@@ -17,6 +17,7 @@ LabVIEW and DIAdem show the time axis); metadata as root properties. Round trips
 from __future__ import annotations
 
 import io
+import logging
 import os
 from collections.abc import Mapping
 
@@ -101,12 +102,22 @@ def _parse(raw: bytes, source: str) -> TdmsFile:
         raise InputError(f"{source}: not a TDMS file (no 'TDSm' lead-in)")
     # npTDMS raises many types on corrupt segments (ValueError, KeyError, struct.error,
     # UnicodeDecodeError, ...); they all mean the file is damaged.
+    # npTDMS logs a warning per damaged segment: the one message below says it instead
+    logs = [logging.getLogger(name) for name in list(logging.root.manager.loggerDict)
+            if name.startswith("nptdms")]  # npTDMS sets each module logger's level
+    levels = [log.level for log in logs]
+    for log in logs:
+        log.setLevel(logging.CRITICAL)
     try:
         return TdmsFile.read(io.BytesIO(raw))
     except Exception as exc:
+        detail = " ".join(str(exc).split())[:200]  # an exception may quote raw bytes
         raise InputError(
-            f"{source}: not a readable TDMS file ({type(exc).__name__}: {exc})"
+            f"{source}: not a readable TDMS file ({type(exc).__name__}: {detail})"
         ) from None
+    finally:
+        for log, level in zip(logs, levels, strict=True):
+            log.setLevel(level)
 
 
 def _label(channel: object) -> str:
@@ -147,7 +158,8 @@ def _samples(channel: object, source: str) -> np.ndarray:
     try:
         values = np.asarray(channel[:])  # type: ignore[index]
     except Exception as exc:  # npTDMS reads lazily in places; corrupt data surfaces here
-        raise InputError(f"{source}: {_label(channel)} unreadable ({exc})") from None
+        detail = " ".join(str(exc).split())[:200]
+        raise InputError(f"{source}: {_label(channel)} unreadable ({detail})") from None
     if values.dtype.kind not in "iuf" or values.ndim != 1:
         raise InputError(
             f"{source}: {_label(channel)} must hold real numbers, got dtype {values.dtype}"

@@ -46,7 +46,7 @@ from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
 from scipy.interpolate import PchipInterpolator
 
 from msens.electronics import NoiseModel, ReadoutCircuit, add_readout_noise, coil_transfer_function
-from msens.errors import require
+from msens.errors import internal, require
 from msens.field.eddy import SIGMA_1018, HarmonicOperator, dissipated_power
 from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import coil_current_density, coil_resistance
@@ -270,7 +270,7 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
     freqs = np.asarray([float(f) for f in frequencies])
     require(freqs.size >= 2 and freqs[0] == 0.0 and bool(np.all(np.diff(freqs) > 0)),
             f"frequencies must increase from 0 Hz (at least two), got {freqs.tolist()}")
-    require(model.rhs is not None, "internal: MechanismPotentials without source loads (rhs)")
+    internal(model.rhs is not None, "internal: MechanismPotentials without source loads (rhs)")
     sol = model.solution
     mesh = sol.problem.mesh
     if sigma is None:
@@ -490,7 +490,8 @@ def join_reports(parts: Sequence[DynamicReport]) -> DynamicReport:
                                    zip(rows, keep, strict=True)])
 
         freqs = cat("frequencies")
-        require(bool(np.all(np.diff(freqs) > 0)), "join_reports: frequencies must increase")
+        internal(bool(np.all(np.diff(freqs) > 0)),
+                 "internal: join_reports: frequencies must increase")
         responses[p] = FrequencyResponse(
             particle=r0.particle, frequencies=freqs, contacts=r0.contacts,
             villari=cat("villari"), approach=cat("approach"), impedance=cat("impedance"),

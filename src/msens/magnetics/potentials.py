@@ -26,7 +26,7 @@ import matplotlib.tri as mtri
 import numpy as np
 import scipy.sparse as sp
 
-from msens.errors import require
+from msens.errors import internal, require
 from msens.field.assembly import assemble_matrix, assemble_vector, factorize
 from msens.field.constitutive import reluctivities, small_signal_tangent, tangent
 from msens.field.forms import element_stiffness, flux_density_qp
@@ -224,7 +224,7 @@ def p2_probes(basis, r: np.ndarray, z: np.ndarray) -> sp.csr_matrix:
     mesh = basis.mesh
     tri = mtri.Triangulation(mesh.p[0], mesh.p[1], mesh.t.T)
     e = tri.get_trifinder()(r, z)
-    require(bool(np.all(e >= 0)), "internal: linkage-table points outside the field mesh")
+    internal(bool(np.all(e >= 0)), "internal: linkage-table points outside the field mesh")
     p0, p1, p2 = (mesh.p[:, mesh.t[k, e]] for k in range(3))
     det = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1])
     l1 = ((r - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (z - p0[1])) / det
@@ -252,7 +252,7 @@ def linkage_table(sol: FieldSolution, potentials: np.ndarray, r_range: tuple[flo
         Grid spacing, m (the rectangle integrals converge as spacing²).
     """
     (r0, r1), (z0, z1) = r_range, z_range
-    require(0 <= r0 < r1 and z0 < z1, f"internal: bad table ranges r {r_range}, z {z_range}")
+    internal(0 <= r0 < r1 and z0 < z1, f"internal: bad table ranges r {r_range}, z {z_range}")
     nr = max(2, int(np.ceil((r1 - r0) / spacing)) + 1)
     nz = max(2, int(np.ceil((z1 - z0) / spacing)) + 1)
     r = np.linspace(r0, r1, nr)

@@ -37,7 +37,7 @@ from typing import Literal
 
 import numpy as np
 
-from msens.errors import InputError, require
+from msens.errors import InputError, internal, require
 from msens.field.build import MeshOptions
 from msens.field.cache import committed_mesh_dirs, default_mesh_dir, geometry_key
 from msens.field.geometry import Coil, SensorGeometry
@@ -154,7 +154,7 @@ class Transducer:
         """The same coil moved axially by ``offset`` (m, + toward the striker), magnets and
         beads fixed: sensitivities by cubic interpolation of the offset profiles. R and L are
         kept (the coil's inductance changes little over a few mm)."""
-        require(self.offsets is not None, "internal: transducer has no offset profiles")
+        internal(self.offsets is not None, "internal: transducer has no offset profiles")
         require(self.offsets[0] <= offset <= self.offsets[-1],
                 f"coil offset {offset} m outside the tabulated "
                 f"{self.offsets[0]:g}..{self.offsets[-1]:g} m")
@@ -258,10 +258,10 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
     Rates are :func:`numpy.gradient` (second order, also on non-uniform times).
     """
     t = np.asarray(t, dtype=float)
-    require(t.ndim == 1 and t.size >= 2, "internal: t must be 1-D with at least 2 samples")
-    require(bool(np.all(np.diff(t) > 0)), "internal: t must be strictly increasing")
-    require(np.ndim(force) == 2 and np.shape(force)[0] == t.size,
-            f"internal: force must have shape (nt={t.size}, n_contacts), got "
+    internal(t.ndim == 1 and t.size >= 2, "internal: t must be 1-D with at least 2 samples")
+    internal(bool(np.all(np.diff(t) > 0)), "internal: t must be strictly increasing")
+    internal(np.ndim(force) == 2 and np.shape(force)[0] == t.size,
+             f"internal: force must have shape (nt={t.size}, n_contacts), got "
             f"{np.shape(force)}")
     fc = contact_forces_of(force, contacts, columns)
     delta = hertz_approach(fc, stiffness) if approach is None else \

@@ -91,6 +91,6 @@ def test_bad_input_exits_2(data, tmp_path, args, capsys):
     err = capsys.readouterr().err
     assert "msens: error:" in err and "Traceback" not in err
     if "lacking" in args[-1]:
-        assert "shot #2 has no channel bead@18" in err
+        assert "shot #2" in err and "bead@18" in err
     if "ragged" in args[-1]:
         assert "bead@13#2" in err

@@ -258,10 +258,10 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
     Rates are :func:`numpy.gradient` (second order, also on non-uniform times).
     """
     t = np.asarray(t, dtype=float)
-    internal(t.ndim == 1 and t.size >= 2, "internal: t must be 1-D with at least 2 samples")
-    internal(bool(np.all(np.diff(t) > 0)), "internal: t must be strictly increasing")
-    internal(np.ndim(force) == 2 and np.shape(force)[0] == t.size,
-             f"internal: force must have shape (nt={t.size}, n_contacts), got "
+    require(t.ndim == 1 and t.size >= 2, "t must be 1-D with at least 2 samples")
+    require(bool(np.all(np.diff(t) > 0)), "t must be strictly increasing")
+    require(np.ndim(force) == 2 and np.shape(force)[0] == t.size,
+            f"force must have shape (nt={t.size}, n_contacts), got "
             f"{np.shape(force)}")
     fc = contact_forces_of(force, contacts, columns)
     delta = hertz_approach(fc, stiffness) if approach is None else \

@@ -256,7 +256,6 @@ class Diagnosis:
             "joint_refit": [{"effect": n, "parameters": p} for n, p in self.refit],
             "disagreement": self.disagreement,
             "simulations": self.simulations,
-            "elapsed_s": self.elapsed_s,
         }
 
 

@@ -99,7 +99,8 @@ def test_null_full_set(bench):
 @pytest.mark.slow
 @pytest.mark.parametrize("pair", [
     {"wall_stiffness": {"wall_youngs_modulus_pa": 60e9}, "daq_lowpass": {"lowpass_tau_s": 1e-6}},
-    {"striker_velocity": {"striker_velocity_m_per_s": 0.45},
+    # a slower striker (0.45 m/s would exceed free fall from the 7.2 mm drop: implausible)
+    {"striker_velocity": {"striker_velocity_m_per_s": 0.35},
      "wall_dissipation": {"gamma_wall_kg_per_s": 3.0}},
 ])
 def test_two_effects_stronger_first_then_the_other(bench, pair):

@@ -16,7 +16,7 @@ from functools import lru_cache
 import numpy as np
 
 from msens.diagnose.effects.base import Context, PhysicsMss
-from msens.errors import require
+from msens.errors import internal
 from msens.field.geometry import SensorGeometry
 from msens.fieldsetup import coil_geometry, geometry_from_study
 from msens.magnetics.mss import MssSensor, readout
@@ -95,7 +95,7 @@ def sensor(spec: PhysicsMss) -> MssSensor:
 
 def with_physics(physics: tuple[PhysicsMss | None, ...], **changes) -> tuple:
     """The specs with ``changes`` applied to every physics MsS."""
-    require(any(p is not None for p in physics), "internal: the state has no physics MsS")
+    internal(any(p is not None for p in physics), "internal: the state has no physics MsS")
     return tuple(None if p is None else dataclasses.replace(p, **changes) for p in physics)
 
 

@@ -32,7 +32,7 @@ effect that the library does not hold (:data:`OUTSIDE`).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -96,6 +96,20 @@ def draw(effect: str, ctx: Context, base: ModelState, rng: np.random.Generator) 
     raise ValueError(f"no plausible range defined for effect {effect!r}")
 
 
+def _with_effects(ctx: Context, base: ModelState, effects: Mapping | None,
+                  draw_effects: Sequence[str], rng: np.random.Generator
+                  ) -> tuple[dict, ModelState]:
+    """The given ``effects`` plus one random draw of each of ``draw_effects``, applied to
+    ``base``: (effect name -> parameters, the resulting state)."""
+    truth = {k: dict(v) for k, v in (effects or {}).items()}
+    for name in draw_effects:
+        truth[name] = draw(name, ctx, base, rng)
+    state = base
+    for name, params in truth.items():
+        state = get(name).apply(ctx, state, params)
+    return truth, state
+
+
 def hidden_case(ctx: Context, base: ModelState, predictor: Predictor,
                 effects: Mapping[str, Mapping[str, float]] | None = None, *, seed: int = 0,
                 draw_effects: tuple[str, ...] = (), rig: RigEffects | None = None
@@ -124,12 +138,7 @@ def hidden_case(ctx: Context, base: ModelState, predictor: Predictor,
         Effect name -> parameters actually used.
     """
     rng = np.random.default_rng(seed)
-    truth = {k: dict(v) for k, v in (effects or {}).items()}
-    for name in draw_effects:
-        truth[name] = draw(name, ctx, base, rng)
-    state = base
-    for name, params in truth.items():
-        state = get(name).apply(ctx, state, params)
+    truth, state = _with_effects(ctx, base, effects, draw_effects, rng)
     rig = rig if rig is not None else RigEffects(seed=seed)
     return synthesize(setup_result(ctx, state, predictor), rig), truth
 
@@ -182,12 +191,7 @@ def hidden_shots(ctx: Context, base: ModelState, predictor: Predictor,
         Effect name -> parameters; ``"velocities"`` -> the shots' striker speeds.
     """
     rng = np.random.default_rng(seed)
-    truth = {k: dict(v) for k, v in (effects or {}).items()}
-    for name in draw_effects:
-        truth[name] = draw(name, ctx, base, rng)
-    state = base
-    for name, params in truth.items():
-        state = get(name).apply(ctx, state, params)
+    truth, state = _with_effects(ctx, base, effects, draw_effects, rng)
     sim = predictor
     if state_of is not None:
         state, sim = state_of(state)

@@ -21,10 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from msens.electronics import coil_transfer_function, transfer_function
-from msens.field.build import MeshOptions
-from msens.field.eddy import SIGMA_1018
-from msens.fieldsetup import geometry_from_study
-from msens.magnetics.dynamic import SKIN_SIZE, dynamic_report
+from msens.fieldsetup import eddy_settings, geometry_from_study
+from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.mss import readout
 from msens.study import load_study
 
@@ -48,10 +46,10 @@ def main(path: str | None = None) -> dict:
     study = load_study(path or ROOT / "studies" / "paper-mss.toml")
     geometry = geometry_from_study(study)
     # the run's eddy-current model: its mesh graded into the bead surfaces, its cache
-    options = MeshOptions(skin_size=study.field.skin_size_m or SKIN_SIZE)
+    eddy = eddy_settings(study)
+    options = eddy.options
     t0 = time.perf_counter()
-    rep = dynamic_report(geometry, options=options,
-                         steel=study.field.steel_conductivity_s_per_m or SIGMA_1018)
+    rep = dynamic_report(geometry, options=options, steel=eddy.steel)
     out: dict = {"study": str(path or "studies/paper-mss.toml"),
                  "skin_size_m": options.skin_size, "dofs": rep.details["dofs"],
                  "elements": rep.details["elements"],

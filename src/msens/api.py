@@ -353,7 +353,6 @@ def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str |
     from msens import budget
     from msens.design import load_sweep, run_design
 
-    _magnetostatic_only(study, "design")
     budget.check(study)
     return run_design(study, load_sweep(sweep), out, scheduler=scheduler, workers=workers,
                       progress=progress, provenance=provenance(study),

@@ -10,8 +10,12 @@ gives a ``steel_bh`` table).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from msens.coil import awg_diameter, heavy_build_diameter
 from msens.errors import InputError
+from msens.field.build import MeshOptions
+from msens.field.eddy import SIGMA_1018, SKIN_SIZE
 from msens.field.geometry import (
     WIRES,
     AirBox,
@@ -118,3 +122,28 @@ def _geometry(study: Study, setup: SetupSpec) -> SensorGeometry:
     steel = {} if f.steel_bh is None else {"steel": f.steel_bh}
     return SensorGeometry(beads=beads, sensors=units, air=air,
                           reversibility=f.steel_reversibility, **steel)
+
+
+@dataclass(frozen=True)
+class EddySettings:
+    """How a study's eddy-current model is built (``[field] eddy_currents = true``).
+
+    Attributes
+    ----------
+    options : MeshOptions
+        Mesh graded to ``skin_size`` at the surfaces of the beads near a coil.
+    steel : float
+        Conductivity of beads and pole pieces, S/m.
+    """
+
+    options: MeshOptions
+    steel: float
+
+
+def eddy_settings(study: Study) -> EddySettings:
+    """The eddy-current model's mesh options and steel conductivity from the study's
+    ``[field]`` (whether the study uses the model is ``study.field.eddy_currents``).
+    ``msens run``, design and diagnose all take them from here, so they solve one model."""
+    f = study.field
+    return EddySettings(options=MeshOptions(skin_size=f.skin_size_m or SKIN_SIZE),
+                        steel=f.steel_conductivity_s_per_m or SIGMA_1018)

@@ -205,17 +205,14 @@ def setup_responses(study: Study, setup: SetupSpec, *,
     if not study.field.eddy_currents or not any(s.model is MssModel.PHYSICS
                                                 for s in setup.sensors):
         return None
-    from msens.field.build import MeshOptions
-    from msens.field.eddy import SIGMA_1018
-    from msens.fieldsetup import geometry_from_study
-    from msens.magnetics.dynamic import SKIN_SIZE, dynamic_report
+    from msens.fieldsetup import eddy_settings, geometry_from_study
+    from msens.magnetics.dynamic import dynamic_report
 
-    sigma = study.field.steel_conductivity_s_per_m or SIGMA_1018
+    eddy = eddy_settings(study)
     _log.info("setup %s: eddy-current frequency responses (steel %.3g MS/m)", setup.name,
-              sigma / 1e6)
-    skin = study.field.skin_size_m or SKIN_SIZE
-    return dynamic_report(geometry_from_study(study, setup), steel=sigma,
-                          options=MeshOptions(skin_size=skin), scheduler=scheduler).responses
+              eddy.steel / 1e6)
+    return dynamic_report(geometry_from_study(study, setup), steel=eddy.steel,
+                          options=eddy.options, scheduler=scheduler).responses
 
 
 def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_contact: float,

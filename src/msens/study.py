@@ -253,7 +253,7 @@ class FieldSpec:
         :data:`msens.materials.STEEL_REVERSIBILITY`.
     skin_size_m : float or None
         Element size at the surfaces of the beads near a coil for the eddy-current model, m;
-        None means :data:`msens.magnetics.dynamic.SKIN_SIZE`.
+        None means :data:`msens.field.eddy.SKIN_SIZE`.
     """
 
     beads: tuple[int, int] | None = None

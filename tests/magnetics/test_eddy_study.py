@@ -31,12 +31,25 @@ def _study(tmp_path, extra: str = ""):
     return api.load(path)
 
 
-def test_eddy_currents_screen_the_coil_signal(tmp_path, monkeypatch):
-    monkeypatch.setenv("MSENS_MESH_DIR", str(tmp_path / "cache"))
-    static = api.run(_study(tmp_path)).setups[0].sensors[0]
-    eddy_study = _study(tmp_path, EDDY)
+@pytest.fixture(scope="module")
+def eddy_runs(tmp_path_factory):
+    """The tiny study run with and without eddy currents (own mesh cache): folder, eddy
+    study, eddy result, static result."""
+    tmp = tmp_path_factory.mktemp("eddy")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("MSENS_MESH_DIR", str(tmp / "cache"))
+        study = _study(tmp, EDDY)
+        return tmp, study, api.run(study), api.run(_study(tmp))
+
+
+def _coil_summary(result) -> dict:
+    return api.physics_summary(result)["coils"][0]
+
+
+def test_eddy_currents_screen_the_coil_signal(eddy_runs):
+    _, eddy_study, result, static_result = eddy_runs
+    static = static_result.setups[0].sensors[0]
     assert eddy_study.field.eddy_currents
-    result = api.run(eddy_study)
     eddy = result.setups[0].sensors[0]
     # the mechanisms' EMFs with eddy currents add up to the record's EMF
     from msens.magnetics.dynamic import mechanism_emfs
@@ -58,8 +71,7 @@ def test_eddy_currents_screen_the_coil_signal(tmp_path, monkeypatch):
     np.testing.assert_allclose(mag[0], 1.0, rtol=1e-12)
     assert np.all(mag[-1] < 0.9) and np.all(np.array(fr["approach_ratio_phase_deg"])[-1] < 0)
     assert fr["resistance_ohm"][-1] > fr["resistance_ohm"][0]  # eddy losses
-    assert "frequency_response" not in api.physics_summary(api.run(_study(tmp_path)))[
-        "coils"][0]
+    assert "frequency_response" not in _coil_summary(static_result)
     v0, v1 = static.mss.voltage, eddy.mss.voltage
     assert v1.shape == v0.shape and np.all(np.isfinite(v1))
     assert 0.3 * np.max(np.abs(v0)) < np.max(np.abs(v1)) < np.max(np.abs(v0))
@@ -104,7 +116,7 @@ def test_small_signal_permeability_key(tmp_path):
             _study(tmp_path, f"[field]\n{bad}\n")
 
 
-def test_eddy_current_records_carry_the_coils_thermal_noise(tmp_path, monkeypatch):
+def test_eddy_current_records_carry_the_coils_thermal_noise(eddy_runs, monkeypatch):
     """With eddy currents the coil's Johnson noise comes from 4kT Re Z(f) of the field model.
 
     The run adds exactly :func:`add_readout_noise` with the coil's Z(f) to the noise-free
@@ -113,8 +125,8 @@ def test_eddy_current_records_carry_the_coils_thermal_noise(tmp_path, monkeypatc
     from msens.electronics import NoiseModel, add_readout_noise, thermal_noise_psd
     from msens.units import K_B
 
+    tmp_path, _, quiet, _ = eddy_runs
     monkeypatch.setenv("MSENS_MESH_DIR", str(tmp_path / "cache"))
-    quiet = api.run(_study(tmp_path, EDDY))
     noisy = TINY.replace("[electronics]\n", "[electronics]\njohnson_noise = true\n")
     path = tmp_path / "noisy.toml"
     path.write_text(noisy + EDDY)
@@ -140,16 +152,55 @@ def test_eddy_current_records_carry_the_coils_thermal_noise(tmp_path, monkeypatc
                                   rel=0.01)
 
 
-@pytest.mark.parametrize("command", ["design", "diagnose"])
-def test_workflows_without_eddy_currents_say_so(tmp_path, capsys, command):
+def test_diagnose_without_eddy_currents_says_so(tmp_path, capsys):
     path = tmp_path / "eddy.toml"
     path.write_text(TINY + EDDY)
-    (tmp_path / "sweep.toml").write_text("")
     (tmp_path / "data.csv").write_text("")
-    args = (["design", str(path), "--sweep", str(tmp_path / "sweep.toml")]
-            if command == "design" else
-            ["diagnose", str(tmp_path / "data.csv"), "--study", str(path)])
+    args = ["diagnose", str(tmp_path / "data.csv"), "--study", str(path)]
     assert main([*args, "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert "eddy_currents" in err and "does not model eddy currents" in err
     assert not (tmp_path / "out").exists()
+
+
+def _design_rows(eddy_runs, name: str, body: str) -> list[dict]:
+    import csv
+
+    tmp, study, _, _ = eddy_runs
+    (tmp / f"{name}.toml").write_text(f'schema = "msens.sweep/1"\nname = "{name}"\n' + body)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("MSENS_MESH_DIR", str(tmp / "cache"))
+        api.design(study, tmp / f"{name}.toml", tmp / name, progress=False)
+    with (tmp / name / "designs.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    assert all(r["status"] == "ok" for r in rows)
+    return rows
+
+
+def _equals_run(row: dict, run: dict, static: dict, tol: float) -> None:
+    for key in ("peak_emf_V", "peak_voltage_V"):
+        assert float(row[key]) == pytest.approx(run[key], rel=tol)
+        assert float(row[key]) < static[key]  # the eddy currents screen
+    for key in ("inductance_H", "resistance_ohm", "resonance_Hz"):
+        assert float(row[key]) == pytest.approx(run[key], rel=1e-9)
+
+
+def test_coil_design_with_eddy_currents_equals_msens_run(eddy_runs):
+    """Coil sweep on the eddy-current model (table quadrature of every source's harmonic
+    potential): the study's own coil gives the run's EMF and DAQ voltage (measured 6e-6),
+    and the coil moved 2 mm off its bead reads a different signal."""
+    rows = _design_rows(eddy_runs, "coil", "[coil]\nturns = [1100]\n"
+                                           "axial_offset_m = [0.0, 2e-3]\n")
+    _, _, run, static = eddy_runs
+    _equals_run(rows[0], _coil_summary(run), _coil_summary(static), 1e-4)
+    assert float(rows[1]["peak_emf_V"]) != pytest.approx(float(rows[0]["peak_emf_V"]),
+                                                         rel=1e-3)
+
+
+@pytest.mark.slow
+def test_magnet_design_with_eddy_currents_equals_msens_run(eddy_runs):
+    """Magnet sweep with eddy currents: the design's own eddy-current model; the study's own
+    magnet gives the run's numbers (same model, same read-out)."""
+    rows = _design_rows(eddy_runs, "magnet", '[magnet]\ngrade = ["ceramic8"]\n')
+    _, _, run, static = eddy_runs
+    _equals_run(rows[0], _coil_summary(run), _coil_summary(static), 1e-8)

@@ -15,6 +15,13 @@ coil_resistance`); L = L_inc × L_W / L_W,0, the study coil's bias-point increme
 inductance (field model) scaled by the designs' Wheeler air-core inductance ratio — exact for
 the study's own coil, an approximation of a few per cent for coils near it (magnet sweeps
 compute L_inc exactly).
+
+With eddy currents (``[field] eddy_currents = true``) the one field model is the run's
+eddy-current model (:func:`msens.fieldsetup.eddy_settings`: the mesh graded into the bead
+surfaces, the steel's conductivity) and the table holds every source's harmonic potential at
+each of the run's frequencies (:mod:`msens.magnetics.harmonic_tables`); a design's complex
+S_c(ω), D_c(ω) come from it, its impedance from the study coil's L(ω) scaled by the Wheeler
+ratio, and the EMF and DAQ voltage from :func:`msens.design.metrics.dynamic_design_rows`.
 """
 
 from __future__ import annotations
@@ -28,12 +35,16 @@ import numpy as np
 
 from msens.coil import wheeler_inductance
 from msens.design.cache import ResultCache, atomic_write_bytes, content_key
-from msens.design.metrics import Wave, design_rows
+from msens.design.metrics import Wave, design_rows, dynamic_design_rows
 from msens.design.physics import study_wave
 from msens.design.runner import run_cached
 from msens.design.sweep import Design, design_unit
+from msens.errors import internal
 from msens.field.geometry import SensorGeometry, SensorUnit
 from msens.field.sensor_model import coil_resistance
+from msens.fieldsetup import eddy_settings
+from msens.magnetics.dynamic import dynamic_report
+from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables
 from msens.magnetics.mss import winding_of
 from msens.magnetics.potentials import LinkageTable, linkage_table, rect_integral
 from msens.magnetics.transducer import (
@@ -74,6 +85,10 @@ class CoilContext:
         Bias-point incremental inductance of the study's coil, H.
     wheeler : float
         Its Wheeler air-core inductance, H.
+    harmonic : HarmonicTables or None
+        With eddy currents: the sources' harmonic tables (same grid as ``table``).
+    inductance_w : ndarray of complex, shape (n_f,), or None
+        With eddy currents: the study coil's L(ω) at ``harmonic.frequencies``, H.
     """
 
     table: LinkageTable
@@ -84,6 +99,8 @@ class CoilContext:
     z_center: float
     inductance: float
     wheeler: float
+    harmonic: HarmonicTables | None = None
+    inductance_w: np.ndarray | None = None
 
 
 def _coil_box(unit: SensorUnit, designs: Sequence[Design], geometry: SensorGeometry
@@ -101,28 +118,46 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
     transducers = transducers_for(geometry)
     tr = transducers[particle]
     wave = study_wave(study, transducers, particle)
-    sol, _ = bias_solution(geometry)
-    model = mechanism_potentials(sol, geometry, stress_force=tr.reference_force,
-                                 law=law_for_steel(geometry.steel))
     r_rng, z_rng = _coil_box(unit, designs, geometry)
-    table = linkage_table(sol, model.potentials, r_rng, z_rng, TABLE_SPACING)
-    return CoilContext(table=table, particles=model.particles,
-                       approach_contacts=model.contacts, count=model.count, wave=wave,
-                       z_center=geometry.beads.center(particle), inductance=tr.inductance_H,
-                       wheeler=wheeler_inductance(winding_of(unit.coil)))
+    common = {"wave": wave,
+              "z_center": geometry.beads.center(particle), "inductance": tr.inductance_H,
+              "wheeler": wheeler_inductance(winding_of(unit.coil))}
+    if not study.field.eddy_currents:
+        sol, _ = bias_solution(geometry)
+        model = mechanism_potentials(sol, geometry, stress_force=tr.reference_force,
+                                     law=law_for_steel(geometry.steel))
+        table = linkage_table(sol, model.potentials, r_rng, z_rng, TABLE_SPACING)
+        return CoilContext(table=table, particles=model.particles,
+                           approach_contacts=model.contacts, count=model.count, **common)
+    # the run's eddy-current model (same mesh, sources and frequencies as dynamic_report)
+    eddy = eddy_settings(study)
+    response = dynamic_report(geometry, options=eddy.options,
+                              steel=eddy.steel).responses[particle]
+    sol, _ = bias_solution(geometry, options=eddy.options)
+    model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
+                                 law=law_for_steel(geometry.steel))
+    harmonic = harmonic_tables(model, geometry, response.frequencies, r_rng, z_rng,
+                               TABLE_SPACING, steel=eddy.steel)
+    static = LinkageTable(harmonic.r, harmonic.z, harmonic.cumulative[0].real)
+    return CoilContext(table=static, particles=model.particles,
+                       approach_contacts=model.contacts, count=model.count, **common,
+                       harmonic=harmonic, inductance_w=np.asarray(response.inductance))
 
 
 def save_context(ctx: CoilContext, path: Path) -> None:
     """Atomic .npz of a context."""
     w = ctx.wave
     buf = io.BytesIO()
+    extra = {} if ctx.harmonic is None else {
+        "frequencies": ctx.harmonic.frequencies, "harmonic": ctx.harmonic.cumulative,
+        "inductance_w": ctx.inductance_w}
     np.savez(buf, r=ctx.table.r, z=ctx.table.z, cumulative=ctx.table.cumulative,
              particles=ctx.particles, approach_contacts=ctx.approach_contacts,
              contacts=w.contacts, t=w.rates.t, force_rate=w.rates.force,
              approach_rate=w.rates.approach,
              scalars=np.array([ctx.count, ctx.z_center, ctx.inductance, ctx.wheeler,
                                w.precompression_N, w.precompression_max_N,
-                               w.wave_speed_change]))
+                               w.wave_speed_change]), **extra)
     atomic_write_bytes(path, buf.getvalue())
 
 
@@ -134,9 +169,12 @@ def load_context(path: Path) -> CoilContext:
                     rates=ContactRates(f["t"], f["force_rate"], f["approach_rate"]),
                     precompression_N=float(s[4]), precompression_max_N=float(s[5]),
                     wave_speed_change=float(s[6]))
+        harmonic = (HarmonicTables(f["frequencies"], f["r"], f["z"], f["harmonic"])
+                    if "harmonic" in f.files else None)
         return CoilContext(LinkageTable(f["r"], f["z"], f["cumulative"]), f["particles"],
                            f["approach_contacts"], int(s[0]), wave, float(s[1]), float(s[2]),
-                           float(s[3]))
+                           float(s[3]), harmonic,
+                           f["inductance_w"] if harmonic is not None else None)
 
 
 def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
@@ -148,17 +186,30 @@ def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
     r_in = np.array([c.inner_radius for c in coils])
     r_out = np.array([c.outer_radius for c in coils])
     turns = np.array([c.turns for c in coils], dtype=float)
-    area = (r_out - r_in) * 2 * half
-    link = (turns / area)[:, None] * rect_integral(ctx.table, r_in, r_out, zc - half,
-                                                   zc + half)
-    contacts, s_vil, dl = contact_profiles(ctx.particles, ctx.approach_contacts, ctx.count,
-                                           link)
-    # the run's transducer covers the same contacts
-    assert np.array_equal(contacts, ctx.wave.contacts)
     resistance = np.array([coil_resistance(c) for c in coils])
-    inductance = np.array([ctx.inductance * wheeler_inductance(winding_of(c)) / ctx.wheeler
-                           for c in coils])
-    rows = design_rows(coils, resistance, inductance, s_vil, dl, ctx.wave, electronics)
+    scale = np.array([wheeler_inductance(winding_of(c)) / ctx.wheeler for c in coils])
+    inductance = ctx.inductance * scale
+    if ctx.harmonic is None:
+        area = (r_out - r_in) * 2 * half
+        link = (turns / area)[:, None] * rect_integral(ctx.table, r_in, r_out, zc - half,
+                                                       zc + half)
+        contacts, s_vil, dl = contact_profiles(ctx.particles, ctx.approach_contacts,
+                                               ctx.count, link)
+        rows = design_rows(coils, resistance, inductance, s_vil, dl, ctx.wave, electronics)
+    else:
+        link = ctx.harmonic.linkage(turns, r_in, r_out, zc - half, zc + half)
+        contacts, vr, ar = contact_profiles(ctx.particles, ctx.approach_contacts, ctx.count,
+                                            link.real)
+        _, vi, ai = contact_profiles(ctx.particles, ctx.approach_contacts, ctx.count,
+                                     link.imag)
+        rows = dynamic_design_rows(coils, resistance, inductance, ctx.harmonic.frequencies,
+                                   vr + 1j * vi, ar + 1j * ai,
+                                   scale[:, None] * ctx.inductance_w[None], ctx.wave,
+                                   electronics)
+        s_vil, dl = vr[:, 0], ar[:, 0]
+    # the run's transducer covers the same contacts
+    internal(bool(np.array_equal(contacts, ctx.wave.contacts)),
+             "internal: coil-sweep table and the run's transducer cover different contacts")
     for row, sv, d in zip(rows, s_vil, dl, strict=True):
         row["contacts"] = [int(c) for c in contacts]
         row["dLambda_dF_Wb_per_N"] = [float(v) for v in sv]

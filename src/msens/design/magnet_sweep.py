@@ -5,7 +5,11 @@ core on the design's geometry (:func:`msens.magnetics.transducer.compute_transdu
 cached by content hash, nonlinear bias solve, both mechanisms, the coil's incremental
 inductance, the magnets' pull on the beads), the study's wave with that pull
 (:func:`msens.design.physics.study_wave`) and the figures of merit of
-:mod:`msens.design.metrics` — the same chain of functions as ``msens run``.
+:mod:`msens.design.metrics` — the same chain of functions as ``msens run``. With eddy
+currents each design also gets its own eddy-current model
+(:func:`msens.magnetics.dynamic.dynamic_report` with the run's mesh options and conductivity,
+cached beside the meshes) and its row is the frequency-domain read-out of
+:func:`msens.design.metrics.dynamic_design_rows`.
 
 Model size: by default the study's whole field model (every MsS sensor: the other sensor's
 magnet changes the forces near this one; every bead), as ``msens run``. ``[model]
@@ -21,9 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
-from msens.design.metrics import design_rows
+from msens.design.metrics import design_rows, dynamic_design_rows
 from msens.design.physics import study_wave
 from msens.field.geometry import SensorGeometry
+from msens.fieldsetup import eddy_settings
+from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.transducer import compute_transducers
 from msens.study import Study
 
@@ -56,9 +62,19 @@ def evaluate_design(task: MagnetTask) -> dict:
     tr = report.transducers[task.particle]
     coil = next(u.coil for u in task.geometry.sensors if u.coil.particle == task.particle)
     wave = study_wave(task.study, report.transducers, task.particle)
-    row = design_rows([coil], np.array([tr.resistance_ohm]), np.array([tr.inductance_H]),
-                      tr.sensitivity_villari[None], tr.dlambda_dapproach[None], wave,
-                      task.study.electronics)[0]
+    resistance, inductance = np.array([tr.resistance_ohm]), np.array([tr.inductance_H])
+    if task.study.field.eddy_currents:
+        eddy = eddy_settings(task.study)
+        mesh_dir = Path(task.mesh_dir) if task.mesh_dir else None
+        rsp = dynamic_report(task.geometry, options=eddy.options, steel=eddy.steel,
+                             mesh_dir=mesh_dir, cache_dir=mesh_dir).responses[task.particle]
+        row = dynamic_design_rows([coil], resistance, inductance, rsp.frequencies,
+                                  rsp.villari[None], rsp.approach[None],
+                                  np.asarray(rsp.inductance)[None], wave,
+                                  task.study.electronics)[0]
+    else:
+        row = design_rows([coil], resistance, inductance, tr.sensitivity_villari[None],
+                          tr.dlambda_dapproach[None], wave, task.study.electronics)[0]
     return {**row, "contacts": [int(k) for k in tr.contacts],
             "dLambda_dF_Wb_per_N": [float(v) for v in tr.sensitivity_villari],
             "dLambda_ddelta_Wb_per_m": [float(v) for v in tr.dlambda_dapproach],

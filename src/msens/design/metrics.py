@@ -25,8 +25,15 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
-from msens.electronics import bandwidth, poles, resonance, transfer_function
+from msens.electronics import (
+    bandwidth,
+    coil_transfer_function,
+    poles,
+    resonance,
+    transfer_function,
+)
 from msens.field.geometry import Coil
+from msens.magnetics.dynamic import PAD, coil_impedance, emf_spectra
 from msens.magnetics.mss import figure_noise_rms, readout
 from msens.magnetics.transducer import ContactRates, emf_from_rates
 from msens.study import ElectronicsSpec
@@ -112,22 +119,85 @@ def design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.nd
         for k in range(lo, hi):
             cf = circuits[keys[k]]
             v = scipy.fft.irfft(spectrum[k - lo] * cf["transfer"], n_fft)[:nt]
-            peak_v = float(np.max(np.abs(v)))
-            rows.append({
-                "outer_radius_m": coils[k].outer_radius,
-                "resistance_ohm": float(resistance[k]), "inductance_H": float(inductance[k]),
-                "winding_capacitance_F": cf["winding_capacitance_F"],
-                "resonance_Hz": cf["resonance_Hz"], "quality_factor": cf["quality_factor"],
-                "bandwidth_Hz": cf["bandwidth_Hz"], "noise_rms_V": cf["noise_rms_V"],
-                "sensitivity_villari_Wb_per_N": float(np.sum(sensitivity_villari[k])),
-                "dLambda_dapproach_Wb_per_m": float(np.sum(dlambda_dapproach[k])),
-                "peak_emf_V": float(np.max(np.abs(e[k - lo]))),
-                "peak_voltage_V": peak_v, "snr": peak_v / cf["noise_rms_V"],
-                "precompression_N": wave.precompression_N,
-                "precompression_max_N": wave.precompression_max_N,
-                "wave_speed_change": wave.wave_speed_change,
-            })
+            rows.append(_row(coils[k], float(resistance[k]), float(inductance[k]), cf,
+                             sensitivity_villari[k], dlambda_dapproach[k], e[k - lo], v, wave))
     return rows
 
 
-__all__ = ["DECAY_TIMES", "EMF_CHUNK", "Wave", "design_rows"]
+def _row(coil: Coil, resistance: float, inductance: float, cf: dict, villari: np.ndarray,
+         approach: np.ndarray, emf: np.ndarray, voltage: np.ndarray, wave: Wave) -> dict:
+    peak_v = float(np.max(np.abs(voltage)))
+    return {
+        "outer_radius_m": coil.outer_radius,
+        "resistance_ohm": resistance, "inductance_H": inductance,
+        "winding_capacitance_F": cf["winding_capacitance_F"],
+        "resonance_Hz": cf["resonance_Hz"], "quality_factor": cf["quality_factor"],
+        "bandwidth_Hz": cf["bandwidth_Hz"], "noise_rms_V": cf["noise_rms_V"],
+        "sensitivity_villari_Wb_per_N": float(np.sum(villari)),
+        "dLambda_dapproach_Wb_per_m": float(np.sum(approach)),
+        "peak_emf_V": float(np.max(np.abs(emf))),
+        "peak_voltage_V": peak_v, "snr": peak_v / cf["noise_rms_V"],
+        "precompression_N": wave.precompression_N,
+        "precompression_max_N": wave.precompression_max_N,
+        "wave_speed_change": wave.wave_speed_change,
+    }
+
+
+#: Designs whose eddy-current spectra are formed at once (bounds memory: chunk × bins × n_c).
+SPECTRUM_CHUNK = 16
+
+
+def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndarray,
+                        frequencies: np.ndarray, villari: np.ndarray, approach: np.ndarray,
+                        inductance_w: np.ndarray, wave: Wave,
+                        electronics: ElectronicsSpec) -> list[dict]:
+    """Metrics of coil designs with eddy currents, one dict per design.
+
+    The EMF and the DAQ voltage are those of ``msens run`` with eddy currents
+    (:func:`msens.magnetics.dynamic.dynamic_signals`): the contact rates' spectra times the
+    complex sensitivities (:func:`msens.magnetics.dynamic.emf_spectra`), then the read-out
+    circuit with the coil's series impedance Z(ω) = R + jωL(ω)
+    (:func:`msens.electronics.coil_transfer_function`), on the run's FFT length
+    (:data:`msens.magnetics.dynamic.PAD`). Resonance, Q, bandwidth and noise are the static
+    circuit's (R, bias-point L), as ``summary.json`` reports them.
+
+    Parameters
+    ----------
+    coils : sequence of Coil, length n_d
+    resistance, inductance : ndarray, shape (n_d,)
+        Ω and H (static bias-point incremental inductance: the circuit figures).
+    frequencies : ndarray, shape (n_f,)
+        Solved frequencies, Hz, from 0.
+    villari, approach : ndarray of complex, shape (n_d, n_f, n_c)
+        S_c(ω), Wb/N, and D_c(ω), Wb/m, of each design.
+    inductance_w : ndarray of complex, shape (n_d, n_f)
+        L(ω) of each design, H.
+    wave : Wave
+    electronics : ElectronicsSpec
+    """
+    t = wave.rates.t
+    nt = t.size
+    dt = float(t[1] - t[0])
+    n = scipy.fft.next_fast_len(math.ceil(PAD * nt), real=True)
+    f = np.fft.rfftfreq(n, dt)
+    force = scipy.fft.rfft(wave.rates.force, n, axis=0)
+    app = scipy.fft.rfft(wave.rates.approach, n, axis=0)
+    rows: list[dict] = []
+    for lo in range(0, len(coils), SPECTRUM_CHUNK):
+        sl = slice(lo, min(lo + SPECTRUM_CHUNK, len(coils)))
+        e_hat = emf_spectra(frequencies, np.moveaxis(villari[sl], 1, 0),
+                            np.moveaxis(approach[sl], 1, 0), f, force, app)
+        z = coil_impedance(frequencies, np.asarray(inductance_w[sl]).T, resistance[sl], f)
+        for j, k in enumerate(range(sl.start, sl.stop)):
+            cf = _circuit_figures(coils[k], float(resistance[k]), float(inductance[k]),
+                                  electronics)
+            h = coil_transfer_function(cf["circuit"], f, z[:, j])
+            e = scipy.fft.irfft(e_hat[:, j], n)[:nt]
+            v = scipy.fft.irfft(h * e_hat[:, j], n)[:nt]
+            rows.append(_row(coils[k], float(resistance[k]), float(inductance[k]), cf,
+                             villari[k, 0].real, approach[k, 0].real, e, v, wave))
+    return rows
+
+
+__all__ = ["DECAY_TIMES", "EMF_CHUNK", "SPECTRUM_CHUNK", "Wave", "design_rows",
+           "dynamic_design_rows"]

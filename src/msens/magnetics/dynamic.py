@@ -209,11 +209,35 @@ class FrequencyResponse:
         return _interp(np.asarray(self.frequencies, float), np.asarray(self.approach), f)
 
     def impedance_at(self, f: np.ndarray) -> np.ndarray:
-        """Z at frequencies ``f`` (Hz), Ω, shape (n,): R_dc + jω L(ω) with the complex
-        inductance L(ω) interpolated (it is smooth and finite at DC; Z/ω is not)."""
-        f = np.asarray(f, dtype=float)
-        ind = _interp(np.asarray(self.frequencies, float), self.inductance, f)
-        return self.resistance_ohm + 1j * TWO_PI * f * ind
+        """Z at frequencies ``f`` (Hz), Ω, shape (n,) (:func:`coil_impedance`)."""
+        return coil_impedance(self.frequencies, self.inductance, self.resistance_ohm, f)
+
+
+def coil_impedance(frequencies: np.ndarray, inductance: np.ndarray,
+                   resistance: float | np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Z = R_dc + jω L(ω) of one or many coils at frequencies ``f``, with the complex
+    inductance L(ω) interpolated (it is smooth and finite at DC; Z/ω is not).
+
+    Parameters
+    ----------
+    frequencies : ndarray, shape (n_f,)
+        Solved frequencies, Hz, from 0.
+    inductance : ndarray of complex, shape (n_f, ...)
+        L(ω) at them, H.
+    resistance : float or ndarray, shape (...)
+        R_dc, Ω.
+    f : ndarray, shape (n,)
+        Hz.
+
+    Returns
+    -------
+    ndarray of complex, shape (n, ...)
+        Ω.
+    """
+    f = np.asarray(f, dtype=float)
+    ind = _interp(np.asarray(frequencies, float), np.asarray(inductance), f)
+    w = TWO_PI * f.reshape((-1,) + (1,) * (ind.ndim - 1))
+    return resistance + 1j * w * ind
 
 
 @dataclass(frozen=True)
@@ -339,13 +363,6 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
 
 
 # ----------------------------------------------------------------------------- cache
-
-#: Element size at the surfaces of the beads near a coil for the eddy-current model, m (the
-#: skin depth is ~20 µm at 100 kHz with the differential permeability). On the one-sensor model
-#: (``python benchmarks/dynamic_mesh_convergence.py``) the contact approach at 40 µm agrees
-#: with 10 µm to 0.7 % and 0.05° at 100 kHz and 2.3 % and 0.7° at 200 kHz; without refinement
-#: it is 9° off at 30 kHz and 28° off at 100 kHz.
-SKIN_SIZE = 40e-6
 
 #: Version of what :func:`frequency_responses` computes; part of the cache key.
 DYNAMIC_VERSION = "dynamic/1"
@@ -516,9 +533,40 @@ def join_reports(parts: Sequence[DynamicReport]) -> DynamicReport:
 
 # ----------------------------------------------------------------------------- in time
 
+#: FFT length of the frequency-domain read-out in record lengths (zero padding: the circuit's
+#: ring-down after the record must fit in it; run and design use the same).
+PAD = 2.0
+
+
+def emf_spectra(frequencies: np.ndarray, villari: np.ndarray, approach: np.ndarray,
+                f: np.ndarray, force_rate: np.ndarray, approach_rate: np.ndarray) -> np.ndarray:
+    """EMF(ω) = −Σ_c [S_c(ω) Ḟ_c(ω) + D_c(ω) δ̇_c(ω)] of one or many coils.
+
+    Parameters
+    ----------
+    frequencies : ndarray, shape (n_f,)
+        Solved frequencies, Hz, from 0.
+    villari, approach : ndarray of complex, shape (n_f, ..., n_c)
+        S_c (Wb/N) and D_c (Wb/m) at them, interpolated to ``f`` by :func:`_interp`.
+    f : ndarray, shape (n,)
+        Hz.
+    force_rate, approach_rate : ndarray of complex, shape (n, n_c)
+        Spectra of dF_c/dt (N/s per bin) and dδ_c/dt (m/s per bin), the coils' contacts.
+
+    Returns
+    -------
+    ndarray of complex, shape (n, ...)
+    """
+    freqs = np.asarray(frequencies, float)
+    s, d = _interp(freqs, np.asarray(villari), f), _interp(freqs, np.asarray(approach), f)
+    shape = (s.shape[0],) + (1,) * (s.ndim - 2) + (s.shape[-1],)
+    return -(np.sum(s * np.reshape(force_rate, shape), axis=-1)
+             + np.sum(d * np.reshape(approach_rate, shape), axis=-1))
+
+
 def emf_spectrum(response: FrequencyResponse, f: np.ndarray, force_rate: np.ndarray,
                  approach_rate: np.ndarray) -> np.ndarray:
-    """EMF(ω) = −Σ_c [S_c(ω) Ḟ_c(ω) + D_c(ω) δ̇_c(ω)], shape (n,).
+    """EMF(ω) of one coil (:func:`emf_spectra`), shape (n,).
 
     Parameters
     ----------
@@ -528,12 +576,12 @@ def emf_spectrum(response: FrequencyResponse, f: np.ndarray, force_rate: np.ndar
     force_rate, approach_rate : ndarray of complex, shape (n, n_c)
         Spectra of dF_c/dt (N/s per bin) and dδ_c/dt (m/s per bin), the record's contacts.
     """
-    return -(np.sum(response.villari_at(f) * force_rate, axis=1)
-             + np.sum(response.approach_at(f) * approach_rate, axis=1))
+    return emf_spectra(response.frequencies, response.villari, response.approach, f,
+                       force_rate, approach_rate)
 
 
 def mechanism_emfs(response: FrequencyResponse, rates: ContactRates,
-                   pad: float = 2.0) -> dict[str, np.ndarray]:
+                   pad: float = PAD) -> dict[str, np.ndarray]:
     """Each mechanism's open-circuit EMF alone, with eddy currents, V.
 
     Parameters
@@ -563,7 +611,7 @@ def mechanism_emfs(response: FrequencyResponse, rates: ContactRates,
 def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
                     circuit: ReadoutCircuit, t: np.ndarray, force: np.ndarray,
                     sample_rate: float, *, approach: np.ndarray | None = None,
-                    columns: np.ndarray | None = None, pad: float = 2.0,
+                    columns: np.ndarray | None = None, pad: float = PAD,
                     noise: NoiseModel | None = None,
                     rng: np.random.Generator | int | None = None) -> MssRecord:
     """Coil signals of one physics MsS with eddy currents: the frequency-domain read-out.
@@ -644,12 +692,14 @@ __all__ = [
     "DEFAULT_FREQUENCIES",
     "DYNAMIC_VERSION",
     "MAGNET_CONDUCTIVITY",
-    "SKIN_SIZE",
+    "PAD",
     "DynamicReport",
     "FrequencyResponse",
+    "coil_impedance",
     "dynamic_key",
     "dynamic_report",
     "dynamic_signals",
+    "emf_spectra",
     "emf_spectrum",
     "frequency_responses",
     "join_reports",

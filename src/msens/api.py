@@ -335,17 +335,6 @@ def format_field(report, written: dict[str, str]) -> str:
     return "\n".join(lines)
 
 
-def _magnetostatic_only(study: Study, command: str) -> None:
-    """Refuse a study with eddy currents in a workflow that has only the magnetostatic
-    transducer (it would compare or rank signals the study does not predict)."""
-    if study.field.eddy_currents:
-        from msens.errors import InputError
-
-        raise InputError(f"{study.source}: {command} does not model eddy currents yet (it uses "
-                         "the magnetostatic transducer), but [field] eddy_currents = true; set "
-                         "it to false for this command")
-
-
 def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str | None = None,
            workers: int | None = None, progress: bool = True, fig_format: str = "png"):
     """Sweep coil/magnet designs of the study's MsS (:mod:`msens.design`); writes
@@ -388,7 +377,6 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
                          "not both")
     if not 1 <= passes <= 7:
         raise InputError(f"--passes must be from 1 to 7, got {passes}")
-    _magnetostatic_only(study, "diagnose")
     target = OutputDir(out)
     target.check(_figure_names(FILES, _check_format(fig_format)))
     budget.check(study)

@@ -152,15 +152,31 @@ def test_eddy_current_records_carry_the_coils_thermal_noise(eddy_runs, monkeypat
                                   rel=0.01)
 
 
-def test_diagnose_without_eddy_currents_says_so(tmp_path, capsys):
-    path = tmp_path / "eddy.toml"
-    path.write_text(TINY + EDDY)
-    (tmp_path / "data.csv").write_text("")
-    args = ["diagnose", str(tmp_path / "data.csv"), "--study", str(path)]
-    assert main([*args, "--out", str(tmp_path / "out")]) == 2
-    err = capsys.readouterr().err
-    assert "eddy_currents" in err and "does not model eddy currents" in err
-    assert not (tmp_path / "out").exists()
+def test_diagnose_baseline_with_eddy_currents_is_the_run(eddy_runs, monkeypatch):
+    """diagnose on an eddy-current study: its baseline record is the run's DAQ voltage (the
+    same frequency-domain read-out), and the effects that need field-model variants the
+    eddy-current model does not have (coil offset, magnet remanence) are not searched.
+    End to end on the main study: tests/verification/test_eddy_roundtrip.py (slow)."""
+    from msens.diagnose.effects import Context, registry
+    from msens.diagnose.predict import Predictor, baseline_state, setup_result
+    from msens.diagnose.workflow import baseline_dissipation
+    from msens.pipeline import output_times
+
+    tmp, study, result, static = eddy_runs
+    monkeypatch.setenv("MSENS_MESH_DIR", str(tmp / "cache"))
+    ctx = Context(study, study.setups[0])
+    base = baseline_state(ctx, *baseline_dissipation(study))
+    predicted = setup_result(ctx, base, Predictor(output_times(study))).sensors[0].mss
+    run = result.setups[0].sensors[0].mss
+    np.testing.assert_allclose(predicted.voltage, run.voltage, rtol=0,
+                               atol=1e-9 * np.max(np.abs(run.voltage)))
+    assert np.max(np.abs(run.voltage - static.setups[0].sensors[0].mss.voltage)) > 0.01
+    searched = {name for name, e in registry().items() if e.applies(ctx)}
+    assert {"cable_capacitance", "striker_velocity"} <= searched
+    assert not {"coil_position", "magnet_remanence"} & searched
+    static_ctx = Context(static.study, static.study.setups[0])
+    assert {"coil_position", "magnet_remanence"} <= {
+        name for name, e in registry().items() if e.applies(static_ctx)}
 
 
 def _design_rows(eddy_runs, name: str, body: str) -> list[dict]:

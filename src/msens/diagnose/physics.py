@@ -5,7 +5,11 @@ key and carries what effects may change (coil offset, magnet remanence, cable). 
 holds the field models (the study's transducers, and on demand their
 :class:`~msens.magnetics.variants.RemanenceFamily`) and turns a ``PhysicsMss`` into the
 :class:`~msens.magnetics.mss.MssSensor` whose DAQ voltage is the sensor's record — the same
-functions ``msens run`` uses, so an undisturbed diagnosis reproduces the run exactly.
+functions ``msens run`` uses, so an undisturbed diagnosis reproduces the run exactly. With
+eddy currents (``[field] eddy_currents = true``) a model also holds each coil's frequency
+response (the run's :func:`msens.magnetics.dynamic.dynamic_report`) and :func:`signals` is
+the frequency-domain read-out of :func:`msens.magnetics.dynamic.dynamic_signals`; the effects
+that need field-model variants (coil offset, magnet remanence) are then not searched.
 """
 
 from __future__ import annotations
@@ -18,8 +22,9 @@ import numpy as np
 from msens.diagnose.effects.base import Context, PhysicsMss
 from msens.errors import internal
 from msens.field.geometry import SensorGeometry
-from msens.fieldsetup import coil_geometry, geometry_from_study
-from msens.magnetics.mss import MssSensor, readout
+from msens.fieldsetup import EddySettings, coil_geometry, eddy_settings, geometry_from_study
+from msens.magnetics.dynamic import FrequencyResponse, dynamic_report, dynamic_signals
+from msens.magnetics.mss import MssRecord, MssSensor, mss_signals, readout
 from msens.magnetics.transducer import (
     Transducer,
     cache_key,
@@ -31,17 +36,24 @@ from msens.materials import BEAD_STEEL
 from msens.steel_law import law_for_steel
 from msens.study import CoilSpec, MssModel
 
-# Field models of this process by key: geometry and nominal transducers (families lazily).
-_MODELS: dict[str, tuple[SensorGeometry, dict[int, Transducer]]] = {}
+# Field models of this process by key: geometry, nominal transducers and (with eddy
+# currents) frequency responses; remanence families lazily.
+_MODELS: dict[str, tuple[SensorGeometry, dict[int, Transducer],
+                         dict[int, FrequencyResponse] | None]] = {}
 _FAMILIES: dict[str, RemanenceFamily] = {}
 
 
-def register(geometry: SensorGeometry) -> str:
-    """Solve (or read from the cache) a geometry's transducers; return its model key."""
+def register(geometry: SensorGeometry, eddy: EddySettings | None = None) -> str:
+    """Solve (or read from the cache) a geometry's transducers, and with ``eddy`` its coils'
+    frequency responses (as ``msens run``); return its model key."""
     key = cache_key(geometry, stress_force=geometry.beads.contact_load,
                     law=law_for_steel(geometry.steel), material=BEAD_STEEL, approach=True)
+    if eddy is not None:
+        key += f"+eddy:{eddy.options!r}:{eddy.steel!r}"
     if key not in _MODELS:
-        _MODELS[key] = (geometry, transducers_for(geometry))
+        responses = None if eddy is None else dynamic_report(
+            geometry, options=eddy.options, steel=eddy.steel).responses
+        _MODELS[key] = (geometry, transducers_for(geometry), responses)
     return key
 
 
@@ -62,7 +74,8 @@ def setup_physics(ctx: Context) -> tuple[PhysicsMss | None, ...]:
     sensors = ctx.setup.sensors
     if not any(s.model is MssModel.PHYSICS for s in sensors):
         return ()
-    model = register(geometry_from_study(ctx.study, ctx.setup))
+    eddy = eddy_settings(ctx.study) if ctx.study.field.eddy_currents else None
+    model = register(geometry_from_study(ctx.study, ctx.setup), eddy)
     return tuple(
         PhysicsMss(model=model, particle=s.particle,
                    coil=coil_geometry(s.coil or CoilSpec(), s.particle),
@@ -93,11 +106,34 @@ def sensor(spec: PhysicsMss) -> MssSensor:
                                  spec.electronics))
 
 
+def signals(spec: PhysicsMss, t: np.ndarray, force: np.ndarray, *,
+            approach: np.ndarray | None = None, columns: np.ndarray | None = None,
+            static: np.ndarray | None = None) -> MssRecord:
+    """The noise-free coil signals of a physics MsS for a chain's contact forces (and
+    approaches), as ``msens run`` forms them: :func:`msens.magnetics.mss.mss_signals`, or with
+    eddy currents :func:`msens.magnetics.dynamic.dynamic_signals` (arguments as those)."""
+    mss = sensor(spec)
+    responses = _MODELS[spec.model][2]
+    rate = spec.electronics.sample_rate_hz
+    if responses is None:
+        return mss_signals(mss, t, force, rate, approach=approach, columns=columns,
+                           static=static)
+    internal(spec.offset_m == 0.0 and spec.remanence_factor == 1.0,
+             "internal: no eddy-current variants for coil offsets or magnet remanence")
+    return dynamic_signals(mss.transducer, responses[spec.particle], mss.circuit, t, force,
+                           rate, approach=approach, columns=columns)
+
+
+def eddy_currents(model: str) -> bool:
+    """Whether a registered model reads its coils with eddy currents."""
+    return _MODELS[model][2] is not None
+
+
 def with_physics(physics: tuple[PhysicsMss | None, ...], **changes) -> tuple:
     """The specs with ``changes`` applied to every physics MsS."""
     internal(any(p is not None for p in physics), "internal: the state has no physics MsS")
     return tuple(None if p is None else dataclasses.replace(p, **changes) for p in physics)
 
 
-__all__ = ["family", "magnetic_force", "register", "sensor", "setup_physics", "transducers",
-           "with_physics"]
+__all__ = ["eddy_currents", "family", "magnetic_force", "register", "sensor", "setup_physics",
+           "signals", "transducers", "with_physics"]

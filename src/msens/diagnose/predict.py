@@ -23,7 +23,7 @@ from msens.compare import smoothed_features as model_features_of
 from msens.diagnose import physics
 from msens.diagnose.effects.base import Context, ModelState
 from msens.features import pulse_features
-from msens.magnetics.mss import mss_signals, voltage_on
+from msens.magnetics.mss import voltage_on
 from msens.results import SensorResult, SetupResult
 from msens.sensors import SensorKind, observe, read_contacts, time_derivative
 
@@ -163,8 +163,7 @@ def observe_state(state: ModelState, force: np.ndarray, contacts: np.ndarray | N
     cols = None if contacts is None else np.asarray(contacts) + 1  # 1-based contact numbers
     out = np.array([
         observe(kind, force, p, contacts=contacts) if ph is None else
-        voltage_on(mss_signals(physics.sensor(ph), t, force, ph.electronics.sample_rate_hz,
-                               approach=approach, columns=cols))
+        voltage_on(physics.signals(ph, t, force, approach=approach, columns=cols))
         for kind, p, ph in zip(state.kinds, state.particles, _physics(state), strict=True)])
     for op in state.post:
         out = op(out, dt)
@@ -224,8 +223,7 @@ def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> Setup
     for spec, pos, rec, ph in zip(ctx.setup.sensors, where, records, _physics(state),
                                   strict=True):
         if ph is not None:  # the record is the DAQ voltage; force: the weighted force
-            mss = mss_signals(physics.sensor(ph), t, res, ph.electronics.sample_rate_hz,
-                              approach=approach, static=static)
+            mss = physics.signals(ph, t, res, approach=approach, static=static)
             sensors.append(SensorResult(sensor=spec, position=pos, force=mss.weighted_force,
                                         voltage_shape=rec,
                                         features=pulse_features(mss.weighted_force, t),

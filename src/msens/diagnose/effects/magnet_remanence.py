@@ -22,7 +22,9 @@ PARAM = "remanence_factor"
 
 
 def _applies(ctx: Context) -> bool:
-    return any(s.model is MssModel.PHYSICS for s in ctx.setup.sensors)
+    # with eddy currents there are no frequency responses of field models at other remanences yet
+    return (any(s.model is MssModel.PHYSICS for s in ctx.setup.sensors)
+            and not ctx.study.field.eddy_currents)
 
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:

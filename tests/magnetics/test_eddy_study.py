@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from msens import api
-from msens.cli import main
 from msens.errors import InputError
 
 TINY = (Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text().replace(

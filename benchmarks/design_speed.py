@@ -5,7 +5,13 @@ mechanisms, the read-out circuit); designs: a dense grid (turns 300..1200 step 1
 7..10 mm x inner radius x wire x axial offset, the ones that fit). The alternative a user
 would pick is a transducer build per design (``compute_transducers``): its time for the
 paper's coil is measured in the same run and the ratio reported.
-Run: python benchmarks/design_speed.py
+
+With ``--eddy`` the same on the main study with ``[field] eddy_currents = true``: the one
+field model is then the eddy-current model (every source's harmonic potential tabulated at
+the run's 17 frequencies), each design's EMF and DAQ voltage the frequency-domain read-out,
+and the alternative is the run's eddy-current model built per design (``dynamic_report``,
+from an empty cache), timed once for the paper's coil.
+Run: python benchmarks/design_speed.py [--eddy]
 """
 
 from __future__ import annotations
@@ -20,7 +26,8 @@ import numpy as np
 from msens.design.coil_sweep import build_context, evaluate
 from msens.design.sweep import design_geometry, parse_sweep
 from msens.errors import InputError
-from msens.fieldsetup import geometry_from_study
+from msens.fieldsetup import eddy_settings, geometry_from_study
+from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.transducer import compute_transducers
 from msens.study import load_study
 
@@ -38,8 +45,10 @@ axial_offset_m = { start = -1e-3, stop = 1e-3, num = 5 }
 """
 
 
-def main() -> dict:
+def main(eddy: bool = False) -> dict:
     study = load_study(ROOT / "studies" / "paper-mss.toml")
+    if eddy:
+        study = study.replace({"field.eddy_currents": True})
     spec = parse_sweep(GRID, source="benchmark")
     geometry = geometry_from_study(study)
     designs = []
@@ -61,8 +70,13 @@ def main() -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         t4 = time.perf_counter()
         compute_transducers(geometry, mesh_dir=tmp)
+        if eddy:
+            e = eddy_settings(study)
+            dynamic_report(geometry, options=e.options, steel=e.steel, mesh_dir=tmp,
+                           cache_dir=tmp)
         per_design = time.perf_counter() - t4
-    return {"study": "paper-mss", "sensor": 13, "designs": len(designs),
+    return {"study": "paper-mss" + (" with eddy currents" if eddy else ""), "sensor": 13,
+            "designs": len(designs),
             "first_field_model_s": round(t1 - t0, 3), "evaluate_s": round(best, 4),
             "designs_per_s": round(len(designs) / best, 1),
             "target_designs_per_s": 1000,
@@ -77,4 +91,6 @@ def main() -> dict:
 
 
 if __name__ == "__main__":
-    print(json.dumps(main(), indent=2))
+    import sys
+
+    print(json.dumps(main(eddy="--eddy" in sys.argv[1:]), indent=2))

@@ -96,7 +96,7 @@ def judge(effect: Effect, ctx: Context, base: ModelState, params: Mapping[str, f
 
 
 def score_candidates(fits: list[EffectFit], rss0: np.ndarray, n_obs: np.ndarray, ctx: Context,
-           base: ModelState) -> tuple[list[Candidate], float]:
+                     base: ModelState) -> tuple[list[Candidate], float]:
     # rss are chi^2 already (residuals over the fit-free noise), per sensor
     n = float(n_obs.sum())
     chi0 = float(rss0.sum())
@@ -115,7 +115,7 @@ def score_candidates(fits: list[EffectFit], rss0: np.ndarray, n_obs: np.ndarray,
 
 
 def decide(cands: list[Candidate], fits: list[EffectFit], threshold: float
-            ) -> tuple[Candidate | None, EffectFit | None]:
+           ) -> tuple[Candidate | None, EffectFit | None]:
     """The best-scoring candidate that is plausible and significant and whose score beats
     by ``threshold`` both the baseline and every plausible change below its floor (when a
     negligible change explains the data better, nothing practical is missing)."""

@@ -228,7 +228,7 @@ OUTSIDE = {
     "small_wall_bead": "a 3.97 mm bead (5/32 in) in place of the last bead on the wall",
     "worn_contact": "contact c_9 at 0.3 of its Hertz stiffness (a flattened, yielded contact)",
     "clipping": "the amplifiers clip at 70 % of each channel's peak",
-    "sensor_resonance": "each sensor's mounting rings at 150 kHz (second order, Q = 4)",
+    "ac_coupling": "AC-coupled amplifiers: a first-order high-pass at 1 kHz on every channel",
 }
 
 
@@ -244,16 +244,14 @@ class _Clip:
 
 
 @dataclass(frozen=True)
-class _Resonance:
-    """A lightly damped second-order resonance of each record (a sensor's mounting):
-    H(s) = w0^2 / (s^2 + s w0 / Q + w0^2), discretised by the bilinear transform."""
+class _HighPass:
+    """AC coupling of each record (a charge amplifier's finite time constant): the
+    first-order high-pass H(s) = s / (s + w_c), discretised by the bilinear transform."""
 
-    frequency_hz: float
-    quality: float
+    corner_hz: float
 
     def __call__(self, records: np.ndarray, dt: float) -> np.ndarray:
-        w0 = 2.0 * np.pi * self.frequency_hz
-        b, a = signal.bilinear([w0**2], [1.0, w0 / self.quality, w0**2], fs=1.0 / dt)
+        b, a = signal.bilinear([1.0, 0.0], [1.0, 2.0 * np.pi * self.corner_hz], fs=1.0 / dt)
         return signal.lfilter(b, a, records, axis=-1)
 
 
@@ -282,9 +280,8 @@ def outside_state(name: str, ctx: Context, state: ModelState, predictor: Predict
         stiff[8] *= 0.3
     elif name == "clipping":
         return dataclasses.replace(state, post=(*state.post, _Clip(0.7))), predictor
-    elif name == "sensor_resonance":
-        return (dataclasses.replace(state, post=(*state.post, _Resonance(150e3, 4.0))),
-                predictor)
+    elif name == "ac_coupling":
+        return dataclasses.replace(state, post=(*state.post, _HighPass(1e3))), predictor
     else:
         raise ValueError(f"unknown outside effect {name!r}; known: {', '.join(OUTSIDE)}")
     chain = dataclasses.replace(chain, mass=mass, stiffness=stiff)

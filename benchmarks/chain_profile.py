@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from msens.chain import DampingLaw, paper_chain, stable_step, striker_velocity
-from msens.chain.integrate import _LAW_CODE, GRADE_LEVELS, _initial_state, _rate_tol
+from msens.chain.integrate import _LAW_CODE, GRADE_LEVELS, _rate_tol, initial_state
 from msens.chain.kernel import stepper
 
 _COUNTER = '''
@@ -133,9 +133,9 @@ def main(law: DampingLaw, contacts: list[int] | None = None) -> dict:
         runs = []
         for g in gammas:
             c = paper_chain(g, damping_law=law)
-            u0, v0 = _initial_state(c, v)
-            runs.append((u0, v0, c.mass, c.stiffness, c.damping, _LAW_CODE[law], c.load(), t,
-                         stable_step(c, v), GRADE_LEVELS[law], _rate_tol(v), False,
+            u0, v0 = initial_state(c, v)
+            runs.append((u0, v0, c.mass, c.stiffness, c.damping, c.drag, _LAW_CODE[law],
+                         c.load(), t, stable_step(c, v), GRADE_LEVELS[law], _rate_tol(v), False,
                          np.empty((t.size, sel.size)), np.empty((t.size, sel.size)),
                          np.empty((1, 30)), np.empty((1, 30)), sel, prof))
         for r in runs:  # compile, warm up

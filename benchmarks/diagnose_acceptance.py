@@ -135,6 +135,11 @@ def effect_cases(bench: Bench, quick: bool, physics: bool, chain: bool,
         plan = []
     if physics:
         plan += [("physics", e, i) for e in PHYSICS for i in range(1 if quick else 2)]
+    # Appended last, so that the cases above keep their seeds.
+    if chain:
+        plan += [("bead", "tube_friction", i) for i in range(1 if quick else 4)]
+    if physics:
+        plan += [("physics", "tube_friction", i) for i in range(1 if quick else 2)]
     cases = []
     for n, (kind, effect, i) in list(enumerate(plan))[part]:
         seed = 1000 + 17 * n

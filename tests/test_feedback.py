@@ -103,13 +103,13 @@ def test_calibration_logs_and_counts_chains(monkeypatch, caplog):
 
 
 def test_diagnosis_logs_candidates_and_decision(monkeypatch, caplog):
-    from msens.diagnose import workflow
+    from msens.diagnose import candidates
 
     effects = [SimpleNamespace(name="wall_dissipation"), SimpleNamespace(name="gap")]
-    monkeypatch.setattr(workflow, "fit_effect", lambda e, *a: e.name)
+    monkeypatch.setattr(candidates, "fit_effect", lambda e, *a: e.name)
     with caplog.at_level(logging.INFO, logger="msens"):
-        fits = workflow._fit_candidates(effects, None, None, None, None, None)
-        workflow._log_decision([SimpleNamespace(effect="gap", score=3.0)], None, 10.0)
+        fits = candidates.fit_candidates(effects, None, None, None, None, None)
+        candidates.log_decision([SimpleNamespace(effect="gap", score=3.0)], None, 10.0)
     assert fits == ["wall_dissipation", "gap"]
     messages = [r.getMessage() for r in caplog.records]
     assert "fitting 2 candidate effects: wall_dissipation, gap" in messages

@@ -48,8 +48,8 @@ def test_generated_coefficients_are_the_exactly_rounded_products():
 @pytest.mark.parametrize("law", [kernel.LAW_LINEAR, kernel.LAW_HKK])
 def test_step_matches_scipy_dop853_step(law):
     """One step of the padded second-order form equals SciPy's DOP853 step on the first-order
-    system (u, v)' = (v, a(u, v)) to rounding (measured: 6e-14 relative on the displacement
-    increments, 4e-15 on the velocities)."""
+    system (u, v)' = (v, a(u, v)), tube drag included, to rounding (measured: 6e-14 relative
+    on the displacement increments, 4e-15 on the velocities)."""
     n = 11
     p = kernel.padded_length(n)
     rng = np.random.default_rng(5)
@@ -63,12 +63,14 @@ def test_step_matches_scipy_dop853_step(law):
     pad = np.zeros(p + 1)
     u, v = pad.copy(), pad.copy()
     u[:n], v[:n] = u0, v0
-    cA, cg, load_p, inv_m = (np.zeros(p) for _ in range(4))
+    cA, cg, load_p, inv_m, drag = (np.zeros(p) for _ in range(5))
     cA[:n], cg[:n], load_p[:n], inv_m[:n] = A, gam, load, 1.0 / mass
+    # tube drag c/m (1/s), strong enough to move the step by far more than rounding
+    drag[:n] = rng.uniform(1e3, 1e4, n)
 
     def acc(uu, vv):
         out = np.zeros(p + 1)
-        kernel.accelerations(uu, vv, cA, cg, law, load_p, inv_m, out)
+        kernel.accelerations(uu, vv, cA, cg, law, load_p, inv_m, drag, out)
         return out
 
     a0 = acc(u, v)
@@ -76,7 +78,7 @@ def test_step_matches_scipy_dop853_step(law):
     kv = np.zeros((dop853_step.N_STAGES, p + 1))
     u1, v1 = pad.copy(), pad.copy()
     dop853_step.rk_step(u, v, a0, h, dop853_step.STEP_REGULAR, cA, cg, law == kernel.LAW_HKK,
-                         load_p, inv_m, kv, pad.copy(), pad.copy(), u1, v1)
+                         load_p, inv_m, drag, kv, pad.copy(), pad.copy(), u1, v1)
 
     def rhs(_t, y):
         uu, vv = pad.copy(), pad.copy()
@@ -100,27 +102,28 @@ def _random_chain(n=11, seed=5):
     u, v = pad.copy(), pad.copy()
     u[:n] = np.cumsum(rng.uniform(0.5e-6, 1.5e-6, n))[::-1]
     v[:n] = rng.uniform(-5e-3, 5e-3, n)  # slow: the contacts stay closed over the steps
-    cA, cg, load, inv_m = (np.zeros(p) for _ in range(4))
+    cA, cg, load, inv_m, drag = (np.zeros(p) for _ in range(5))
     cA[:n] = rng.uniform(5e9, 1e10, n)
     cg[:n] = rng.uniform(1.0, 5.0, n)
     load[:n] = rng.uniform(0.1, 0.3, n)
     inv_m[:n] = 1.0 / rng.uniform(0.02, 0.03, n)
-    return u, v, cA, cg, load, inv_m
+    drag[:n] = rng.uniform(0.0, 1e3, n)  # tube drag c/m, 1/s
+    return u, v, cA, cg, load, inv_m, drag
 
 
 def test_local_error_is_ninth_order():
     """One step from the same state: the error against 64 substeps scales as h^9 (measured
     slope 8.8 over omega h ~ 0.25-0.5; asserted within [8.5, 9.5])."""
-    u, v, cA, cg, load, inv_m = _random_chain()
+    u, v, cA, cg, load, inv_m, drag = _random_chain()
     m = u.size
     kv = np.zeros((dop853_step.N_STAGES, m))
 
     def one(fn, uu, vv, h):
         a0 = np.zeros(m)
-        kernel.accelerations(uu, vv, cA, cg, kernel.LAW_LINEAR, load, inv_m, a0)
+        kernel.accelerations(uu, vv, cA, cg, kernel.LAW_LINEAR, load, inv_m, drag, a0)
         u1, v1 = np.zeros(m), np.zeros(m)
-        fn(uu, vv, a0, h, dop853_step.STEP_REGULAR, cA, cg, False, load, inv_m, kv, np.zeros(m),
-           np.zeros(m), u1, v1)
+        fn(uu, vv, a0, h, dop853_step.STEP_REGULAR, cA, cg, False, load, inv_m, drag, kv,
+           np.zeros(m), np.zeros(m), u1, v1)
         return u1, v1
 
     def fine(h):
@@ -141,18 +144,18 @@ def test_sqrt_modes_are_dop853_in_the_square_root_of_time(mode):
     dy/ds = 2 s f(y) from s = 0 (t = t0 + s^2); STEP_SQRT_END equals its step of size
     -sqrt(h) on dy/ds = -2 s f(y) from s = sqrt(h) (t = t0 + h - s^2). To rounding (1e-20 m
     on displacements of 1e-5 m)."""
-    u, v, cA, cg, load, inv_m = _random_chain()
+    u, v, cA, cg, load, inv_m, drag = _random_chain()
     n, m = 11, u.size
     h = 1.5e-6
 
     def acc(uu, vv):
         out = np.zeros(m)
-        kernel.accelerations(uu, vv, cA, cg, kernel.LAW_LINEAR, load, inv_m, out)
+        kernel.accelerations(uu, vv, cA, cg, kernel.LAW_LINEAR, load, inv_m, drag, out)
         return out
 
     a0 = acc(u, v)
     u1, v1 = np.zeros(m), np.zeros(m)
-    dop853_step.rk_step(u, v, a0, h, mode, cA, cg, False, load, inv_m,
+    dop853_step.rk_step(u, v, a0, h, mode, cA, cg, False, load, inv_m, drag,
                          np.zeros((dop853_step.N_STAGES, m)), np.zeros(m), np.zeros(m), u1, v1)
     sign = 1.0 if mode == dop853_step.STEP_SQRT_START else -1.0
 
@@ -176,15 +179,15 @@ def test_sqrt_step_keeps_the_order_at_a_closing():
     as a regular step it falls like h^{5/2}, the velocity's Hertz term t^{5/2} (measured 2.4).
     Asserted: >= 5.5 and <= 3."""
     m = kernel.padded_length(1) + 1
-    cA, cg, load, inv_m = (np.zeros(m - 1) for _ in range(4))
+    cA, cg, load, inv_m, drag = (np.zeros(m - 1) for _ in range(5))
     cA[0], inv_m[0] = 7.1e9, 1.0 / 0.45e-3
 
     def step(mode, h, u0=0.0, v0=0.3):
         u, v, a0 = np.zeros(m), np.zeros(m), np.zeros(m)
         u[0], v[0] = u0, v0
-        kernel.accelerations(u, v, cA, cg, kernel.LAW_LINEAR, load, inv_m, a0)
+        kernel.accelerations(u, v, cA, cg, kernel.LAW_LINEAR, load, inv_m, drag, a0)
         u1, v1 = np.zeros(m), np.zeros(m)
-        dop853_step.rk_step(u, v, a0, h, mode, cA, cg, False, load, inv_m,
+        dop853_step.rk_step(u, v, a0, h, mode, cA, cg, False, load, inv_m, drag,
                              np.zeros((dop853_step.N_STAGES, m)), np.zeros(m), np.zeros(m),
                              u1, v1)
         return u1[0], v1[0]

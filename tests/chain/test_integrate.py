@@ -63,8 +63,8 @@ def _smooth_run(dt, n=10, F0=5.0, T=2e-4, t=None):
     v0[0] = 0.05
     t = np.array([0.0, T]) if t is None else t
     out = [np.empty((t.size, kernel.padded_length(n))) for _ in range(4)]
-    kernel.integrate(u0, v0, c.mass, c.stiffness, c.damping, kernel.LAW_LINEAR, load, t, dt,
-                     5, 1e-14, True, *out, np.arange(kernel.padded_length(n)))
+    kernel.integrate(u0, v0, c.mass, c.stiffness, c.damping, c.drag, kernel.LAW_LINEAR, load,
+                     t, dt, 5, 1e-14, True, *out, np.arange(kernel.padded_length(n)))
     assert out[1][:, :n].min() > 0.0  # no contact opened
     return out[3][:, :n]
 
@@ -166,18 +166,19 @@ def test_local_update_after_a_switch_equals_the_full_pass(law, k):
     u[:n], v[:n] = rng.normal(scale=1e-6, size=n), rng.normal(scale=0.1, size=n)
     cA, cg = np.zeros(p), np.zeros(p)
     cA[:n], cg[:n] = rng.uniform(5e9, 1e10, n), rng.uniform(0.0, 5.0, n)
-    load, inv_m = np.zeros(p), np.zeros(p)
+    load, inv_m, drag = np.zeros(p), np.zeros(p), np.zeros(p)
     load[:n], inv_m[:n] = rng.normal(size=n), 1.0 / rng.uniform(1e-4, 1e-3, n)
+    drag[:n] = rng.uniform(0.0, 1e3, n)  # tube drag c/m, 1/s
     a, jk = np.empty(p + 1), np.empty(p + 1)
-    kernel.accelerations(u, v, cA, cg, law, load, inv_m, a)
-    kernel.jerks(u, v, a, cA, cg, inv_m, jk)
+    kernel.accelerations(u, v, cA, cg, law, load, inv_m, drag, a)
+    kernel.jerks(u, v, a, cA, cg, inv_m, drag, jk)
     cA[k], cg[k] = 0.0, 0.0  # the contact opens
-    events.update_near(k, u, v, a, jk, law != kernel.LAW_HKK, cA, cg, law, load, inv_m)
+    events.update_near(k, u, v, a, jk, law != kernel.LAW_HKK, cA, cg, law, load, inv_m, drag)
     a_full, j_full = np.empty(p + 1), np.empty(p + 1)
-    kernel.accelerations(u, v, cA, cg, law, load, inv_m, a_full)
+    kernel.accelerations(u, v, cA, cg, law, load, inv_m, drag, a_full)
     np.testing.assert_allclose(a, a_full, rtol=0, atol=1e-14 * np.abs(a_full).max())
     if law != kernel.LAW_HKK:
-        kernel.jerks(u, v, a_full, cA, cg, inv_m, j_full)
+        kernel.jerks(u, v, a_full, cA, cg, inv_m, drag, j_full)
         np.testing.assert_allclose(jk, j_full, rtol=0, atol=1e-14 * np.abs(j_full).max())
 
 

@@ -31,10 +31,10 @@ n = 3
 p = kernel.padded_length(n)
 u, v, a, jk = (np.zeros(p + 1) for _ in range(4))
 u[:n] = [3e-6, 2e-6, 1e-6]
-cA, cg, load, inv_m = (np.zeros(p) for _ in range(4))
+cA, cg, load, inv_m, drag = (np.zeros(p) for _ in range(5))
 cA[:n] = 1e10
 inv_m[:n] = 1.0
-events.update_near(0, u, v, a, jk, False, cA, cg, kernel.LAW_LINEAR, load, inv_m)
+events.update_near(0, u, v, a, jk, False, cA, cg, kernel.LAW_LINEAR, load, inv_m, drag)
 stats = events.update_near.stats
 print(json.dumps({"a": a[:2].tolist(), "hits": sum(stats.cache_hits.values()),
                   "misses": sum(stats.cache_misses.values())}))

@@ -30,28 +30,29 @@ def _chain_state(seed=3):
     v = np.zeros(P + 1)
     u[:N] = np.cumsum(rng.uniform(0.5e-6, 1.5e-6, N))[::-1]
     v[:N] = rng.uniform(-0.1, 0.1, N)
-    cA, cg, load, inv_m = (np.zeros(P) for _ in range(4))
+    cA, cg, load, inv_m, drag = (np.zeros(P) for _ in range(5))
     cA[:N] = rng.uniform(5e9, 1e10, N)
     cg[:N] = rng.uniform(0.0, 9.6, N)
     load[:N] = 0.044
     inv_m[:N] = 1.0 / 4.5e-3
-    return u, v, cA, cg, load, inv_m
+    drag[:N] = rng.uniform(0.0, 50.0, N)  # tube drag c/m, 1/s
+    return u, v, cA, cg, load, inv_m, drag
 
 
 def _calls(name):
     """Argument tuples of one call of each noalias kernel (no two written arrays overlap)."""
-    u, v, cA, cg, load, inv_m = _chain_state()
+    u, v, cA, cg, load, inv_m, drag = _chain_state()
     a = np.zeros(P + 1)
-    kernel.accelerations(u, v, cA, cg, kernel.LAW_LINEAR, load, inv_m, a)
+    kernel.accelerations(u, v, cA, cg, kernel.LAW_LINEAR, load, inv_m, drag, a)
     kv = np.zeros((dop853_step.N_STAGES, P + 1))
     closed = np.zeros(P)  # contact states are padded like cA
     closed[:N] = 1.0
     return {
-        "rk_step": (u, v, a, 2e-6, dop853_step.STEP_REGULAR, cA, cg, False, load, inv_m, kv,
+        "rk_step": (u, v, a, 2e-6, dop853_step.STEP_REGULAR, cA, cg, False, load, inv_m, drag, kv,
                     np.zeros(P + 1), np.zeros(P + 1), np.zeros(P + 1), np.zeros(P + 1)),
-        "accelerations": (u, v, cA, cg, kernel.LAW_LINEAR_LOADING, load, inv_m,
+        "accelerations": (u, v, cA, cg, kernel.LAW_LINEAR_LOADING, load, inv_m, drag,
                           np.zeros(P + 1)),
-        "jerks": (u, v, a, cA, cg, inv_m, np.zeros(P + 1)),
+        "jerks": (u, v, a, cA, cg, inv_m, drag, np.zeros(P + 1)),
         "contact_forces": (u, v, cA, cg, kernel.LAW_HKK, np.zeros(P + 1)),
         "violated": (u, v, closed, closed, cg, 1e-12, True, -1),
         "openings_within": (u, v, a, closed, 2e-6, np.zeros(P)),

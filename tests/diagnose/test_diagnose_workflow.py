@@ -86,6 +86,18 @@ def test_names_a_hidden_effect_and_recovers_it(bench, effect, params):
     assert d.misfit_after == pytest.approx(1.0, abs=0.2)  # down to the noise
 
 
+def test_names_tube_friction_within_ten_percent(bench):
+    """Bead data with viscous drag of 0.2 N s/m on every bead (a greasy tube): named
+    ``tube_friction`` with the drag within 10 %, explained."""
+    study, ctx, base, predictor = bench
+    wf, _ = hidden_case(ctx, base, predictor, {"tube_friction": {"tube_drag_n_s_per_m": 0.2}},
+                        seed=21)
+    d = diagnose(wf, study, fit=fixed_fit())
+    assert d.effect == "tube_friction"
+    assert d.parameters["tube_drag_n_s_per_m"] == pytest.approx(0.2, rel=0.10)
+    assert d.explained
+
+
 def test_null_data_names_none_and_reports_where(bench, tmp_path):
     study, ctx, base, predictor = bench
     wf, _ = hidden_case(ctx, base, predictor, seed=12)
@@ -96,7 +108,7 @@ def test_null_data_names_none_and_reports_where(bench, tmp_path):
     assert {c.effect for c in d.candidates} == {
         "wall_dissipation", "wall_stiffness", "striker_velocity", "contact_damping_law",
         "daq_lowpass", "sensor_position", "static_precompression",
-        "sensor_mass"}  # no magnet on a bead setup
+        "sensor_mass", "tube_friction"}  # no magnet on a bead setup
     assert d.explained  # the baseline is the truth: its residual is the noise
     written = write([d], tmp_path)
     report = json.loads(written[0].read_text())

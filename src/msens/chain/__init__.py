@@ -4,6 +4,9 @@ compiled time integrator. Knows nothing of fields, sensors or studies."""
 from msens.chain.equilibrium import static_contact_forces, static_equilibrium
 from msens.chain.integrate import (
     ChainResult,
+    contact_forces,
+    initial_state,
+    particle_accelerations,
     simulate,
     simulate_batch,
     simulate_reference,
@@ -17,10 +20,13 @@ __all__ = [
     "Chain",
     "ChainResult",
     "DampingLaw",
+    "contact_forces",
     "hertz_energy",
     "hertz_sphere_flat",
     "hertz_sphere_sphere",
+    "initial_state",
     "paper_chain",
+    "particle_accelerations",
     "simulate",
     "simulate_batch",
     "simulate_reference",

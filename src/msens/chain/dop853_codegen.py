@@ -67,14 +67,15 @@ _COEF = np.array([
 
 
 @njit_noalias(cache=True, fastmath=FASTMATH)
-def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
+def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, drag, kv, tu, tv, u1, v1):
     """One DOP853 step of size ``h`` (s) from (u, v); ``a0`` = acceleration at (u, v).
 
     ``mode`` selects the time variable of the step (see :mod:`msens.chain.dop853_codegen`):
     ``STEP_REGULAR``, ``STEP_SQRT_START`` (a contact closed at the step's start) or
     ``STEP_SQRT_END`` (a contact opens at its end). Padded layout of
     :func:`msens.chain.kernel.forces.contact_forces`: ``u``, ``v``, ``a0``, ``tu``, ``tv``, ``u1``,
-    ``v1`` have shape (p + 1,) and ``cA``, ``cg``, ``load``, ``inv_m`` shape (p,), zero past
+    ``v1`` have shape (p + 1,) and ``cA``, ``cg``, ``load``, ``inv_m``, ``drag`` (each
+    particle's viscous drag on the tube over its mass, c/m in 1/s) shape (p,), zero past
     the n particles. ``hkk`` selects the Kuwabara-Kono force law (else the linear dashpot).
     ``kv`` (N_STAGES, p + 1) receives the stage accelerations, ``tu``/``tv`` are scratch;
     the result goes to (u1, v1).
@@ -89,15 +90,16 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         kv[0, i] = a0[i]
 '''
 
-# Contact forces and the particle balance in one pass: the force of the contact above a
-# particle is carried over from the previous iteration (a first-order recurrence, which the
-# compiler still vectorises; ~10 % faster per step than two loops through an array).
+# Contact forces, the drag on the tube and the particle balance in one pass: the force of
+# the contact above a particle is carried over from the previous iteration (a first-order
+# recurrence, which the compiler still vectorises; ~10 % faster per step than two loops
+# through an array).
 _FORCES = '''    f_prev = 0.0
     for k in range(m):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[{s}, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[{s}, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
 '''
 

@@ -126,7 +126,8 @@ def stable_step(chain: Chain, striker_velocity: float) -> float:
     reduced mass at the striker speed over ``STEPS_PER_CONTACT_TIME`` (per damping law);
     the period of the highest linearised frequency of the statically compressed chain
     (Gershgorin bound) over ``STEPS_PER_LINEAR_PERIOD``; and half the fastest dashpot time
-    mu/gamma (far inside the real stability interval of DOP853, about [-6, 0]).
+    mu/gamma or drag time m/c (far inside the real stability interval of DOP853, about
+    [-6, 0]).
 
     Parameters
     ----------
@@ -143,8 +144,8 @@ def stable_step(chain: Chain, striker_velocity: float) -> float:
 
 def _stable_step(chain: Chain, striker_velocity: float, f0: np.ndarray) -> float:
     # stable_step with the static contact forces f0 (N) given.
-    dt = _step_limit(chain.mass, _reduced_masses(chain), chain.stiffness, chain.damping, f0,
-                     abs(float(striker_velocity)),
+    dt = _step_limit(chain.mass, _reduced_masses(chain), chain.stiffness, chain.damping,
+                     chain.drag, f0, abs(float(striker_velocity)),
                      float(STEPS_PER_CONTACT_TIME[chain.damping_law]),
                      chain.damping_law is not DampingLaw.HERTZ_KUWABARA_KONO)
     if not np.isfinite(dt):
@@ -153,7 +154,8 @@ def _stable_step(chain: Chain, striker_velocity: float, f0: np.ndarray) -> float
 
 
 @numba.njit(cache=True)
-def _step_limit(mass, mu, stiffness, damping, f0, v, steps_per_contact_time, dashpot_time):
+def _step_limit(mass, mu, stiffness, damping, drag, f0, v, steps_per_contact_time,
+                dashpot_time):
     # The three limits of stable_step in one compiled pass (numpy's small-array calls would
     # cost more than the work on every simulate); mu = reduced masses of the contacts. inf
     # when none applies.
@@ -168,6 +170,8 @@ def _step_limit(mass, mu, stiffness, damping, f0, v, steps_per_contact_time, das
         omega2 = max(omega2, 2.0 * k_sum / mass[k])
         if dashpot_time and damping[k] > 0.0:
             t_damp = min(t_damp, 0.5 * mu[k] / damping[k])
+        if drag[k] > 0.0:
+            t_damp = min(t_damp, 0.5 * mass[k] / drag[k])
     dt = t_damp
     if v > 0.0:
         t_c = HERTZ_TIME_CONSTANT * (np.min(mu) ** 2 / (np.max(stiffness) ** 2 * v)) ** 0.2
@@ -197,9 +201,23 @@ def _times_ok(t: np.ndarray) -> bool:
     return True
 
 
-def _initial_state(chain: Chain, striker_velocity: float, f0: np.ndarray | None = None,
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    # Static equilibrium (from the static contact forces f0, N, if given) and the impact.
+def initial_state(chain: Chain, striker_velocity: float, f0: np.ndarray | None = None,
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """State at the impact (t = 0): static equilibrium and the striker's speed.
+
+    Parameters
+    ----------
+    chain : Chain
+    striker_velocity : float
+        m/s, along +x.
+    f0 : ndarray, shape (n,), optional
+        Static contact forces, N (default :func:`static_contact_forces`).
+
+    Returns
+    -------
+    u0, v0 : ndarray, shape (n,)
+        Displacements (m) and velocities (m/s).
+    """
     if f0 is None:
         f0 = static_contact_forces(chain)
     u0 = equilibrium_from_forces(f0, chain.stiffness)
@@ -239,7 +257,7 @@ def simulate(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
     load = chain.load()
     f0 = contact_forces_from_loads(load)  # shared by the default step and the equilibrium
     dt = _stable_step(chain, striker_velocity, f0) if dt is None else _check_dt(dt)
-    u0, v0 = _initial_state(chain, striker_velocity, f0)
+    u0, v0 = initial_state(chain, striker_velocity, f0)
     n = chain.n_particles
     # One block for all outputs: separate large arrays each page-fault afresh (glibc mmaps
     # them), which cost as much as the integration itself for 10^4 samples. Rows have the
@@ -247,7 +265,7 @@ def simulate(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
     block = np.empty((4 if states else 2, t.size, kernel.padded_length(n)))
     dummy = np.empty((1, n))
     out = [block[0], block[1], block[2] if states else dummy, block[3] if states else dummy]
-    steps = kernel.integrate(u0, v0, chain.mass, chain.stiffness, chain.damping,
+    steps = kernel.integrate(u0, v0, chain.mass, chain.stiffness, chain.damping, chain.drag,
                              _LAW_CODE[chain.damping_law], load, t, dt,
                              GRADE_LEVELS[chain.damping_law], _rate_tol(striker_velocity), states,
                              *out, np.arange(block.shape[2]))
@@ -301,9 +319,9 @@ def simulate_batch(chains: Sequence[Chain], striker_velocities: ArrayLike, t_out
         for d in steps_dt:
             _check_dt(d)
     stack = {name: np.array([getattr(c, name) for c in chains])
-             for name in ("mass", "stiffness", "damping")}
+             for name in ("mass", "stiffness", "damping", "drag")}
     load = np.array([c.load() for c in chains])
-    # Initial states of all runs at once (see _initial_state).
+    # Initial states of all runs at once (see initial_state).
     u0 = np.ascontiguousarray(equilibrium_from_loads(load, stack["stiffness"]))
     v0 = np.zeros((runs, n))
     v0[:, 0] = v
@@ -314,9 +332,10 @@ def simulate_batch(chains: Sequence[Chain], striker_velocities: ArrayLike, t_out
     # may share its core with other work; numba's default splits the runs evenly up front.
     with numba.parallel_chunksize(BATCH_CHUNK):
         steps = kernel.integrate_batch(u0, v0, stack["mass"], stack["stiffness"],
-                                       stack["damping"], _LAW_CODE[law], load, t, steps_dt,
-                                       GRADE_LEVELS[law], np.array([_rate_tol(vi) for vi in v]),
-                                       force, approach, sel)
+                                       stack["damping"], stack["drag"], _LAW_CODE[law], load,
+                                       t, steps_dt, GRADE_LEVELS[law],
+                                       np.array([_rate_tol(vi) for vi in v]), force, approach,
+                                       sel)
     if contacts is not None:
         return ChainResult(t=t, force=force, approach=approach, dt=steps_dt, steps=steps,
                            contacts=sel)
@@ -334,8 +353,23 @@ def _check_contacts(contacts: ArrayLike, n: int) -> np.ndarray:
     return c.astype(np.int64)
 
 
-def _numpy_forces(chain: Chain, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Contact forces of Eq. 6-9 (dashpot only while delta > 0), shape (n,) or (n, m)."""
+def contact_forces(chain: Chain, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Contact forces of Eq. 6-9 (dashpot only while delta > 0), in numpy.
+
+    The reference implementation of the force law (the compiled kernel evaluates the same
+    law on its own layout).
+
+    Parameters
+    ----------
+    chain : Chain
+    u, v : ndarray, shape (n,) or (n, m)
+        Displacements (m) and velocities (m/s) of the particles (m states as columns).
+
+    Returns
+    -------
+    ndarray, shape (n,) or (n, m)
+        Contact forces, N, compressive positive (last: the wall contact).
+    """
     gap = np.concatenate([u[:-1] - u[1:], u[-1:]])
     rate = np.concatenate([v[:-1] - v[1:], v[-1:]])
     closed = gap > 0.0
@@ -347,6 +381,34 @@ def _numpy_forces(chain: Chain, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     if chain.damping_law is DampingLaw.LINEAR_LOADING:
         return A * d**1.5 + np.where(closed & (rate > 0.0), g * rate, 0.0)
     return np.sqrt(d) * (A * d + g * rate)
+
+
+def particle_accelerations(chain: Chain, u: np.ndarray, v: np.ndarray,
+                  load: np.ndarray | None = None) -> np.ndarray:
+    """Particle accelerations of Eq. 9 with the tube drag, in numpy (the reference path).
+
+    m_k a_k = load_k + F_{k-1} - F_k - c_k v_k, F the contact forces
+    (:func:`contact_forces`), c the drag (``Chain.drag``).
+
+    Parameters
+    ----------
+    chain : Chain
+    u, v : ndarray, shape (n,)
+        Displacements (m) and velocities (m/s).
+    load : ndarray, shape (n,), optional
+        Constant forces, N (default ``chain.load()``).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        m/s^2.
+    """
+    F = contact_forces(chain, u, v)
+    a = (chain.load() if load is None else load).copy()
+    a[1:] += F[:-1]
+    a -= F
+    a -= chain.drag * v
+    return a / chain.mass
 
 
 def simulate_reference(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
@@ -378,7 +440,7 @@ def simulate_reference(chain: Chain, striker_velocity: float, t_out: ArrayLike, 
     """
     t = _check_times(t_out)
     n = chain.n_particles
-    u0, v0 = _initial_state(chain, striker_velocity)
+    u0, v0 = initial_state(chain, striker_velocity)
     load = chain.load()
     if atol is None:
         mu = float(np.min(_reduced_masses(chain)))
@@ -388,11 +450,7 @@ def simulate_reference(chain: Chain, striker_velocity: float, t_out: ArrayLike, 
 
     def rhs(_t, y):
         u, v = y[:n], y[n:]
-        F = _numpy_forces(chain, u, v)
-        a = load.copy()
-        a[1:] += F[:-1]
-        a -= F
-        return np.concatenate([v, a / chain.mass])
+        return np.concatenate([v, particle_accelerations(chain, u, v, load)])
 
     sol = solve_ivp(rhs, (0.0, float(t[-1])), np.concatenate([u0, v0]), method="DOP853",
                     t_eval=t, rtol=rtol, atol=atol)
@@ -400,6 +458,6 @@ def simulate_reference(chain: Chain, striker_velocity: float, t_out: ArrayLike, 
         raise RuntimeError(f"solve_ivp failed: {sol.message}")
     u, v = sol.y[:n], sol.y[n:]
     gap = np.concatenate([u[:-1] - u[1:], u[-1:]])
-    force = _numpy_forces(chain, u, v)
+    force = contact_forces(chain, u, v)
     return ChainResult(t=t, force=force.T.copy(), approach=gap.T.copy(),
                        displacement=u.T.copy(), velocity=v.T.copy(), steps=int(sol.nfev))

@@ -9,6 +9,9 @@ Conventions (shared with the rest of msens)
 * Displacements ``u`` (m) are measured along +x from the "just touching" configuration;
   the approach is delta_k = [u_k - u_{k+1}]_+ and delta_{n-1} = [u_{n-1}]_+.
 
+Each particle k may also feel a viscous drag -c_k v_k (``Chain.drag``, N s/m) from the tube
+it slides in, relative to the fixed tube; zero by default.
+
 Contact force (compressive positive), only while delta > 0:
 
 * ``LINEAR`` (paper Eq. 6): F = A delta^{3/2} + gamma d(delta)/dt, gamma in kg/s.
@@ -84,6 +87,9 @@ class Chain:
     length : ndarray, shape (n,) or None
         Extent of each particle along the axis, m (2R for a sphere); used only to turn
         displacements into positions.
+    drag : ndarray, shape (n,) or None
+        Viscous drag coefficient c of each particle on the tube, N s/m (>= 0): force -c v
+        on the particle, v its velocity relative to the fixed tube. None (default): zero.
     """
 
     mass: np.ndarray
@@ -93,6 +99,7 @@ class Chain:
     gravity: float = G0
     damping_law: DampingLaw = DampingLaw.LINEAR
     length: np.ndarray | None = None
+    drag: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         mass = _vector("mass", self.mass, None)
@@ -102,6 +109,9 @@ class Chain:
         fields = {"mass": mass}
         for name in ("stiffness", "damping", "static_force"):
             fields[name] = _vector(name, getattr(self, name), n)
+        fields["drag"] = _vector("drag", np.zeros(n) if self.drag is None else self.drag, n)
+        if np.any(fields["drag"] < 0):
+            raise ValueError("Chain.drag must be >= 0")
         if self.length is not None:
             fields["length"] = _vector("length", self.length, n)
             if np.any(fields["length"] <= 0):

@@ -22,7 +22,8 @@ Plausible ranges (paper setup: 0.376 m/s striker, steel wall, gamma_c ~ 2.2 kg/s
 - ``cable_capacitance``: log-uniform in [0.3, 3] nF (3-30 m of RG-58);
 - ``static_precompression``: a run of 2-5 contacts starting anywhere from c_3 to c_24,
   force uniform in [0.5, 3] N;
-- ``sensor_mass``: the bead mass x uniform in [1.15, 1.8].
+- ``sensor_mass``: the bead mass x uniform in [1.15, 1.8];
+- ``tube_friction``: drag log-uniform in [0.05, 0.5] N s/m (a light oil film to grease).
 
 :func:`hidden_shots` makes a multi-shot file whose shots differ in striker speed (the
 rig's shot-to-shot jitter) besides noise and trigger; :func:`outside_case` makes data with an
@@ -36,9 +37,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy import signal
 
-from msens.chain.integrate import ChainResult, _initial_state, _numpy_forces
 from msens.diagnose.effects import Context, ModelState, get
 from msens.diagnose.effects.coil_position import names as coil_names
 from msens.diagnose.effects.sensor_position import names as position_names
@@ -83,6 +83,8 @@ def draw(effect: str, ctx: Context, base: ModelState, rng: np.random.Generator) 
                 "precompression_force_n": float(rng.uniform(0.5, 3.0))}
     if effect == "sensor_mass":
         return {"sensor_mass_kg": float(ctx.study.chain.bead_mass_kg * rng.uniform(1.15, 1.8))}
+    if effect == "tube_friction":
+        return {"tube_drag_n_s_per_m": _log_uniform(rng, 0.05, 0.5)}
     if effect == "sensor_position":
         params = dict(zip(position_names(ctx), (int(p) for p in base.particles), strict=True))
         space = {p.name: p for p in get(effect).space(ctx, base)}
@@ -226,52 +228,8 @@ OUTSIDE = {
     "small_wall_bead": "a 3.97 mm bead (5/32 in) in place of the last bead on the wall",
     "worn_contact": "contact c_9 at 0.3 of its Hertz stiffness (a flattened, yielded contact)",
     "clipping": "the amplifiers clip at 70 % of each channel's peak",
-    "tube_drag": "viscous drag of 0.5 kg/s on every bead (beads rubbing on the tube)",
+    "ac_coupling": "AC-coupled amplifiers: a first-order high-pass at 1 kHz on every channel",
 }
-
-
-@dataclass
-class DragPredictor(Predictor):
-    """A predictor whose chain has viscous drag ``drag`` (kg/s) on every particle but the
-    striker, integrated by SciPy (``solve_ivp``, DOP853; the contact forces of
-    :func:`msens.chain.integrate._numpy_forces`): the chain kernel has no per-particle drag.
-    Slow (seconds per run); for making test data only."""
-
-    drag: float = 0.0
-
-    def _simulate(self, states, needs=None):
-        out = []
-        for s in states:
-            res = _simulate_drag(s.chain, s.velocity, self.t, self.drag)
-            self.simulations += 1
-            out.append((res.force, None, res.approach))
-        return out
-
-
-def _simulate_drag(chain, velocity: float, t: np.ndarray, drag: float):
-    n = chain.n_particles
-    u0, v0 = _initial_state(chain, velocity)
-    load = chain.load()
-    c = np.full(n, drag)
-    c[0] = 0.0  # the striker falls free inside the guide
-
-    def rhs(_t, y):
-        u, v = y[:n], y[n:]
-        f = _numpy_forces(chain, u, v)
-        a = load - c * v
-        a[1:] += f[:-1]
-        a -= f
-        return np.concatenate([v, a / chain.mass])
-
-    d_scale = 1e-6
-    atol = np.concatenate([np.full(n, 1e-9 * d_scale), np.full(n, 1e-9)])
-    sol = solve_ivp(rhs, (0.0, float(t[-1])), np.concatenate([u0, v0]), method="DOP853",
-                    t_eval=t, rtol=1e-8, atol=atol)
-    if not sol.success:
-        raise RuntimeError(f"solve_ivp failed: {sol.message}")
-    u, v = sol.y[:n], sol.y[n:]
-    gap = np.concatenate([u[:-1] - u[1:], u[-1:]])
-    return ChainResult(t=t, force=_numpy_forces(chain, u, v).T.copy(), approach=gap.T.copy())
 
 
 @dataclass(frozen=True)
@@ -283,6 +241,18 @@ class _Clip:
     def __call__(self, records: np.ndarray, dt: float) -> np.ndarray:
         peak = np.max(np.abs(records), axis=-1, keepdims=True)
         return np.clip(records, -self.level * peak, self.level * peak)
+
+
+@dataclass(frozen=True)
+class _HighPass:
+    """AC coupling of each record (a charge amplifier's finite time constant): the
+    first-order high-pass H(s) = s / (s + w_c), discretised by the bilinear transform."""
+
+    corner_hz: float
+
+    def __call__(self, records: np.ndarray, dt: float) -> np.ndarray:
+        b, a = signal.bilinear([1.0, 0.0], [1.0, 2.0 * np.pi * self.corner_hz], fs=1.0 / dt)
+        return signal.lfilter(b, a, records, axis=-1)
 
 
 def outside_state(name: str, ctx: Context, state: ModelState, predictor: Predictor
@@ -310,8 +280,8 @@ def outside_state(name: str, ctx: Context, state: ModelState, predictor: Predict
         stiff[8] *= 0.3
     elif name == "clipping":
         return dataclasses.replace(state, post=(*state.post, _Clip(0.7))), predictor
-    elif name == "tube_drag":
-        return state, DragPredictor(predictor.t, drag=0.5)
+    elif name == "ac_coupling":
+        return dataclasses.replace(state, post=(*state.post, _HighPass(1e3))), predictor
     else:
         raise ValueError(f"unknown outside effect {name!r}; known: {', '.join(OUTSIDE)}")
     chain = dataclasses.replace(chain, mass=mass, stiffness=stiff)

@@ -173,7 +173,8 @@ def observe_state(state: ModelState, force: np.ndarray, contacts: np.ndarray | N
 def _sim_key(state: ModelState) -> tuple:
     c = state.chain
     return (c.mass.tobytes(), c.stiffness.tobytes(), c.damping.tobytes(),
-            c.static_force.tobytes(), c.gravity, c.damping_law, float(state.velocity))
+            c.static_force.tobytes(), c.drag.tobytes(), c.gravity, c.damping_law,
+            float(state.velocity))
 
 
 def baseline_state(ctx: Context, gamma_contact: float, gamma_wall: float) -> ModelState:

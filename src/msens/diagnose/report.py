@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from msens.diagnose.workflow import Diagnosis
+from msens.diagnose.diagnosis import Diagnosis
 from msens.output import OutputDir
 
 FILES = ("diagnosis.json", "diagnosis.png")

@@ -55,208 +55,39 @@ import dataclasses
 import logging
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
-from tqdm import tqdm
 
 from msens.calibrate import DissipationFit
-from msens.compare import model_record, setup_spec_channels, shot_records, smooth
-from msens.diagnose.effects import Context, Effect, ModelState, registry
+from msens.compare import setup_spec_channels
+from msens.diagnose.candidates import (
+    THRESHOLD,
+    candidate_effects,
+    decide,
+    fit_candidates,
+    log_decision,
+    score_candidates,
+    with_added,
+)
+from msens.diagnose.diagnosis import Candidate, Diagnosis
+from msens.diagnose.effects import Context
 from msens.diagnose.effects import get as get_effect
-from msens.diagnose.fit import EffectFit, fit_effect, refit_jointly
+from msens.diagnose.fit import refit_jointly
 from msens.diagnose.noise import shot_matrix
 from msens.diagnose.objective import FeatureObjective, WaveformObjective, check_channels
-from msens.diagnose.predict import (
-    Predictor,
-    baseline_state,
-    feature_records,
-    model_features_of,
-    positions,
-    setup_result,
-)
+from msens.diagnose.predict import Predictor, baseline_state, positions, setup_result
 from msens.diagnose.shots import fit_shots
 from msens.diagnose.verdict import verdict
+from msens.diagnose.where import feature_residuals, feature_table, window_residuals, worst_window
 from msens.errors import InputError
-from msens.features import centre_distance
 from msens.io.waveform import Waveform
 from msens.pipeline import calibrate_dissipation, output_times
 from msens.study import SetupSpec, Study
 
+__all__ = ["THRESHOLD", "Candidate", "Diagnosis", "baseline_dissipation", "diagnose",
+           "diagnose_passes", "diagnose_reference", "match_setup_spec"]
+
 _log = logging.getLogger(__name__)
-
-#: Smallest BIC drop (score) for naming an effect; see the module docstring.
-THRESHOLD = 10.0
-#: Half-width of the incident / reflected windows, in incident pulse widths (FWHM).
-WINDOW_WIDTHS = 1.5
-
-
-@dataclass(frozen=True)
-class Candidate:
-    """One fitted effect and its evidence.
-
-    Attributes
-    ----------
-    effect : str
-    parameters : dict
-        Fitted values, SI.
-    baseline : dict
-        The parameters' baseline values (None where the baseline is another law).
-    chi2 : float
-        Weighted residual sum at the optimum.
-    misfit : float
-        chi2 per observation.
-    score : float
-        BIC drop against the baseline (> 0 favours the effect).
-    n_parameters : int
-    plausible : bool
-        Every fitted parameter inside its physical range.
-    significant : bool
-        The change from the baseline reaches the effect's practical-significance floor.
-    notes : tuple of str
-        Why the candidate is implausible or below its floor (empty otherwise).
-    """
-
-    effect: str
-    parameters: dict
-    baseline: dict
-    chi2: float
-    misfit: float
-    score: float
-    n_parameters: int
-    plausible: bool = True
-    significant: bool = True
-    notes: tuple[str, ...] = ()
-
-    def to_json(self) -> dict:
-        """The candidate's entry in ``diagnosis.json``."""
-        return {"effect": self.effect, "misfit": self.misfit, "score": self.score,
-                "parameters": self.parameters, "baseline": self.baseline,
-                "n_parameters": self.n_parameters, "plausible": self.plausible,
-                "significant": self.significant, "notes": list(self.notes)}
-
-
-@dataclass(frozen=True)
-class Diagnosis:
-    """Result of one diagnosis pass.
-
-    Attributes
-    ----------
-    mode : {"waveform", "features"}
-    setup : str
-    effect : str
-        Named effect or ``"none"``.
-    parameters : dict
-        Its fitted parameters (empty for none).
-    misfit_before, misfit_after : float
-        chi^2 per observation of the baseline and of the model with the named effect.
-    candidates : tuple of Candidate
-        Sorted by score, best first.
-    threshold : float
-    n_obs : int
-    sigma : tuple of float
-        Noise std per sensor used in chi^2 (V or V for MsS voltage; 1 in feature mode).
-    added : tuple of (str, dict)
-        Effects already in the baseline (earlier passes).
-    refit : tuple of (str, dict)
-        When ``added`` is not empty and an effect is named: the added effects and the new one
-        with their parameters refined together (:func:`~msens.diagnose.fit.refit_jointly`);
-        ``misfit_after`` is that model's.
-    gamma_contact, gamma_wall : float
-        Baseline dissipation (Eq. 10 or the study's).
-    disagreement : dict
-        Where the baseline misses: features and windows (see :func:`diagnose`).
-    simulations : int
-    elapsed_s : float
-    verdict : dict
-        Whether the final model (the named effect, or the baseline for none) explains the
-        data: ``explained`` and the residual/noise test per window
-        (:func:`msens.diagnose.verdict.verdict`).
-    noise : dict
-        The noise estimate, independent of every fit (waveform mode; empty for features).
-    before, after : ModelState
-        The baseline and the model with the named effect (== before for none).
-    overlay : list of dict
-        Per sensor, for the figure: ``channel``, ``t_us`` (record time), ``data``,
-        ``before``, ``after`` (V; the shots' mean), or for features mode the feature table.
-    """
-
-    mode: str
-    setup: str
-    effect: str
-    parameters: dict
-    misfit_before: float
-    misfit_after: float
-    candidates: tuple[Candidate, ...]
-    threshold: float
-    n_obs: int
-    sigma: tuple[float, ...]
-    added: tuple[tuple[str, dict], ...]
-    refit: tuple[tuple[str, dict], ...]
-    gamma_contact: float
-    gamma_wall: float
-    disagreement: dict
-    simulations: int
-    elapsed_s: float
-    verdict: dict
-    noise: dict
-    before: ModelState = field(repr=False)
-    after: ModelState = field(repr=False)
-    overlay: list = field(repr=False, default_factory=list)
-
-    @property
-    def explained(self) -> bool:
-        """Whether the final model's residual is consistent with the noise."""
-        return bool(self.verdict["explained"])
-
-    def summary(self) -> str:
-        """One sentence: what is named and whether it explains the data."""
-        where = self.verdict.get("unexplained_where")
-        at = (f"; the residual is {where['residual_over_noise']:.2g} x the noise at the "
-              f"{where['window']} window of {where['channel']}" if where else "")
-        if self.effect == "none":
-            if self.explained:
-                return "nothing is missing: the model explains the data within the noise"
-            return "no plausible library effect explains the data" + at
-        if self.explained:
-            return f"{self.effect} explains the data within the noise"
-        return f"{self.effect} is supported but does not explain the data" + at
-
-    def to_json(self) -> dict:
-        """The content of ``diagnosis.json``."""
-        return {
-            "effect": self.effect,
-            "parameters": self.parameters,
-            "explained": self.explained,
-            "summary": self.summary(),
-            "misfit_before": self.misfit_before,
-            "misfit_after": self.misfit_after,
-            "verdict": self.verdict,
-            "noise": self.noise,
-            "candidates": [c.to_json() for c in self.candidates],
-            "mode": self.mode,
-            "setup": self.setup,
-            "threshold_delta_bic": self.threshold,
-            "misfit_definition": "chi^2 per observation: squared residuals over the noise "
-                                 "variance estimated without any fit (waveform: per sample "
-                                 "of the shots' mean, gain, offset and time offset profiled "
-                                 "out; features: over the published std)",
-            "score_definition": "BIC(baseline) - BIC(effect) = chi2_0 - chi2 - k ln N",
-            "naming_rule": "the best-scoring candidate whose parameters are inside their "
-                           "physical ranges, whose change reaches the effect's "
-                           "practical-significance floor, and whose score exceeds the "
-                           "threshold and the best plausible below-floor candidate's score "
-                           "by the threshold",
-            "n_observations": self.n_obs,
-            "sigma": list(self.sigma),
-            "baseline": {"gamma_contact": self.gamma_contact,
-                         "gamma_wall": self.gamma_wall,
-                         "added_effects": [{"effect": n, "parameters": p}
-                                           for n, p in self.added]},
-            "joint_refit": [{"effect": n, "parameters": p} for n, p in self.refit],
-            "disagreement": self.disagreement,
-            "simulations": self.simulations,
-        }
 
 
 # ------------------------------------------------------------------------ baseline
@@ -283,210 +114,6 @@ def baseline_dissipation(study: Study, fit: DissipationFit | None = None) -> tup
     if fit is not None:
         return fit.gamma_c, fit.gamma_w
     return study.chain.gamma_contact, study.chain.gamma_wall
-
-
-def _with_added(ctx: Context, state: ModelState,
-                added: Sequence[tuple[str, Mapping[str, float]]]) -> ModelState:
-    for name, params in added:
-        state = get_effect(name).apply(ctx, state, params)
-    return state
-
-
-def _candidate_effects(ctx: Context, names: Sequence[str] | None,
-                       added: Sequence[tuple[str, Mapping]]) -> list[Effect]:
-    lib = registry()
-    if names is not None:
-        unknown = [n for n in names if n not in lib]
-        if unknown:
-            raise InputError(f"unknown effect(s) {', '.join(unknown)}; known: {', '.join(lib)}")
-    done = {n for n, _ in added}
-    return [e for n, e in lib.items()
-            if (names is None or n in names) and n not in done and e.applies(ctx)]
-
-
-def _fit_candidates(effects: Sequence[Effect], ctx: Context, base: ModelState,
-                    predictor: Predictor, objective, weights: np.ndarray) -> list[EffectFit]:
-    """:func:`fit_effect` of every candidate, with a progress bar (the slow step)."""
-    _log.info("fitting %d candidate effects: %s", len(effects),
-              ", ".join(e.name for e in effects))
-    fits = []
-    with tqdm(effects, desc="candidate effects", unit=" effect", leave=False,
-              disable=not _log.isEnabledFor(logging.INFO)) as bar:
-        for e in bar:
-            bar.set_postfix_str(e.name)
-            fits.append(fit_effect(e, ctx, base, predictor, objective, weights))
-    return fits
-
-
-def _log_decision(cands: list[Candidate], winner: Candidate | None, threshold: float) -> None:
-    if winner is not None:
-        _log.info("decision: %s (score %.1f > threshold %g)", winner.effect, winner.score,
-                  threshold)
-    elif cands:
-        _log.info("decision: none (best %s scores %.1f <= threshold %g)", cands[0].effect,
-                  cands[0].score, threshold)
-    else:
-        _log.info("decision: none (no candidate effect applies)")
-
-
-# ------------------------------------------------------------------------ scoring
-
-def judge(effect: Effect, ctx: Context, base: ModelState, params: Mapping[str, float]
-          ) -> tuple[bool, bool, tuple[str, ...]]:
-    """(plausible, significant, notes) of an effect's fitted parameters.
-
-    Plausible: every parameter inside its physical range. Significant: some parameter with
-    a baseline value moved from it by at least its floor (an effect whose parameters have no
-    baseline value, e.g. another law, is significant).
-    """
-    space = effect.space(ctx, base)
-    ref = effect.baseline(ctx, base)
-    notes = []
-    plausible = True
-    for p in space:
-        v = float(params[p.name])
-        if not p.is_plausible(v):
-            plausible = False
-            lo, hi = p.physical
-            notes.append(f"implausible: {p.name} = {v:.4g} outside its physical range "
-                         f"[{lo:.4g}, {hi:.4g}] ({p.reason})")
-    moves = [(p, float(params[p.name]) - float(ref[p.name])) for p in space
-             if ref.get(p.name) is not None]
-    significant = not moves or any(abs(d) > 0 and abs(d) >= p.floor for p, d in moves)
-    if not significant:
-        notes.append("below the practical-significance floor: " + "; ".join(
-            f"{p.name} changed by {d:+.3g} < {p.floor:.3g} ({p.floor_reason})"
-            for p, d in moves))
-    return plausible, significant, tuple(notes)
-
-
-def _score(fits: list[EffectFit], rss0: np.ndarray, n_obs: np.ndarray, ctx: Context,
-           base: ModelState) -> tuple[list[Candidate], float]:
-    # rss are chi^2 already (residuals over the fit-free noise), per sensor
-    n = float(n_obs.sum())
-    chi0 = float(rss0.sum())
-    cands = []
-    for f in fits:
-        effect = get_effect(f.effect)
-        chi = float(f.rss.sum())
-        plausible, significant, notes = judge(effect, ctx, base, f.parameters)
-        cands.append(Candidate(
-            effect=f.effect, parameters=f.parameters,
-            baseline=effect.baseline(ctx, base), chi2=chi, misfit=chi / n,
-            score=chi0 - chi - f.n_parameters * np.log(n), n_parameters=f.n_parameters,
-            plausible=plausible, significant=significant, notes=notes))
-    cands.sort(key=lambda c: -c.score)
-    return cands, chi0 / n
-
-
-def _decide(cands: list[Candidate], fits: list[EffectFit], threshold: float
-            ) -> tuple[Candidate | None, EffectFit | None]:
-    """The best-scoring candidate that is plausible and significant and whose score beats
-    by ``threshold`` both the baseline and every plausible change below its floor (when a
-    negligible change explains the data better, nothing practical is missing)."""
-    negligible = max((c.score for c in cands if c.plausible and not c.significant),
-                     default=0.0)
-    for c in cands:
-        if c.plausible and c.significant and c.score - max(negligible, 0.0) > threshold:
-            return c, next(f for f in fits if f.effect == c.effect)
-    return None, None
-
-
-# ------------------------------------------------------------------------ where
-
-def _trough(force: np.ndarray, t: np.ndarray, t_inc: float, width: float,
-            peak: float) -> float:
-    """Deepest pre-peak excursion below zero within 2 widths before the incident peak,
-    as a fraction of the incident peak (0 when there is none)."""
-    m = (t >= t_inc - 2 * width) & (t <= t_inc) & np.isfinite(force)
-    if not m.any() or not np.isfinite(peak) or peak == 0:
-        return float("nan")
-    return float(min(0.0, np.min(force[m])) / peak)
-
-
-def _features(force: np.ndarray, t: np.ndarray) -> dict[str, float]:
-    force = np.where(np.isfinite(force), force, 0.0)  # outside the record: at rest
-    f = model_features_of(force, t)
-    sm = smooth(force, float(t[1] - t[0]))
-    return {"t_incident_us": float(f.t_incident) * 1e6, "tof_us": float(f.tof) * 1e6,
-            "ar": float(f.ar), "width_us": float(f.width) * 1e6,
-            "trough": _trough(sm, t, float(f.t_incident), float(f.width), float(f.f_incident))}
-
-
-def _feature_residuals(result, waveform: Waveform) -> dict:
-    """Measured (mean over shots) against baseline model features per channel, and speed."""
-    t = result.history.t
-    shots = shot_records(result, waveform)
-    out: dict = {"channels": []}
-    t_inc: dict[str, tuple[float, float, int]] = {}
-    for sensor in result.sensors:
-        name = f"{sensor.sensor.kind.value}@{sensor.sensor.particle}"
-        recs = [r for shot in shots for r in shot
-                if (r.channel.kind, r.channel.particle)
-                == (sensor.sensor.kind.value, sensor.sensor.particle)]
-        meas = [_features(r.force, t) for r in recs]
-        model = _features(model_record(sensor, t), t)
-        row = {"channel": name}
-        for k in model:
-            vals = np.array([m[k] for m in meas])
-            row[k] = {"measured": float(np.mean(vals)), "model": model[k],
-                      "residual": float(np.mean(vals) - model[k]),
-                      "std": float(np.std(vals, ddof=1)) if vals.size > 1 else 0.0}
-        out["channels"].append(row)
-        t_inc[name] = (row["t_incident_us"]["measured"], model["t_incident_us"],
-                       sensor.sensor.particle)
-    if len(t_inc) >= 2:
-        (a, b) = sorted(t_inc.values(), key=lambda x: x[2])[::len(t_inc) - 1]
-        d = centre_distance(result.chain.length, a[2], b[2])
-        meas_v = d / ((b[0] - a[0]) * 1e-6)
-        model_v = d / ((b[1] - a[1]) * 1e-6)
-        out["speed_m_per_s"] = {"measured": meas_v, "model": model_v,
-                                "residual": meas_v - model_v}
-    return out
-
-
-def _windows(objective: WaveformObjective, records_before: np.ndarray,
-             records_after: np.ndarray, result) -> list[dict]:
-    """chi^2 per sample (residual over the fit-free noise) in the incident and reflected
-    window of each sensor, and elsewhere, before and after."""
-    feats = model_features_of(feature_records(records_before, objective.physics, objective.t),
-                              objective.t)
-    rows = []
-    per = [objective.aligned(r) for r in (records_before, records_after)]
-    for j, sensor in enumerate(result.sensors):
-        name = f"{sensor.sensor.kind.value}@{sensor.sensor.particle}"
-        w = WINDOW_WIDTHS * float(feats.width[j])
-        spans = {"incident": (float(feats.t_incident[j]) - w, float(feats.t_incident[j]) + w),
-                 "reflected": (float(feats.t_reflected[j]) - w,
-                               float(feats.t_reflected[j]) + w)}
-        # windows are in model time of the baseline alignment, the same samples after
-        masks = []
-        for _, tm, _ in per[0]:
-            inside = {k: (tm >= lo) & (tm <= hi) for k, (lo, hi) in spans.items()}
-            inside["elsewhere"] = ~(inside["incident"] | inside["reflected"])
-            masks.append(inside)
-        for window in ("incident", "reflected", "elsewhere"):
-            vals, count = [], 0
-            for aligned in per:
-                num = 0.0
-                count = 0
-                for shot, (_, _, m), mk in zip(objective.shots, aligned, masks, strict=True):
-                    sel = mk[window]
-                    r = (shot.y[j] - m[j])[sel]
-                    num += float(np.sum(shot.w[j][sel] * r**2))
-                    count += r.size
-                vals.append(num / count if count else float("nan"))
-            if count:
-                rows.append({"channel": name, "window": window, "n_samples": count,
-                             "chi2_per_sample_before": vals[0],
-                             "chi2_per_sample_after": vals[1]})
-    return rows
-
-
-def _where(windows: list[dict]) -> str:
-    worst = max(windows, key=lambda r: r["chi2_per_sample_before"])
-    return f"{worst['window']} pulse at {worst['channel']}" if worst["window"] != "elsewhere" \
-        else f"outside the pulses at {worst['channel']}"
 
 
 # ------------------------------------------------------------------------ workflows
@@ -530,7 +157,7 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
               "".join(f", + {n}" for n, _ in added))
     predictor = Predictor(output_times(study))
     plain = baseline_state(ctx, gc, gw)
-    base = _with_added(ctx, plain, added)
+    base = with_added(ctx, plain, added)
     base_result = setup_result(ctx, base, predictor)
     shifts, per_shot = None, None
     if len({c.repeat for c in waveform.channels}) > 1:
@@ -539,18 +166,18 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
         per_shot = fit_shots(waveform, base, base_result, predictor)
         shifts = np.round((per_shot.delays[0] - per_shot.delays) / waveform.dt).astype(int)
         plain = dataclasses.replace(plain, velocity_spread=per_shot.spread)
-        base = _with_added(ctx, plain, added)
+        base = with_added(ctx, plain, added)
         _log.info("%d shots: striker speed spread %.2g %%", len(per_shot.speeds),
                   100 * per_shot.spread)
     objective = WaveformObjective(waveform, base_result, shifts)
     records0 = predictor.records([base])[0]
     rss0 = objective.rss(records0)
     weights = np.ones(len(rss0))  # rss is chi^2: already over the noise
-    fits = _fit_candidates(_candidate_effects(ctx, effects, added), ctx, base, predictor,
+    fits = fit_candidates(candidate_effects(ctx, effects, added), ctx, base, predictor,
                            objective, weights)
-    cands, misfit0 = _score(fits, rss0, objective.n_obs, ctx, base)
-    winner, wfit = _decide(cands, fits, threshold)
-    _log_decision(cands, winner, threshold)
+    cands, misfit0 = score_candidates(fits, rss0, objective.n_obs, ctx, base)
+    winner, wfit = decide(cands, fits, threshold)
+    log_decision(cands, winner, threshold)
     after = wfit.state if wfit is not None else base
     refit: tuple[tuple[str, dict], ...] = ()
     if wfit is not None and added:
@@ -562,11 +189,11 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     records1 = predictor.records([after])[0]  # rerun with the effect added
     rss1 = objective.rss(records1)
     n = float(objective.n_obs.sum())
-    windows = _windows(objective, records0, records1, base_result)
+    windows = window_residuals(objective, records0, records1, base_result)
     ens = objective.ensemble
     names = [f"{s.kind.value}@{s.particle}" for s in setup.sensors]
-    disagreement = {"where": _where(windows), "windows": windows,
-                    "features": _feature_residuals(base_result, waveform)}
+    disagreement = {"where": worst_window(windows), "windows": windows,
+                    "features": feature_residuals(base_result, waveform)}
     return Diagnosis(
         mode="waveform", setup=setup.name, effect=winner.effect if winner else "none",
         parameters=dict(winner.parameters) if winner else {},
@@ -642,21 +269,21 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
     _log.info("feature diagnosis of setup %s: baseline model (gamma_c = %.3g kg/s, gamma_w = "
               "%.3g kg/s%s)", setup.name, gc, gw, "".join(f", + {n}" for n, _ in added))
     predictor = Predictor(output_times(study))
-    base = _with_added(ctx, baseline_state(ctx, gc, gw), added)
+    base = with_added(ctx, baseline_state(ctx, gc, gw), added)
     where = positions([s.particle for s in setup.sensors])
     objective = FeatureObjective(setup, rows, where, predictor.t)
     records0 = predictor.records([base])[0]
     rss0 = objective.rss(records0)
     weights = np.ones(len(where))
-    fits = _fit_candidates(_candidate_effects(ctx, effects, added), ctx, base, predictor,
+    fits = fit_candidates(candidate_effects(ctx, effects, added), ctx, base, predictor,
                            objective, weights)
-    cands, misfit0 = _score(fits, rss0, objective.n_obs, ctx, base)
-    winner, wfit = _decide(cands, fits, threshold)
-    _log_decision(cands, winner, threshold)
+    cands, misfit0 = score_candidates(fits, rss0, objective.n_obs, ctx, base)
+    winner, wfit = decide(cands, fits, threshold)
+    log_decision(cands, winner, threshold)
     after = wfit.state if wfit is not None else base
     records1 = predictor.records([after])[0]
     n = float(objective.n_obs.sum())
-    table = _feature_table(objective, records0, records1, setup, where)
+    table = feature_table(objective, records0, records1, setup, where)
     worst = max(table, key=lambda r: abs(r["residual_before"]))
     # each feature is one window; the published std is taken as known (dof infinite)
     rows = [{"channel": r["channel"], "window": r["feature"], "n_samples": 1,
@@ -676,21 +303,3 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
         verdict=verdict(float(objective.rss(records1).sum()), n, rows, float("inf")),
         noise={"source": "the published shot-to-shot std of each feature"},
         before=base, after=after, overlay=table)
-
-
-def _feature_table(objective: FeatureObjective, records0: np.ndarray, records1: np.ndarray,
-                   setup: SetupSpec, where: list[str]) -> list[dict]:
-    f0, f1 = (model_features_of(feature_records(r, objective.physics, objective.t),
-                                objective.t) for r in (records0, records1))
-    r0, r1 = objective.residuals(records0), objective.residuals(records1)
-    out = []
-    for j, (s, pos, row) in enumerate(zip(setup.sensors, where, objective.rows, strict=True)):
-        name = f"{s.kind.value}@{s.particle} ({pos})"
-        out.append({"channel": name, "feature": "tof_us", "measured": row.tof_us,
-                    "std": row.tof_std_us, "model_before": float(f0.tof[j]) * 1e6,
-                    "model_after": float(f1.tof[j]) * 1e6, "residual_before": float(r0[j, 0]),
-                    "residual_after": float(r1[j, 0])})
-        out.append({"channel": name, "feature": "ar", "measured": row.ar, "std": row.ar_std,
-                    "model_before": float(f0.ar[j]), "model_after": float(f1.ar[j]),
-                    "residual_before": float(r0[j, 1]), "residual_after": float(r1[j, 1])})
-    return out

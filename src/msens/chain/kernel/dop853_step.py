@@ -145,14 +145,15 @@ _COEF = np.array([
 
 
 @njit_noalias(cache=True, fastmath=FASTMATH)
-def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
+def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, drag, kv, tu, tv, u1, v1):
     """One DOP853 step of size ``h`` (s) from (u, v); ``a0`` = acceleration at (u, v).
 
     ``mode`` selects the time variable of the step (see :mod:`msens.chain.dop853_codegen`):
     ``STEP_REGULAR``, ``STEP_SQRT_START`` (a contact closed at the step's start) or
     ``STEP_SQRT_END`` (a contact opens at its end). Padded layout of
     :func:`msens.chain.kernel.forces.contact_forces`: ``u``, ``v``, ``a0``, ``tu``, ``tv``, ``u1``,
-    ``v1`` have shape (p + 1,) and ``cA``, ``cg``, ``load``, ``inv_m`` shape (p,), zero past
+    ``v1`` have shape (p + 1,) and ``cA``, ``cg``, ``load``, ``inv_m``, ``drag`` (each
+    particle's viscous drag on the tube over its mass, c/m in 1/s) shape (p,), zero past
     the n particles. ``hkk`` selects the Kuwabara-Kono force law (else the linear dashpot).
     ``kv`` (N_STAGES, p + 1) receives the stage accelerations, ``tu``/``tv`` are scratch;
     the result goes to (u1, v1).
@@ -176,7 +177,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[1, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[1, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # stage 2
     ch = h * _COEF[mode, 2]
@@ -191,7 +192,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[2, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[2, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # stage 3
     ch = h * _COEF[mode, 6]
@@ -207,7 +208,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[3, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[3, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # stage 4
     ch = h * _COEF[mode, 11]
@@ -225,7 +226,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[4, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[4, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # stage 5
     ch = h * _COEF[mode, 18]
@@ -243,7 +244,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[5, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[5, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # stage 6
     ch = h * _COEF[mode, 25]
@@ -264,7 +265,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[6, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[6, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # stage 7
     ch = h * _COEF[mode, 34]
@@ -288,7 +289,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[7, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[7, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # stage 8
     ch = h * _COEF[mode, 45]
@@ -314,7 +315,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[8, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[8, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # stage 9
     ch = h * _COEF[mode, 58]
@@ -342,7 +343,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[9, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[9, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # stage 10
     ch = h * _COEF[mode, 73]
@@ -373,7 +374,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[10, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[10, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # stage 11
     ch = h * _COEF[mode, 90]
@@ -407,7 +408,7 @@ def rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1):
         dp = max(tu[k] - tu[k + 1], 0.0)
         w = np.sqrt(dp)
         f = cA[k] * dp * w + cg[k] * (tv[k] - tv[k + 1]) * (w if hkk else 1.0)
-        kv[11, k] = (load[k] + f_prev - f) * inv_m[k]
+        kv[11, k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * tv[k]
         f_prev = f
     # solution
     bu0 = hh * _COEF[mode, 109]

@@ -148,7 +148,7 @@ def closing_grade(r, q, levels):
 
 
 @nb.njit(cache=True, fastmath=FM)
-def update_near(k, u, v, a, jk, with_jerk, cA, cg, law, load, inv_m):
+def update_near(k, u, v, a, jk, with_jerk, cA, cg, law, load, inv_m, drag):
     """After contact k switched: the accelerations of its two particles (and with
     ``with_jerk`` the jerks of the four around it) anew, the only ones that change; the same
     arithmetic as :func:`accelerations` and :func:`jerks` (padded layout)."""
@@ -160,7 +160,7 @@ def update_near(k, u, v, a, jk, with_jerk, cA, cg, law, load, inv_m):
         f_prev = force(u[k - 1] - u[k], v[k - 1] - v[k], cA[k - 1], cg[k - 1], hkk)
     for i in range(k, min(k + 2, p)):
         f = force(u[i] - u[i + 1], v[i] - v[i + 1], cA[i], cg[i], hkk)
-        a[i] = (load[i] + f_prev - f) * inv_m[i]
+        a[i] = (load[i] + f_prev - f) * inv_m[i] - drag[i] * v[i]
         f_prev = f
     if with_jerk:
         i0 = max(k - 1, 0)
@@ -170,7 +170,7 @@ def update_near(k, u, v, a, jk, with_jerk, cA, cg, law, load, inv_m):
                              cA[i0 - 1], cg[i0 - 1])
         for i in range(i0, min(k + 3, p)):
             d = dforce(u[i] - u[i + 1], v[i] - v[i + 1], a[i] - a[i + 1], cA[i], cg[i])
-            jk[i] = (d_prev - d) * inv_m[i]
+            jk[i] = (d_prev - d) * inv_m[i] - drag[i] * a[i]
             d_prev = d
 
 
@@ -254,7 +254,7 @@ def gap_tol(k, closed, damp, gam, hkk):
 
 @nb.njit(cache=True)
 def switch(kind, k, t, u, v, a, jk, jk_ok, closed, damp, A, gam, cA, cg, law, load, inv_m,
-            t_left, q_left, s_left):
+           drag, t_left, q_left, s_left):
     """Switch contact k's state at time t (``kind`` as in :func:`toggle`) and update the
     accelerations (and valid jerks) that change. With the loading law the relative
     accelerations and jerks of the contacts around k just before the first switch at t are
@@ -262,7 +262,7 @@ def switch(kind, k, t, u, v, a, jk, jk_ok, closed, damp, A, gam, cA, cg, law, lo
     formed first if not valid. Returns (whether it closed, whether the jerks are valid)."""
     if law == LAW_LINEAR_LOADING:
         if not jk_ok:
-            jerks(u, v, a, cA, cg, inv_m, jk)
+            jerks(u, v, a, cA, cg, inv_m, drag, jk)
             jk_ok = True
         # A switch of contact k moves the accelerations of its two particles and the jerks of
         # the four around it: the relative ones of contacts k - 2 .. k + 2.
@@ -272,7 +272,7 @@ def switch(kind, k, t, u, v, a, jk, jk_ok, closed, damp, A, gam, cA, cg, law, lo
                 q_left[i] = a[i] - a[i + 1]
                 s_left[i] = jk[i] - jk[i + 1]
     closing = toggle(kind, k, closed, damp, A, gam, cA, cg)
-    update_near(k, u, v, a, jk, jk_ok and law != LAW_HKK, cA, cg, law, load, inv_m)
+    update_near(k, u, v, a, jk, jk_ok and law != LAW_HKK, cA, cg, law, load, inv_m, drag)
     return closing, jk_ok
 
 

@@ -80,19 +80,21 @@ def contact_forces(u, v, cA, cg, law, Fp):
 
 
 @njit_noalias(cache=True, fastmath=FM)
-def accelerations(u, v, cA, cg, law, load, inv_m, out):
+def accelerations(u, v, cA, cg, law, load, inv_m, drag, out):
     """Accelerations (m/s^2) into ``out`` (p + 1,) on the padded layout (zero past n).
 
-    ``load`` and ``inv_m`` are padded with zeros to (p,). Forces and the particle balance
-    in one branch-free pass, as in the generated Runge-Kutta step: the force of the contact
-    above particle k is carried over from the previous iteration.
+    ``load``, ``inv_m`` and ``drag`` (each particle's viscous drag coefficient over its
+    mass, c/m in 1/s: the drag on the tube adds -c v / m) are padded with zeros to (p,).
+    Forces and the particle balance in one branch-free pass, as in the generated
+    Runge-Kutta step: the force of the contact above particle k is carried over from the
+    previous iteration.
     """
     n = cA.shape[0]
     hkk = law == LAW_HKK
     f_prev = 0.0
     for k in range(n):
         f = force(u[k] - u[k + 1], v[k] - v[k + 1], cA[k], cg[k], hkk)
-        out[k] = (load[k] + f_prev - f) * inv_m[k]
+        out[k] = (load[k] + f_prev - f) * inv_m[k] - drag[k] * v[k]
         f_prev = f
     for i in range(n, u.shape[0]):
         out[i] = 0.0
@@ -106,11 +108,12 @@ def dforce(g, r, q, cA, cg):
 
 
 @njit_noalias(cache=True, fastmath=FM)
-def jerks(u, v, a, cA, cg, inv_m, out):
+def jerks(u, v, a, cA, cg, inv_m, drag, out):
     """Time derivatives of the accelerations (m/s^3) into ``out`` (p + 1,), linear-dashpot laws.
 
     Differentiates Eq. 6 along the motion: dF/dt = (3/2) A sqrt(delta) d(delta)/dt
-    + gamma d^2(delta)/dt^2 with the relative acceleration from ``a``. Padded layout as in
+    + gamma d^2(delta)/dt^2 with the relative acceleration from ``a``, and the drag term
+    -(c/m) a (``drag`` = c/m as in :func:`accelerations`). Padded layout as in
     :func:`accelerations` (one pass). (Not for the Kuwabara-Kono law, whose dF/dt is
     unbounded where a contact opens or closes.)
     """
@@ -118,7 +121,7 @@ def jerks(u, v, a, cA, cg, inv_m, out):
     d_prev = 0.0
     for k in range(n):
         d = dforce(u[k] - u[k + 1], v[k] - v[k + 1], a[k] - a[k + 1], cA[k], cg[k])
-        out[k] = (d_prev - d) * inv_m[k]
+        out[k] = (d_prev - d) * inv_m[k] - drag[k] * a[k]
         d_prev = d
     for i in range(n, u.shape[0]):
         out[i] = 0.0

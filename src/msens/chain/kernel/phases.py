@@ -157,8 +157,8 @@ def predict_switch(t, h, mode, k_open, dt, v, a0, j0, closed, damp, gam_p, rate_
 
 
 @nb.njit(cache=True, inline="always")
-def take_step(h, mode, k_open, u, v, a0, closed, damp, gam, hkk, cA, cg, load, inv_m, kv, tu,
-              tv, u1, v1):
+def take_step(h, mode, k_open, u, v, a0, closed, damp, gam, hkk, cA, cg, load, inv_m, drag, kv,
+              tu, tv, u1, v1):
     """The Runge-Kutta step from (u, v) into (u1, v1); one to an opening (``k_open``) is
     refined by Newton on its length until the contact's gap vanishes at its end (if it does
     not open as estimated, it grazes: a regular step of the estimated length, in which an
@@ -175,7 +175,7 @@ def take_step(h, mode, k_open, u, v, a0, closed, damp, gam, hkk, cA, cg, load, i
     tol = gap_tol(k_open, closed, damp, gam, hkk) if k_open >= 0 else 0.0
     steps = 0
     for it in range(NEWTON_MAX + 2):
-        rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1)
+        rk_step(u, v, a0, h, mode, cA, cg, hkk, load, inv_m, drag, kv, tu, tv, u1, v1)
         steps += 1
         if k_open < 0:
             break
@@ -248,7 +248,7 @@ def earliest_violation(h, u, v, a0, u1, v1, a1, closed, damp, gam, gam_p, rate_t
 
 @nb.njit(cache=True, inline="always")
 def cut_back(h, mode, kmin, kind, th_min, dt, law, u, v, a0, closed, damp, gam, hkk, cA, cg,
-             load, inv_m, kv, tu, tv, u1, v1, a1):
+             load, inv_m, drag, kv, tu, tv, u1, v1, a1):
     """Redo the step (length h) to the crossing ``th_min`` of contact ``kmin``'s state,
     refined by Newton on the event function (not for a rate switch, ``kind`` 1: only a kink
     of the force, its cubic estimate, error O(h^4), is ample).
@@ -283,11 +283,11 @@ def cut_back(h, mode, kmin, kind, th_min, dt, law, u, v, a0, closed, damp, gam, 
     tol = gap_tol(kmin, closed, damp, gam, hkk) if kmin >= 0 else 0.0
     steps = 0
     for it in range(NEWTON_MAX + 1):
-        rk_step(u, v, a0, hc, mode, cA, cg, hkk, load, inv_m, kv, tu, tv, u1, v1)
+        rk_step(u, v, a0, hc, mode, cA, cg, hkk, load, inv_m, drag, kv, tu, tv, u1, v1)
         steps += 1
         if kmin < 0:
             if law == LAW_LINEAR_LOADING:
-                accelerations(u1, v1, cA, cg, law, load, inv_m, a1)
+                accelerations(u1, v1, cA, cg, law, load, inv_m, drag, a1)
             break
         if it == NEWTON_MAX or kind == 1:
             break
@@ -324,14 +324,15 @@ def keep_history(v, a0, j0, r_prev, q_prev, s_prev, n):
 
 
 @nb.njit(cache=True, inline="always")
-def output_jerks(t_out, j, t, h, septic, j0_ok, u, v, a0, j0, u1, v1, a1, j1, cA, cg, inv_m):
+def output_jerks(t_out, j, t, h, septic, j0_ok, u, v, a0, j0, u1, v1, a1, j1, cA, cg, inv_m,
+                 drag):
     """The jerks at both ends of the step (``j0`` only unless ``j0_ok``) where the septic
     interpolant needs them: the step holds output samples. Returns whether ``j1`` holds
     those at its end."""
     if septic and j < t_out.shape[0] and t_out[j] <= t + h:
         if not j0_ok:
-            jerks(u, v, a0, cA, cg, inv_m, j0)
-        jerks(u1, v1, a1, cA, cg, inv_m, j1)
+            jerks(u, v, a0, cA, cg, inv_m, drag, j0)
+        jerks(u1, v1, a1, cA, cg, inv_m, drag, j1)
         return True
     return False
 

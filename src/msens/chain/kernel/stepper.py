@@ -79,9 +79,12 @@ def _initial_states(u, v, A, gam, loading, n, closed, damp, cA, cg):
 
 
 @nb.njit(cache=True)
-def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, rate_tol,
+def integrate(u_init, v_init, mass, A, gam, drag, law, load, t_out, dt, grade_levels, rate_tol,
               store_uv, out_F, out_d, out_u, out_v, sel):
     """Integrate one chain from t = 0 over t_out (sorted, t_out[0] >= 0) with nominal step dt.
+
+    ``drag`` (n,) is each particle's viscous drag coefficient on the tube, N s/m (force
+    -drag v on the particle).
 
     ``grade_levels`` is the depth K of the step grading after a contact closes (first step,
     in sqrt(t - t0), dt 2^-K); ``rate_tol`` (m/s) the approach rate below which a sign change
@@ -101,6 +104,8 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
     subset = _output_subset(sel, n, p, out_F, out_d, out_u, out_v, store_uv)
     inv_m = zeros64(p)
     inv_m[:n] = 1.0 / mass
+    drag_m = zeros64(p)
+    drag_m[:n] = drag / mass
     load_p = zeros64(p)
     load_p[:n] = load
     u = zeros64(m)
@@ -142,7 +147,7 @@ def integrate(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, 
                                  cg)
     return _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_start, n,
                       (u, v, u1, v1, a0, a1, j0, j1, kv, tu, tv, F, us, vs, cs),
-                      (closed, damp, A, gam, gam_p, flag, cA, cg, load_p, inv_m),
+                      (closed, damp, A, gam, gam_p, flag, cA, cg, load_p, inv_m, drag_m),
                       (r_prev, q_prev, s_prev, t_left, q_left, s_left),
                       (out_F, out_d, out_u, out_v, sel))
 
@@ -154,8 +159,9 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
 
     ``work`` = (u, v, u1, v1, a0, a1, j0, j1, kv, tu, tv, F, us, vs, cs): states at the two
     ends of a step, their accelerations and jerks, Runge-Kutta and sampling scratch;
-    ``contacts`` = (closed, damp, A, gam, gam_p, flag, cA, cg, load_p, inv_m): contact states,
-    coefficients and the particles' loads and inverse masses (padded layout);
+    ``contacts`` = (closed, damp, A, gam, gam_p, flag, cA, cg, load_p, inv_m, drag_m): contact
+    states, coefficients and the particles' loads, inverse masses and drag over mass (1/s)
+    (padded layout);
     ``history`` = (r_prev, q_prev, s_prev, t_left, q_left, s_left): the dashpot-switch
     predictor's data; ``out`` = (out_F, out_d, out_u, out_v, sel). ``sqrt_start``: a contact
     closes at t = 0.
@@ -165,7 +171,7 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
     every step (~10 % of the run time).
     """
     u, v, u1, v1, a0, a1, j0, j1, kv, tu, tv, F, us, vs, cs = work
-    closed, damp, A, gam, gam_p, flag, cA, cg, load_p, inv_m = contacts
+    closed, damp, A, gam, gam_p, flag, cA, cg, load_p, inv_m, drag_m = contacts
     r_prev, q_prev, s_prev, t_left, q_left, s_left = history
     out_F, out_d, out_u, out_v, sel = out
     h_prev = 0.0
@@ -180,9 +186,9 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
     grade = grade_levels
     nt = t_out.shape[0]
     t_end = t_out[nt - 1]
-    accelerations(u, v, cA, cg, law, load_p, inv_m, a0)
+    accelerations(u, v, cA, cg, law, load_p, inv_m, drag_m, a0)
     if septic:
-        jerks(u, v, a0, cA, cg, inv_m, j0)
+        jerks(u, v, a0, cA, cg, inv_m, drag_m, j0)
     # The jerks are only formed for steps with samples: j0 holds those at the step's start
     # when j0_ok.
     j0_ok = True
@@ -205,11 +211,11 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
         if now and toggles_here < 4 * n:
             toggles_here += 1
             _, j0_ok = switch(0, k_open, t, u, v, a0, j0, j0_ok, closed, damp, A, gam, cA, cg,
-                              law, load_p, inv_m, t_left, q_left, s_left)
+                              law, load_p, inv_m, drag_m, t_left, q_left, s_left)
             continue
         k_pred = -1
         if loading and not j0_ok:
-            jerks(u, v, a0, cA, cg, inv_m, j0)
+            jerks(u, v, a0, cA, cg, inv_m, drag_m, j0)
             j0_ok = True
         if loading and h_prev > 0.0:
             h, mode, k_open, k_pred, now = predict_switch(
@@ -218,7 +224,7 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
             if now and toggles_here < 4 * n:
                 toggles_here += 1
                 _, j0_ok = switch(1, k_pred, t, u, v, a0, j0, j0_ok, closed, damp, A, gam, cA,
-                                  cg, law, load_p, inv_m, t_left, q_left, s_left)
+                                  cg, law, load_p, inv_m, drag_m, t_left, q_left, s_left)
                 continue
         if t + h > t_end - 0.01 * dt:
             # Stretch the last step by at most 1% rather than leave a sliver.
@@ -229,17 +235,17 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
         if h <= 0.0:
             h = dt  # only rounding left: finish the last samples with one more step
         h, mode, k_open, taken = take_step(h, mode, k_open, u, v, a0, closed, damp, gam, hkk,
-                                           cA, cg, load_p, inv_m, kv, tu, tv, u1, v1)
+                                           cA, cg, load_p, inv_m, drag_m, kv, tu, tv, u1, v1)
         steps += taken
         if loading:
-            accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
+            accelerations(u1, v1, cA, cg, law, load_p, inv_m, drag_m, a1)
         kmin, kind, th_min = earliest_violation(h, u, v, a0, u1, v1, a1, closed, damp, gam,
                                                 gam_p, rate_tol, loading, k_pred, k_open, n)
         if kmin >= 0 and th_min <= THETA_NOW and toggles_here < 4 * n:
             # The contact changes state now: toggle and redo the step.
             toggles_here += 1
             closing, j0_ok = switch(kind, kmin, t, u, v, a0, j0, j0_ok, closed, damp, A, gam,
-                                    cA, cg, law, load_p, inv_m, t_left, q_left, s_left)
+                                    cA, cg, law, load_p, inv_m, drag_m, t_left, q_left, s_left)
             if closing:
                 sqrt_start = True
                 t_close = t
@@ -249,7 +255,7 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
         if kmin >= 0 and th_min > THETA_NOW:
             h, mode, k_open, kmin, taken = cut_back(h, mode, kmin, kind, th_min, dt, law, u, v,
                                                     a0, closed, damp, gam, hkk, cA, cg, load_p,
-                                                    inv_m, kv, tu, tv, u1, v1, a1)
+                                                    inv_m, drag_m, kv, tu, tv, u1, v1, a1)
             steps += taken
             if redo_here < 4 and violated(u1, v1, closed, damp, gam_p, rate_tol, loading,
                                           kmin):
@@ -260,14 +266,14 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
                 h_cap = h
                 continue
         if not (loading and kmin < 0):  # else a1 is already that of (u1, v1)
-            accelerations(u1, v1, cA, cg, law, load_p, inv_m, a1)
+            accelerations(u1, v1, cA, cg, law, load_p, inv_m, drag_m, a1)
         if not (k_pred >= 0 and kmin < 0 and prediction_holds(k_pred, h, v1, a1, damp)):
             k_pred = -1
         if loading:
             keep_history(v, a0, j0, r_prev, q_prev, s_prev, n)
             h_prev = h
         j1_ok = output_jerks(t_out, j, t, h, septic, j0_ok, u, v, a0, j0, u1, v1, a1, j1, cA, cg,
-                             inv_m)
+                             inv_m, drag_m)
         j = dense_output(t_out, j, t, h, dt, mode, law, septic, store_uv, subset, u, v, a0, j0,
                          u1, v1, a1, j1, cA, cg, out_F, out_d, out_u, out_v, sel, us, vs, F, cs)
         t += h
@@ -283,7 +289,8 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
         k_tog, kind_tog = switch_at_end(kmin, kind, th_min, k_open, k_pred)
         if k_tog >= 0:
             sqrt_start, j0_ok = switch(kind_tog, k_tog, t, u, v, a0, j0, j0_ok, closed, damp, A,
-                                       gam, cA, cg, law, load_p, inv_m, t_left, q_left, s_left)
+                                       gam, cA, cg, law, load_p, inv_m, drag_m, t_left, q_left,
+                                       s_left)
             if sqrt_start:
                 t_close = t
                 grade = closing_grade(gap(v, k_tog) * dt, gap(a0, k_tog) * dt * dt,
@@ -292,8 +299,8 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
 
 
 @nb.njit(cache=True, parallel=True)
-def integrate_batch(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_levels, rate_tol,
-                    out_F, out_d, sel):
+def integrate_batch(u_init, v_init, mass, A, gam, drag, law, load, t_out, dt, grade_levels,
+                    rate_tol, out_F, out_d, sel):
     """Integrate ``runs`` chains in parallel; arrays carry a leading run axis.
 
     dt has shape (runs,); ``sel``, the output contacts, is common (see :func:`integrate`).
@@ -304,7 +311,7 @@ def integrate_batch(u_init, v_init, mass, A, gam, law, load, t_out, dt, grade_le
     steps = np.zeros(runs, dtype=np.int64)
     dummy = np.empty((1, n))
     for r in nb.prange(runs):
-        steps[r] = integrate(u_init[r], v_init[r], mass[r], A[r], gam[r], law, load[r],
+        steps[r] = integrate(u_init[r], v_init[r], mass[r], A[r], gam[r], drag[r], law, load[r],
                              t_out, dt[r], grade_levels, rate_tol[r], False, out_F[r], out_d[r],
                              dummy, dummy, sel)
     return steps

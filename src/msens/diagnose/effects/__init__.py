@@ -22,7 +22,8 @@ from msens.errors import InputError
 #: The fixed public names, in the order reports list them.
 NAMES = ("wall_dissipation", "wall_stiffness", "striker_velocity", "magnetic_precompression",
          "contact_damping_law", "daq_lowpass", "sensor_position", "magnet_remanence",
-         "coil_position", "cable_capacitance", "static_precompression", "sensor_mass")
+         "coil_position", "cable_capacitance", "static_precompression", "sensor_mass",
+         "tube_friction")
 
 
 #: The effects that only a physics MsS (its field model and read-out) has.

@@ -1,0 +1,127 @@
+"""Which effect: fit every candidate of the library, score it and name one (steps 5-6 of
+:mod:`msens.diagnose.workflow`)."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from tqdm import tqdm
+
+from msens.diagnose.diagnosis import Candidate
+from msens.diagnose.effects import Context, Effect, ModelState, registry
+from msens.diagnose.effects import get as get_effect
+from msens.diagnose.fit import EffectFit, fit_effect
+from msens.diagnose.predict import Predictor
+from msens.errors import InputError
+
+_log = logging.getLogger(__name__)
+
+#: Smallest BIC drop (score) for naming an effect; see :mod:`msens.diagnose.workflow`.
+THRESHOLD = 10.0
+
+
+def with_added(ctx: Context, state: ModelState,
+                added: Sequence[tuple[str, Mapping[str, float]]]) -> ModelState:
+    for name, params in added:
+        state = get_effect(name).apply(ctx, state, params)
+    return state
+
+
+def candidate_effects(ctx: Context, names: Sequence[str] | None,
+                       added: Sequence[tuple[str, Mapping]]) -> list[Effect]:
+    lib = registry()
+    if names is not None:
+        unknown = [n for n in names if n not in lib]
+        if unknown:
+            raise InputError(f"unknown effect(s) {', '.join(unknown)}; known: {', '.join(lib)}")
+    done = {n for n, _ in added}
+    return [e for n, e in lib.items()
+            if (names is None or n in names) and n not in done and e.applies(ctx)]
+
+
+def fit_candidates(effects: Sequence[Effect], ctx: Context, base: ModelState,
+                    predictor: Predictor, objective, weights: np.ndarray) -> list[EffectFit]:
+    """:func:`fit_effect` of every candidate, with a progress bar (the slow step)."""
+    _log.info("fitting %d candidate effects: %s", len(effects),
+              ", ".join(e.name for e in effects))
+    fits = []
+    with tqdm(effects, desc="candidate effects", unit=" effect", leave=False,
+              disable=not _log.isEnabledFor(logging.INFO)) as bar:
+        for e in bar:
+            bar.set_postfix_str(e.name)
+            fits.append(fit_effect(e, ctx, base, predictor, objective, weights))
+    return fits
+
+
+def log_decision(cands: list[Candidate], winner: Candidate | None, threshold: float) -> None:
+    if winner is not None:
+        _log.info("decision: %s (score %.1f > threshold %g)", winner.effect, winner.score,
+                  threshold)
+    elif cands:
+        _log.info("decision: none (best %s scores %.1f <= threshold %g)", cands[0].effect,
+                  cands[0].score, threshold)
+    else:
+        _log.info("decision: none (no candidate effect applies)")
+
+
+def judge(effect: Effect, ctx: Context, base: ModelState, params: Mapping[str, float]
+          ) -> tuple[bool, bool, tuple[str, ...]]:
+    """(plausible, significant, notes) of an effect's fitted parameters.
+
+    Plausible: every parameter inside its physical range. Significant: some parameter with
+    a baseline value moved from it by at least its floor (an effect whose parameters have no
+    baseline value, e.g. another law, is significant).
+    """
+    space = effect.space(ctx, base)
+    ref = effect.baseline(ctx, base)
+    notes = []
+    plausible = True
+    for p in space:
+        v = float(params[p.name])
+        if not p.is_plausible(v):
+            plausible = False
+            lo, hi = p.physical
+            notes.append(f"implausible: {p.name} = {v:.4g} outside its physical range "
+                         f"[{lo:.4g}, {hi:.4g}] ({p.reason})")
+    moves = [(p, float(params[p.name]) - float(ref[p.name])) for p in space
+             if ref.get(p.name) is not None]
+    significant = not moves or any(abs(d) > 0 and abs(d) >= p.floor for p, d in moves)
+    if not significant:
+        notes.append("below the practical-significance floor: " + "; ".join(
+            f"{p.name} changed by {d:+.3g} < {p.floor:.3g} ({p.floor_reason})"
+            for p, d in moves))
+    return plausible, significant, tuple(notes)
+
+
+def score_candidates(fits: list[EffectFit], rss0: np.ndarray, n_obs: np.ndarray, ctx: Context,
+                     base: ModelState) -> tuple[list[Candidate], float]:
+    # rss are chi^2 already (residuals over the fit-free noise), per sensor
+    n = float(n_obs.sum())
+    chi0 = float(rss0.sum())
+    cands = []
+    for f in fits:
+        effect = get_effect(f.effect)
+        chi = float(f.rss.sum())
+        plausible, significant, notes = judge(effect, ctx, base, f.parameters)
+        cands.append(Candidate(
+            effect=f.effect, parameters=f.parameters,
+            baseline=effect.baseline(ctx, base), chi2=chi, misfit=chi / n,
+            score=chi0 - chi - f.n_parameters * np.log(n), n_parameters=f.n_parameters,
+            plausible=plausible, significant=significant, notes=notes))
+    cands.sort(key=lambda c: -c.score)
+    return cands, chi0 / n
+
+
+def decide(cands: list[Candidate], fits: list[EffectFit], threshold: float
+           ) -> tuple[Candidate | None, EffectFit | None]:
+    """The best-scoring candidate that is plausible and significant and whose score beats
+    by ``threshold`` both the baseline and every plausible change below its floor (when a
+    negligible change explains the data better, nothing practical is missing)."""
+    negligible = max((c.score for c in cands if c.plausible and not c.significant),
+                     default=0.0)
+    for c in cands:
+        if c.plausible and c.significant and c.score - max(negligible, 0.0) > threshold:
+            return c, next(f for f in fits if f.effect == c.effect)
+    return None, None

@@ -79,7 +79,7 @@ def test_layer_geometry_lifts_the_beads_above():
 
 
 def test_layer_mesh_has_the_disc(layered):
-    g, model, *_ = layered
+    _, model, *_ = layered
     axi = model.steel.problem.mesh
     q = model.geometry.beads.layer_rect()
     el = axi.subdomains[q.name]
@@ -93,7 +93,7 @@ def test_layer_mesh_has_the_disc(layered):
     assert area == pytest.approx((q.r1 - q.r0) * (q.z1 - q.z0), rel=1e-9)
 
 
-def test_closed_branch_is_the_linear_approach_source(layered, tmp_path_factory):
+def test_closed_branch_is_the_linear_approach_source(layered):
     """The steel disc's slope at δ_s against the plain mesh's approach source (another
     mesh: agreement to the meshes' discretisation error, 2 %)."""
     g, _, coil, table, d = layered

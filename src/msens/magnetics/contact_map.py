@@ -32,6 +32,9 @@ branch, PCHIP in the gap for the air branch).
 
 from __future__ import annotations
 
+import json
+import logging
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -50,6 +53,8 @@ from msens.magnetics.approach import _morphed_quadrature
 from msens.magnetics.potentials import nonlinear_resolve
 from msens.magnetics.villari import coil_flux_linkage
 
+_log = logging.getLogger(__name__)
+
 State = Literal["steel", "air"]
 
 #: Height of the closed (steel) disc after morphing, m: 1 nm, a thousandth of the smallest
@@ -58,6 +63,16 @@ CLOSED_THICKNESS = 1e-9
 
 #: Height of the disc in the mesh, as a fraction of the flat radius (the states morph it).
 LAYER_FRACTION = 0.05
+
+#: Closed-branch table nodes, approach δ in m: 0 to beyond the peak approach of the main
+#: study (1.6–2.1 µm at 10–16 N).
+STEEL_NODES: tuple[float, ...] = (0.0, 0.5e-6, 1.0e-6, 1.5e-6, 2.0e-6, 2.5e-6)
+#: Open-branch table nodes, gap δ_s − δ between the flats in m: up to beyond the main study's
+#: most negative approach near a coil (−11.2 µm at contact 10).
+AIR_GAPS: tuple[float, ...] = (1e-9, 0.05e-6, 0.2e-6, 0.5e-6, 1e-6, 2e-6, 4e-6, 6e-6, 9e-6,
+                               13e-6, 18e-6)
+#: Version of the tables' content; part of the cache key.
+MAP_VERSION = "contact-map/1"
 
 
 def static_approach(geometry: SensorGeometry) -> float:
@@ -172,13 +187,21 @@ def state_points(model: LayerModel, state: State, delta: float,
     return p
 
 
-def state_flux(model: LayerModel, state: State, delta: float, coil: Coil,
-               others: Mapping[int, float] | None = None, *, tol: float = 1e-12,
-               max_iter: int = 30) -> float:
-    """Coil flux linkage Λ of a contact state by a full nonlinear re-solve, Wb."""
+def state_fluxes(model: LayerModel, state: State, delta: float, coils: Sequence[Coil],
+                 others: Mapping[int, float] | None = None, *, tol: float = 1e-12,
+                 max_iter: int = 30) -> np.ndarray:
+    """Flux linkage Λ of each coil in a contact state by one full nonlinear re-solve, Wb,
+    shape (n_coils,)."""
     sol = model.solution(state)
     q = _morphed_quadrature(sol, state_points(model, state, delta, others))
-    return coil_flux_linkage(sol, nonlinear_resolve(sol, q, tol=tol, max_iter=max_iter), coil)
+    a = nonlinear_resolve(sol, q, tol=tol, max_iter=max_iter)
+    return np.array([coil_flux_linkage(sol, a, c) for c in coils])
+
+
+def state_flux(model: LayerModel, state: State, delta: float, coil: Coil,
+               others: Mapping[int, float] | None = None, **kw) -> float:
+    """Coil flux linkage Λ of a contact state by a full nonlinear re-solve, Wb."""
+    return float(state_fluxes(model, state, delta, [coil], others, **kw)[0])
 
 
 def bridge_share(delta: np.ndarray, delta_static: float) -> np.ndarray:
@@ -263,19 +286,69 @@ class ContactMap:
         return (self(d + h) - self(d - h)) / (2 * h)
 
 
-def contact_map(model: LayerModel, coil: Coil, steel_delta: Sequence[float],
-                air_gap: Sequence[float], **kw) -> ContactMap:
-    """Tabulate one contact's map by full nonlinear solves on its layer mesh.
+@dataclass(frozen=True)
+class ApproachMap:
+    """The static nonlinearity of one coil's contact approaches (a Hammerstein model's
+    static part): the contact maps of some of its contacts.
+
+    The linear transducer reads an approach δ through ∂Λ/∂δ_c (static, or D_c(ω) with eddy
+    currents). A mapped contact instead feeds it the equivalent approach
+    δ̃_c = δ_s + (Λ_c(δ_c) − Λ_c(δ_s)) / (∂Λ/∂δ_c), so that the static flux is Λ_c(δ_c)
+    exactly and the frequency response acts on the map's output.
+
+    Attributes
+    ----------
+    maps : tuple of ContactMap
+    """
+
+    maps: tuple[ContactMap, ...]
+
+    @property
+    def contacts(self) -> tuple[int, ...]:
+        """The mapped contacts."""
+        return tuple(m.contact for m in self.maps)
+
+    def equivalent(self, delta: np.ndarray, contacts: np.ndarray,
+                   dlambda: np.ndarray) -> np.ndarray:
+        """Equivalent approaches δ̃, m, same shape as ``delta``.
+
+        Parameters
+        ----------
+        delta : ndarray, shape (..., n_c)
+            Approaches of ``contacts``, m.
+        contacts : ndarray of int, shape (n_c,)
+        dlambda : ndarray, shape (n_c,)
+            The linear transducer's ∂Λ/∂δ_c, Wb/m (unmapped contacts pass through).
+        """
+        d = np.asarray(delta, dtype=float)
+        out = d.copy()
+        contacts = np.asarray(contacts)
+        for m in self.maps:
+            k = np.flatnonzero(contacts == m.contact)
+            if k.size and dlambda[k[0]] != 0.0:
+                out[..., k[0]] = m.delta_static + m(d[..., k[0]]) / dlambda[k[0]]
+        return out
+
+
+def contact_maps(model: LayerModel, coils: Sequence[Coil],
+                 steel_delta: Sequence[float] = STEEL_NODES,
+                 air_gap: Sequence[float] = AIR_GAPS, **kw) -> tuple[ContactMap, ...]:
+    """Tabulate one contact's map for each coil by full nonlinear solves on its layer mesh
+    (one solve per node serves every coil).
 
     Parameters
     ----------
     model : LayerModel
-    coil : Coil
+    coils : sequence of Coil
     steel_delta : sequence of float
         Approaches of the closed branch, m (increasing; cover 0 to the peak approach).
     air_gap : sequence of float
         Gaps δ_s − δ of the open branch, m (increasing; the first is replaced by
         :data:`CLOSED_THICKNESS`; cover up to δ_s − the most negative δ).
+
+    Returns
+    -------
+    tuple of ContactMap, one per coil
     """
     sd = np.asarray(steel_delta, dtype=float)
     ag = np.asarray(air_gap, dtype=float).copy()
@@ -283,12 +356,94 @@ def contact_map(model: LayerModel, coil: Coil, steel_delta: Sequence[float],
             "contact map nodes must increase")
     ag[0] = CLOSED_THICKNESS
     ds = static_approach(model.geometry)
-    ref = state_flux(model, "steel", ds, coil, **kw)
-    steel = np.array([state_flux(model, "steel", d, coil, **kw) for d in sd]) - ref
-    air = np.array([state_flux(model, "air", ds - g, coil, **kw) for g in ag]) - ref
-    return ContactMap(model.contact, ds, sd, steel, ag, air)
+    ref = state_fluxes(model, "steel", ds, coils, **kw)
+    steel = np.array([state_fluxes(model, "steel", d, coils, **kw) for d in sd]) - ref
+    air = np.array([state_fluxes(model, "air", ds - g, coils, **kw) for g in ag]) - ref
+    return tuple(ContactMap(model.contact, ds, sd, steel[:, i], ag, air[:, i])
+                 for i in range(len(coils)))
 
 
-__all__ = ["CLOSED_THICKNESS", "LAYER_FRACTION", "ContactMap", "LayerModel", "bridge_share",
-           "contact_flux", "contact_map", "layer_geometry", "layer_model", "state_flux",
-           "state_points", "static_approach"]
+def contact_map(model: LayerModel, coil: Coil, steel_delta: Sequence[float] = STEEL_NODES,
+                air_gap: Sequence[float] = AIR_GAPS, **kw) -> ContactMap:
+    """:func:`contact_maps` of one coil."""
+    return contact_maps(model, [coil], steel_delta, air_gap, **kw)[0]
+
+
+# ----------------------------------------------------------------------------- per geometry
+
+def mapped_contacts(geometry: SensorGeometry) -> tuple[int, ...]:
+    """Contacts that get a map: the six around each coil's particle p (p − 3 .. p + 2, the
+    span of its bias magnet's pole pieces and one beyond), within the modelled chain."""
+    b = geometry.beads
+    out = {c for u in geometry.sensors for c in range(u.coil.particle - 3, u.coil.particle + 3)
+           if b.first <= c < b.last}
+    return tuple(sorted(out))
+
+
+def _map_json(m: ContactMap) -> dict:
+    return {"contact": m.contact, "delta_static_m": m.delta_static,
+            "steel_delta_m": m.steel_delta.tolist(), "steel_flux_Wb": m.steel_flux.tolist(),
+            "air_gap_m": m.air_gap.tolist(), "air_flux_Wb": m.air_flux.tolist()}
+
+
+def _map_from_json(d: dict) -> ContactMap:
+    return ContactMap(int(d["contact"]), float(d["delta_static_m"]),
+                      np.array(d["steel_delta_m"]), np.array(d["steel_flux_Wb"]),
+                      np.array(d["air_gap_m"]), np.array(d["air_flux_Wb"]))
+
+
+def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
+                  options: MeshOptions | None = None, mesh_dir: str | Path | None = None,
+                  cache_dir: str | Path | None = None) -> dict[int, ApproachMap]:
+    """The contact maps of every coil of ``geometry`` (cached ``contact-map-<key>.json``).
+
+    The key joins the transducer key (mesh, steel, magnets) and the table nodes. Lookup as
+    :func:`msens.magnetics.transducer.transducer_report`: with ``cache_dir`` only there;
+    otherwise the committed folders, then the user cache, where new maps are written. Cold:
+    one layer mesh and about 20 nonlinear solves per contact of :func:`mapped_contacts`
+    (about a minute each on the default geometry).
+
+    Returns
+    -------
+    dict of int -> ApproachMap
+        Keyed by coil particle.
+    """
+    from msens.field.cache import committed_mesh_dirs, default_mesh_dir
+    from msens.io._files import atomic_write_bytes
+    from msens.io.hashing import content_hash
+
+    contacts = mapped_contacts(geometry)
+    key = content_hash({"version": MAP_VERSION, "transducer": transducer_key,
+                        "contacts": list(contacts), "steel_nodes": list(STEEL_NODES),
+                        "air_gaps": list(AIR_GAPS), "layer": LAYER_FRACTION,
+                        "closed": CLOSED_THICKNESS}, 16)
+    name = f"contact-map-{key}.json"
+    directory = Path(cache_dir) if cache_dir is not None else default_mesh_dir()
+    search = [directory] if cache_dir is not None else [*committed_mesh_dirs(), directory]
+    for d in search:
+        if (d / name).is_file():
+            data = json.loads((d / name).read_text())
+            return {int(p): ApproachMap(tuple(_map_from_json(m) for m in maps))
+                    for p, maps in data["coils"].items()}
+    units = list(geometry.iter_units())
+    coils = [u.coil for u in units]
+    _log.info("contact maps %s (cached: no): %d contacts, a layer mesh and ~20 nonlinear "
+              "solves each", key, len(contacts))
+    tables: dict[int, list[ContactMap]] = {c.particle: [] for c in coils}
+    for c in contacts:
+        start = time.perf_counter()
+        model = layer_model(geometry, c, options, mesh_dir)
+        for coil, m in zip(coils, contact_maps(model, coils), strict=True):
+            tables[coil.particle].append(m)
+        _log.info("contact map of contact %d in %.0f s", c, time.perf_counter() - start)
+    data = {"key": key, "version": MAP_VERSION, "transducer": transducer_key,
+            "coils": {str(p): [_map_json(m) for m in ms] for p, ms in tables.items()}}
+    directory.mkdir(parents=True, exist_ok=True)
+    atomic_write_bytes(directory / name, json.dumps(data, indent=1).encode(), overwrite=True)
+    return {p: ApproachMap(tuple(ms)) for p, ms in tables.items()}
+
+
+__all__ = ["AIR_GAPS", "CLOSED_THICKNESS", "LAYER_FRACTION", "MAP_VERSION", "STEEL_NODES",
+           "ApproachMap", "ContactMap", "LayerModel", "approach_maps", "bridge_share",
+           "contact_flux", "contact_map", "contact_maps", "layer_geometry", "layer_model",
+           "mapped_contacts", "state_flux", "state_fluxes", "state_points", "static_approach"]

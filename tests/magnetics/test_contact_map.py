@@ -256,3 +256,25 @@ def test_hammerstein_with_eddy_currents():
     expect = villari + table(d10) - table(d10[0]) + 3.7 * (approach[:, 10] - approach[0, 10])
     # trapezoidal integral of the FFT-differentiated EMF: agreement to 1e-3 of the range
     assert np.max(np.abs(rec.flux - expect)) < 1e-3 * np.ptp(expect)
+
+
+@pytest.mark.slow
+def test_transducers_with_contact_maps(tmp_path):
+    """``transducer_report(contact_maps=True)``: maps of the contacts around the coil, their
+    static slopes the linear sources' (2 %: two meshes), and the cache read back equal."""
+    from msens.magnetics.transducer import transducer_report
+
+    g = SensorGeometry(beads=BeadChain(first=11, last=15),
+                       sensors=(SensorUnit(Coil(particle=13), BiasMagnet(particle=13)),),
+                       air=AirBox(0.06, 0.05))
+    kw = {"options": COARSE, "cache_dir": tmp_path, "mesh_dir": tmp_path}
+    tr = transducer_report(g, contact_maps=True, **kw).transducers[13]
+    assert tr.approach_map.contacts == (11, 12, 13, 14)
+    for m in tr.approach_map.maps:
+        k = int(np.flatnonzero(tr.contacts == m.contact)[0])
+        assert float(m.slope(m.delta_static)) == pytest.approx(tr.dlambda_dapproach[k],
+                                                               rel=2e-2)
+    again = transducer_report(g, contact_maps=True, **kw).transducers[13]
+    for a, b in zip(tr.approach_map.maps, again.approach_map.maps, strict=True):
+        assert np.array_equal(a.air_flux, b.air_flux)
+        assert np.array_equal(a.steel_flux, b.steel_flux)

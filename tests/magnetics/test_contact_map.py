@@ -278,3 +278,20 @@ def test_transducers_with_contact_maps(tmp_path):
     for a, b in zip(tr.approach_map.maps, again.approach_map.maps, strict=True):
         assert np.array_equal(a.air_flux, b.air_flux)
         assert np.array_equal(a.steel_flux, b.steel_flux)
+
+
+def test_contact_map_key(tmp_path):
+    """``[field] contact_map``: a boolean, off by default; bad values name the key."""
+    from pathlib import Path
+
+    from msens import api
+
+    tiny = (Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text()
+    path = tmp_path / "tiny.toml"
+    path.write_text(tiny)
+    assert api.load(path).field.contact_map is False
+    path.write_text(tiny + "\n[field]\ncontact_map = true\n")
+    assert api.load(path).field.contact_map is True
+    path.write_text(tiny + "\n[field]\ncontact_map = 1\n")
+    with pytest.raises(InputError, match="contact_map"):
+        api.load(path)

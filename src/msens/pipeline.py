@@ -194,7 +194,8 @@ def setup_transducers(study: Study, setup: SetupSpec) -> dict | None:
     coils = ", ".join(str(s.particle) for s in setup.sensors if s.model is MssModel.PHYSICS)
     _log.info("setup %s: field model and transducers of the coils at particles %s",
               setup.name, coils)
-    return transducers_for(geometry_from_study(study, setup))
+    return transducers_for(geometry_from_study(study, setup),
+                           contact_maps=study.field.contact_map)
 
 
 def setup_responses(study: Study, setup: SetupSpec, *,

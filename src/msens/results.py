@@ -408,7 +408,7 @@ def mechanism_share(tr, history, response=None) -> dict:
     )
 
     rates = contact_rates(history.t, history.force, tr.contacts, tr.contact_stiffness,
-                          approach=history.approach)
+                          approach=history.approach, equivalent=tr.equivalent_approach)
     if response is None:
         emfs = {m: emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach, m)
                 for m in ("villari", "approach")}

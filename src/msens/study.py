@@ -254,6 +254,10 @@ class FieldSpec:
     skin_size_m : float or None
         Element size at the surfaces of the beads near a coil for the eddy-current model, m;
         None means :data:`msens.field.eddy.SKIN_SIZE`.
+    contact_map : bool
+        Read the contacts near each coil through their nonlinear maps Λ_c(δ) from the open
+        gap to the peak approach (:mod:`msens.magnetics.contact_map`) instead of the linear
+        approach sources alone. Off by default (cold: about a minute per mapped contact).
     """
 
     beads: tuple[int, int] | None = None
@@ -268,6 +272,7 @@ class FieldSpec:
     small_signal_permeability: str = "differential"
     reversibility: float | None = None
     skin_size_m: float | None = None
+    contact_map: bool = False
 
     @property
     def steel_reversibility(self) -> float:
@@ -888,7 +893,8 @@ def _field(t: Table | None, chain: ChainSpec, source: str) -> FieldSpec:
                      # below 1 µm the mesh explodes; above 1 mm it is no refinement of a 2.4 mm
                      # bead
                      skin_size_m=t.number("skin_size_m", None, low=1e-6, high=1e-3,
-                                          allow_none=True))
+                                          allow_none=True),
+                     contact_map=t.boolean("contact_map", False))
     if spec.skin_size_m is not None and not spec.eddy_currents:
         raise t.error("skin_size_m", "applies only with eddy_currents = true")
     if spec.reversibility is not None and spec.small_signal_permeability != "reversible":

@@ -43,7 +43,7 @@ def study_wave(study: Study, transducers: Mapping[int, Transducer], particle: in
                                     transducers=dict(transducers))
     tr = transducers[particle]
     rates = contact_rates(t, history.force, tr.contacts, tr.contact_stiffness,
-                          approach=history.approach)
+                          approach=history.approach, equivalent=tr.equivalent_approach)
     comp = np.cumsum(magnetic_precompression(transducers))  # contact c at index c - 1
     own = slice(max(particle - 3, 0), particle + 1)  # c_{p-2} .. c_{p+1}
     static = static_contact_forces(chain)

@@ -7,7 +7,9 @@ written as gmsh 4.1 ``.msh`` with named physical groups:
 - surfaces: ``bead_<k>``, ``coil_<k>``, ``magnet_<k>``, ``pole_<k>_lower``,
   ``pole_<k>_upper`` (k = particle number) and ``air``;
 - curves: ``axis`` (r = 0), ``outer`` (r = radius and the two z ends of the box) and
-  ``contact_<k>_<k+1>`` (the flat shared by neighbour beads; only when they touch).
+  ``contact_<k>_<k+1>`` (the flat shared by neighbour beads; only when they touch);
+- with a contact layer (:attr:`~msens.field.geometry.BeadChain.contact_layer`), the surface
+  ``layer_<k>_<k+1>`` between that contact's flats (its flats are not named ``contact_``).
 
 Grading: near a contact the air wedge between two spheres is only g + (rho^2 - a^2)/R thick
 (g = optional gap between the flats), so the element size follows that height (times
@@ -257,6 +259,9 @@ def build_mesh(geometry: SensorGeometry, path: str | Path,
         for p in b.particles:
             named.append((f"bead_{p}", _bead_surface(occ, MM * b.radius, MM * b.center(p),
                                                      MM * b.half_height)))
+        layer = b.layer_rect()
+        if layer is not None:
+            named.append((layer.name, _rect_surface(occ, layer)))
         part_rects: list[Rect] = []
         for unit in geometry.iter_units():
             rects = [geometry.coil_rect(unit), *geometry.magnet_rects(unit)]
@@ -295,6 +300,8 @@ def build_mesh(geometry: SensorGeometry, path: str | Path,
         if b.contact_gap == 0:
             a = MM * b.flat_radius
             for upper, lower in b.contacts:
+                if b.contact_layer is not None and upper == b.contact_layer[0]:
+                    continue
                 z = MM * b.contact_z(upper)
                 flat = [t for _, t in gmsh.model.getEntitiesInBoundingBox(
                     -eps, z - eps, -1, a + eps, z + eps, 1, dim=1)]

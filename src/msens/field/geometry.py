@@ -9,6 +9,9 @@ Beads are spheres of radius R truncated by a flat of radius ``a`` at every conta
 the Hertz contact circle, so neighbour centres are ``2 sqrt(R^2 - a^2)`` apart and neighbours
 share the flat as an interface (they touch; no air gap). An optional uniform ``contact_gap``
 separates the flats by a thin air layer; it exists for cross-checks (isolated bodies) only.
+An optional ``contact_layer`` (one contact) inserts a thin disc between that contact's flats:
+a mesh region of its own (``layer_<k>_<k+1>``) that the contact map
+(:mod:`msens.magnetics.contact_map`) fills with steel (closed) or air (open) on one mesh.
 
 The plastic tube and the coil former are non-magnetic; they constrain the geometry (validated
 here) but are not separate mesh regions (their permeability is that of air).
@@ -132,6 +135,10 @@ class BeadChain:
         Lower bound of the flat radius, m (the flat is max(Hertz(load), this)).
     contact_gap : float
         Air gap between neighbour flats, m; 0 (default) means the beads touch.
+    contact_layer : (int, float) or None
+        (upper particle k, thickness h in m): a disc of radius ``flat_radius`` and height h
+        between the flats of contact k–(k+1); the beads above it sit h higher. None (default):
+        no layer (and no change to the mesh key).
     """
 
     first: int = 2
@@ -141,6 +148,9 @@ class BeadChain:
     contact_load: float = DEFAULT_CONTACT_LOAD
     min_flat_radius: float = 0.0
     contact_gap: float = 0.0
+    # left out of the mesh key when None, so existing meshes keep their keys
+    contact_layer: tuple[int, float] | None = field(default=None,
+                                                     metadata={"omit_if_default": True})
 
     def __post_init__(self) -> None:
         require(self.count >= 2, f"chain count must be >= 2 particles, got {self.count}")
@@ -154,6 +164,15 @@ class BeadChain:
         require(self.contact_gap >= 0, f"contact_gap must be >= 0 m, got {self.contact_gap}")
         require(self.flat_radius < 0.2 * self.radius,
                 f"contact flat radius {self.flat_radius:.3g} m must be < 0.2 x bead radius")
+        if self.contact_layer is not None:
+            k, h = self.contact_layer
+            require(self.first <= k < self.last,
+                    f"contact_layer: contact {k}-{k + 1} is not between modelled beads "
+                    f"{self.first}..{self.last}")
+            require(0 < h < 0.1 * self.flat_radius,
+                    f"contact_layer thickness must be in (0, {0.1 * self.flat_radius:.3g}) m "
+                    f"(a tenth of the flat radius), got {h}")
+            require(self.contact_gap == 0, "contact_layer needs contact_gap = 0")
 
     @property
     def radius(self) -> float:
@@ -184,11 +203,26 @@ class BeadChain:
         """Axial position of a particle's centre, m (any particle 2..count, modelled or not)."""
         require(2 <= particle <= self.count,
                 f"particle {particle} is not in the chain 2..{self.count}")
-        return self.half_height + (self.count - particle) * self.pitch
+        z = self.half_height + (self.count - particle) * self.pitch
+        if self.contact_layer is not None and particle <= self.contact_layer[0]:
+            z += self.contact_layer[1]
+        return z
 
     def contact_z(self, upper: int) -> float:
-        """Axial position of the contact plane between ``upper`` and ``upper + 1``, m."""
-        return self.center(upper) - self.half_height - self.contact_gap / 2
+        """Axial position of the contact plane between ``upper`` and ``upper + 1``, m (the
+        mid-plane of a contact layer)."""
+        z = self.center(upper) - self.half_height - self.contact_gap / 2
+        if self.contact_layer is not None and upper == self.contact_layer[0]:
+            z -= self.contact_layer[1] / 2
+        return z
+
+    def layer_rect(self) -> Rect | None:
+        """The contact layer's disc in the (r, z) plane (None without a layer)."""
+        if self.contact_layer is None:
+            return None
+        k, h = self.contact_layer
+        z = self.contact_z(k)
+        return Rect(f"layer_{k}_{k + 1}", 0.0, self.flat_radius, z - h / 2, z + h / 2)
 
     @property
     def contacts(self) -> tuple[tuple[int, int], ...]:

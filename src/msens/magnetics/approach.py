@@ -11,7 +11,8 @@ f_c = -∂R/∂δ_c, the derivative of the bias residual R on morphed meshes of 
 (:mod:`msens.magnetics.potentials`), checked by re-solving the nonlinear problem on the
 morphed meshes (:func:`approach_flux_change`). Re-meshing at a different flat radius was
 rejected: the mesh-to-mesh noise of the coil's bias flux linkage (~1e-4 relative) is about
-1000 times the effect.
+1000 times the effect. Finite approaches up to an open gap, on one mesh per contact:
+:mod:`msens.magnetics.contact_map`.
 """
 
 from __future__ import annotations

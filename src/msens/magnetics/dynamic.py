@@ -665,7 +665,8 @@ def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
     stiff = transducer.contact_stiffness
     delta = (hertz_approach(fc, stiff) if approach is None
              else contact_forces_of(approach, contacts, columns))
-    rates = contact_rates(t, fc, contacts, stiff, columns=contacts, approach=delta)
+    rates = contact_rates(t, fc, contacts, stiff, columns=contacts, approach=delta,
+                          equivalent=transducer.equivalent_approach)
     dt = (t[-1] - t[0]) / (t.size - 1)
     require(bool(np.allclose(np.diff(t), dt, rtol=1e-6, atol=0.0)),
             "chain times must be uniformly spaced")

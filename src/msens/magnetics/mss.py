@@ -149,6 +149,8 @@ def mss_signals(sensor: MssSensor, t: np.ndarray, force: np.ndarray, sample_rate
         delta = hertz_approach(fc, stiff)
     else:
         delta = contact_forces_of(approach, contacts, columns)
+    # the nonlinear contact maps, if any: what the linear sources read
+    delta, delta0 = tr.equivalent_approach(delta), tr.equivalent_approach(delta0)
     flux = (fc - base) @ tr.sensitivity_villari + (delta - delta0) @ tr.dlambda_dapproach
     total = float(np.sum(tr.sensitivity("both")))
     rates = contact_rates(t, fc, contacts, stiff, columns=contacts, approach=delta)

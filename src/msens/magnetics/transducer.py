@@ -30,7 +30,7 @@ import json
 import logging
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Literal
@@ -53,6 +53,7 @@ from msens.io._files import atomic_write_bytes
 from msens.io.hashing import canonical as _canonical
 from msens.io.hashing import content_hash
 from msens.magnetics.approach import approach_residuals, hertz_approach_rate, hertz_stiffness
+from msens.magnetics.contact_map import ApproachMap
 from msens.magnetics.potentials import (
     TangentOperator,
     adjoint_linkage,
@@ -120,6 +121,10 @@ class Transducer:
         ``sensitivity_villari`` and ``dlambda_dapproach`` of the same coil moved by each
         offset (magnets and beads fixed), from the same source potentials
         (:func:`offset_profiles`); :meth:`shifted` interpolates them.
+    approach_map : ApproachMap, optional
+        Nonlinear contact maps Λ_c(δ) of some contacts
+        (:mod:`msens.magnetics.contact_map`): their approaches are read through
+        :meth:`equivalent_approach`. None: the linear sources alone.
     """
 
     particle: int
@@ -136,6 +141,7 @@ class Transducer:
     offsets: np.ndarray | None = None
     villari_by_offset: np.ndarray | None = None
     approach_by_offset: np.ndarray | None = None
+    approach_map: ApproachMap | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.contacts).shape
@@ -162,8 +168,18 @@ class Transducer:
 
         vil = CubicSpline(self.offsets, self.villari_by_offset, axis=0)(offset)
         app = CubicSpline(self.offsets, self.approach_by_offset, axis=0)(offset)
+        # the contact maps belong to the coil where they were solved
         return replace(self, sensitivity_villari=np.asarray(vil),
-                       dlambda_dapproach=np.asarray(app))
+                       dlambda_dapproach=np.asarray(app), approach_map=None)
+
+    def equivalent_approach(self, delta: np.ndarray) -> np.ndarray:
+        """The approaches the linear sources read, m, shape of ``delta`` (..., n_c): the
+        contact maps' equivalent approaches (:meth:`ApproachMap.equivalent`) for mapped
+        contacts, ``delta`` itself otherwise."""
+        if self.approach_map is None:
+            return np.asarray(delta, dtype=float)
+        return self.approach_map.equivalent(delta, np.asarray(self.contacts),
+                                            np.asarray(self.dlambda_dapproach))
 
     def sensitivity(self, mechanism: Mechanism = "both") -> np.ndarray:
         """∂Λ/∂F_c of the chosen mechanism(s) at the reference load, Wb/N, shape (n_c,)."""
@@ -233,7 +249,9 @@ def contact_forces_of(force: np.ndarray, contacts: np.ndarray,
 
 def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
                   stiffness: float, columns: np.ndarray | None = None,
-                  approach: np.ndarray | None = None) -> ContactRates:
+                  approach: np.ndarray | None = None,
+                  equivalent: Callable[[np.ndarray], np.ndarray] | None = None
+                  ) -> ContactRates:
     """Force and approach rates of ``contacts`` from a chain's contact states.
 
     Parameters
@@ -252,6 +270,10 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
         The chain's contact approaches δ_c(t), m (negative: open), same columns as
         ``force``. Without it δ_c = ([F_c]_+/A)^{2/3}, whose slope in F is infinite at
         F = 0: a contact that unloads or opens between two samples then gives a spike.
+    equivalent : callable, optional
+        Maps the approaches (nt, n_c) of ``contacts`` to those the linear sources read:
+        :meth:`Transducer.equivalent_approach` (the nonlinear contact maps). Every reading of
+        a chain history passes its transducer's here.
 
     Notes
     -----
@@ -266,6 +288,8 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
     fc = contact_forces_of(force, contacts, columns)
     delta = hertz_approach(fc, stiffness) if approach is None else \
         contact_forces_of(approach, contacts, columns)
+    if equivalent is not None:
+        delta = equivalent(delta)
     return ContactRates(t=t, force=np.gradient(fc, t, axis=0),
                         approach=np.gradient(delta, t, axis=0))
 
@@ -366,7 +390,7 @@ def emf(transducer: Transducer, t: np.ndarray, force: np.ndarray,
     ndarray, shape (nt,)
     """
     rates = contact_rates(t, force, transducer.contacts, transducer.contact_stiffness,
-                          approach=approach)
+                          approach=approach, equivalent=transducer.equivalent_approach)
     return emf_from_rates(rates, transducer.sensitivity_villari, transducer.dlambda_dapproach,
                           mechanism)
 
@@ -766,8 +790,12 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
                       stress_force: float | None = None,
                       law: JilesAthertonSablik | None = None,
                       material: ElasticMaterial = BEAD_STEEL, approach: bool = True,
-                      refresh: bool = False) -> TransducerReport:
+                      refresh: bool = False, contact_maps: bool = False) -> TransducerReport:
     """Cached :func:`compute_transducers` (``transducer-<key>.json``).
+
+    With ``contact_maps`` every transducer also gets the nonlinear contact maps of its
+    contacts near the coils (:func:`msens.magnetics.contact_map.approach_maps`, cached
+    beside it as ``contact-map-<key>.json``).
 
     Lookup follows the mesh cache (:mod:`msens.field.cache`): with ``cache_dir`` only that
     folder; otherwise the committed folders (:func:`msens.field.cache.committed_mesh_dirs`,
@@ -786,6 +814,16 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
     else:
         directory = default_mesh_dir()
         search = [*committed_mesh_dirs(), directory]
+    if contact_maps:
+        from msens.magnetics.contact_map import approach_maps
+
+        report = transducer_report(geometry, options=options, cache_dir=cache_dir,
+                                   mesh_dir=mesh_dir, stress_force=force, law=law,
+                                   material=material, approach=approach, refresh=refresh)
+        maps = approach_maps(geometry, key, options=options, mesh_dir=mesh_dir,
+                             cache_dir=cache_dir)
+        return TransducerReport({p: replace(tr, approach_map=maps[p])
+                                 for p, tr in report.transducers.items()}, report.details)
     if not refresh:
         for d in search:
             path = d / name

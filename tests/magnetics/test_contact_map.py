@@ -1,0 +1,297 @@
+"""The nonlinear contact map Λ_c(δ) against full nonlinear solves on its layer mesh.
+
+A small one-sensor model (coarse mesh, ~0.6 s per nonlinear re-solve). Tolerances: the
+brief's acceptance is 1 % of the flux change Λ(δ) − Λ(δ_static) between the table and a full
+solve at three pulse loads and one open gap; superposition of two neighbouring contacts
+(one solve) against the single-contact changes, 1 % of the joint change.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from msens.errors import InputError
+from msens.field.build import MeshOptions
+from msens.field.cache import committed_mesh_dirs, geometry_key
+from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.sensor_model import bias_problem, load_mesh
+from msens.field.solve import solve
+from msens.magnetics.approach import hertz_stiffness
+from msens.magnetics.contact_map import (
+    CLOSED_THICKNESS,
+    ContactMap,
+    contact_flux,
+    contact_map,
+    layer_geometry,
+    layer_model,
+    state_flux,
+    static_approach,
+)
+from msens.magnetics.transducer import coil_linkage, mechanism_potentials
+from msens.mechanics.hertz import hertz_approach
+from msens.steel_law import law_for_steel
+
+COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)
+CONTACT = 12
+OPEN = -11.25e-6  # the main study's most negative approach near coil 13 (contact 10)
+
+
+def _small() -> SensorGeometry:
+    return SensorGeometry(beads=BeadChain(first=9, last=17),
+                          sensors=(SensorUnit(Coil(particle=13), BiasMagnet(particle=13)),),
+                          air=AirBox(0.06, 0.05))
+
+
+@pytest.fixture(scope="module")
+def layered(tmp_path_factory):
+    g = _small()
+    d = tmp_path_factory.mktemp("meshes")
+    model = layer_model(g, CONTACT, COARSE, d)
+    coil = g.sensors[0].coil
+    table = contact_map(model, coil, (0.0, 0.7e-6, 1.4e-6, 2.0e-6),
+                        (1e-9, 0.1e-6, 0.5e-6, 2e-6, 6e-6, 14e-6))
+    return g, model, coil, table, d
+
+
+def test_default_geometry_keeps_its_committed_mesh():
+    key = geometry_key(SensorGeometry())
+    assert any((d / f"sensor-{key}.msh").is_file() for d in committed_mesh_dirs())
+
+
+def test_layer_geometry_lifts_the_beads_above():
+    g = _small()
+    lg = layer_geometry(g, CONTACT)
+    b, lb = g.beads, lg.beads
+    h = lb.contact_layer[1]
+    for p in b.particles:
+        assert lb.center(p) - b.center(p) == pytest.approx(h if p <= CONTACT else 0.0,
+                                                           abs=1e-15)
+    q = lb.layer_rect()
+    assert (q.r0, q.r1) == (0.0, b.flat_radius)
+    # the disc fills the space between the two flats exactly
+    assert q.z1 == pytest.approx(lb.center(CONTACT) - lb.half_height, abs=1e-15)
+    assert q.z0 == pytest.approx(lb.center(CONTACT + 1) + lb.half_height, abs=1e-15)
+    with pytest.raises(InputError, match="contact_layer"):
+        BeadChain(first=9, last=17, contact_layer=(17, 1e-7))
+    with pytest.raises(InputError, match="contact_layer thickness"):
+        BeadChain(first=9, last=17, contact_layer=(12, 1e-5))
+
+
+def test_layer_mesh_has_the_disc(layered):
+    _, model, *_ = layered
+    axi = model.steel.problem.mesh
+    q = model.geometry.beads.layer_rect()
+    el = axi.subdomains[q.name]
+    p = axi.mesh.p[:, axi.mesh.t[:, el]]
+    assert p[0].min() == 0.0
+    assert p[0].max() == pytest.approx(q.r1, rel=1e-9)
+    assert (p[1].min(), p[1].max()) == (pytest.approx(q.z0, abs=1e-12),
+                                        pytest.approx(q.z1, abs=1e-12))
+    x, y = axi.mesh.p[:, axi.mesh.t[:, el]]
+    area = 0.5 * np.abs((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0])).sum()
+    assert area == pytest.approx((q.r1 - q.r0) * (q.z1 - q.z0), rel=1e-9)
+
+
+def test_closed_branch_is_the_linear_approach_source(layered):
+    """The steel disc's slope at δ_s against the plain mesh's approach source (another
+    mesh: agreement to the meshes' discretisation error, 2 %)."""
+    g, _, coil, table, d = layered
+    axi, _ = load_mesh(g, COARSE, d)
+    sol = solve(bias_problem(g, axi), max_iter=40, tol=1e-11)
+    model = mechanism_potentials(sol, g, stress_force=g.beads.contact_load,
+                                 law=law_for_steel(g.steel))
+    k = int(np.flatnonzero(model.contacts == CONTACT)[0])
+    linear = coil_linkage(model, coil)[model.particles.size + k]
+    assert table.slope(table.delta_static) == pytest.approx(linear, rel=2e-2)
+
+
+def test_branches_meet_where_the_gap_closes(layered):
+    """The open disc at a 1 nm gap is the closed contact (Λ continuous at δ_s): within 1e-4
+    of the change over a 1 µm approach."""
+    _, model, coil, table, _ = layered
+    ds = table.delta_static
+    scale = abs(table(ds + 1e-6))
+    steel = state_flux(model, "steel", ds, coil)
+    air = state_flux(model, "air", ds - CLOSED_THICKNESS, coil)
+    assert abs(air - steel) < 1e-4 * scale
+
+
+def test_table_against_full_solves(layered):
+    """Three pulse loads and one open gap, none a table node: within 1 % of the change from
+    the static approach."""
+    g, model, coil, table, _ = layered
+    stiffness = hertz_stiffness(g.beads.radius)
+    static = float(hertz_approach(g.beads.contact_load, stiffness))
+    assert static == pytest.approx(static_approach(g), rel=1e-9)  # the flat's own approach
+    base = contact_flux(model, static, coil)
+    for delta in [*(float(hertz_approach(f, stiffness)) for f in (7.0, 8.5, 10.0)), OPEN]:
+        solved = contact_flux(model, delta, coil) - base
+        assert float(table(delta) - table(static)) == pytest.approx(solved, rel=1e-2)
+
+
+def test_blend_inside_the_bridge_range(layered):
+    """Between 0 and δ_s the map is the area-weighted blend of the two branches' solves."""
+    _, model, coil, table, _ = layered
+    ds = table.delta_static
+    delta = 0.37 * ds
+    ref = state_flux(model, "steel", ds, coil)
+    solved = contact_flux(model, delta, coil) - ref
+    assert float(table(delta)) == pytest.approx(solved, rel=1e-2)
+
+
+def test_superposition_of_neighbours(layered):
+    """The contact open and its lower neighbour at the 10 N approach in one solve, against
+    the sum of the single-contact changes (same mesh): 1 %."""
+    g, model, coil, table, _ = layered
+    ds = table.delta_static
+    nb = float(hertz_approach(10.0, hertz_stiffness(g.beads.radius))) - ds
+    ref = state_flux(model, "steel", ds, coil)
+    alone = state_flux(model, "air", OPEN, coil) - ref
+    neighbour = state_flux(model, "steel", ds, coil, {CONTACT + 1: nb}) - ref
+    joint = state_flux(model, "air", OPEN, coil, {CONTACT + 1: nb}) - ref
+    assert alone + neighbour == pytest.approx(joint, rel=1e-2)
+
+
+def test_map_is_continuous_and_blends():
+    """Pure-table checks: the blend is continuous at 0 and δ_s and equals each branch
+    outside (0, δ_s)."""
+    m = ContactMap(contact=5, delta_static=0.5e-6,
+                   steel_delta=np.array([0.0, 1e-6, 2e-6]),
+                   steel_flux=np.array([1.0, -1.0, -3.0]) * 1e-6,
+                   air_gap=np.array([1e-9, 1e-6, 1e-5]),
+                   air_flux=np.array([0.0, 1.2, 10.0]) * 1e-6)
+    eps = 1e-13
+    for x in (0.0, 0.5e-6):
+        assert float(m(x - eps)) == pytest.approx(float(m(x + eps)), abs=1e-12)
+    assert float(m(-2e-6)) == pytest.approx(float(m.air(-2e-6)), rel=1e-12)
+    assert float(m(1.5e-6)) == pytest.approx(float(m.steel(1.5e-6)), rel=1e-12)
+    assert float(m(0.25e-6)) == pytest.approx(
+        0.5 * float(m.air(0.25e-6)) + 0.5 * float(m.steel(0.25e-6)), rel=1e-12)
+
+
+# ----------------------------------------------------------------------------- wiring
+
+def _wired(mapped: bool):
+    """A two-contact transducer; contact 10 (if ``mapped``) read through a nonlinear map."""
+    from msens.magnetics.contact_map import ApproachMap
+    from msens.magnetics.transducer import Transducer
+
+    table = ContactMap(contact=10, delta_static=0.5e-6,
+                       steel_delta=np.array([0.0, 0.5e-6, 1.0e-6, 2.0e-6]),
+                       steel_flux=np.array([-0.35, 0.0, 0.33, 0.86]) * 1e-6,
+                       air_gap=np.array([1e-9, 1e-6, 4e-6, 9e-6, 18e-6]),
+                       air_flux=np.array([0.0, -0.7, -2.3, -3.9, -5.7]) * 1e-6)
+    tr = Transducer(particle=13, contacts=np.array([10, 11]),
+                    sensitivity_villari=np.array([1e-7, 2e-7]),
+                    dlambda_dapproach=np.array([0.7, 3.7]),
+                    contact_stiffness=hertz_stiffness(2.38e-3), reference_force=1.85,
+                    magnetic_particle_force=np.zeros(30), resistance_ohm=100.0,
+                    inductance_H=0.03, turns=1100, source="test",
+                    approach_map=ApproachMap((table,)) if mapped else None)
+    return tr, table
+
+
+def _history():
+    t = np.arange(2000) * 1e-7
+    s = np.sin(np.pi * t / t[-1])
+    approach = np.zeros((t.size, 12))
+    approach[:, 9] = 0.06e-6 - 11.3e-6 * s**2 + 1.5e-6 * s**8  # opens, then closes hard
+    approach[:, 10] = 0.45e-6 + 1.2e-6 * s**3
+    # Hertz forces of the approaches (the static reading takes δ(0) from the first force)
+    force = hertz_stiffness(2.38e-3) * np.clip(approach, 0.0, None) ** 1.5
+    return t, force, approach
+
+
+def _circuit():
+    from msens.electronics import ReadoutCircuit
+
+    return ReadoutCircuit(resistance=100.0, inductance=0.03, winding_capacitance=30e-12,
+                          cable_capacitance=100e-12, input_resistance=1e6,
+                          input_capacitance=20e-12)
+
+
+def test_mapped_contact_flux_is_the_map():
+    """With a map, the record's flux is Λ_c(δ_c(t)) − Λ_c(δ_c(0)) for the mapped contact and
+    the linear source for the others (to round-off); the EMF is −dΛ/dt of the same."""
+    from msens.magnetics.mss import MssSensor, mss_signals
+
+    tr, table = _wired(True)
+    t, force, approach = _history()
+    rec = mss_signals(MssSensor(tr, _circuit()), t, force, 10e6, approach=approach)
+    d10, d11 = approach[:, 9], approach[:, 10]
+    villari = (force[:, 9:11] - force[0, 9:11]) @ tr.sensitivity_villari
+    expect = villari + table(d10) - table(d10[0]) + 3.7 * (d11 - d11[0])
+    assert np.max(np.abs(rec.flux - expect)) < 1e-9 * np.max(np.abs(expect))
+    assert np.max(np.abs(rec.emf + np.gradient(expect, t))) < 1e-6 * np.max(np.abs(rec.emf))
+    # the linear reading of the same history differs by the map's nonlinearity
+    lin = mss_signals(MssSensor(_wired(False)[0], _circuit()), t, force, 10e6,
+                      approach=approach)
+    assert np.max(np.abs(lin.flux - rec.flux)) > 0.2 * np.max(np.abs(rec.flux))
+
+
+def test_hammerstein_with_eddy_currents():
+    """With a frequency response, the map acts first (Hammerstein): the mapped transducer
+    equals the linear one fed with the equivalent approaches, and at σ = 0 (a flat
+    response) its flux is the static map's."""
+    from msens.magnetics.dynamic import FrequencyResponse, dynamic_signals
+
+    tr, table = _wired(True)
+    lin, _ = _wired(False)
+    t, force, approach = _history()
+    f = np.array([0.0, 1e3, 1e6])
+    flat = FrequencyResponse(particle=13, frequencies=f, contacts=tr.contacts,
+                             villari=np.tile(tr.sensitivity_villari, (3, 1)).astype(complex),
+                             approach=np.tile(tr.dlambda_dapproach, (3, 1)).astype(complex),
+                             impedance=np.array([100.0, 100 + 2j * np.pi * 1e3 * 0.03,
+                                                 100 + 2j * np.pi * 1e6 * 0.03]),
+                             resistance_ohm=100.0, static_inductance_H=0.03)
+    rec = dynamic_signals(tr, flat, _circuit(), t, force, 10e6, approach=approach)
+    eq = approach.copy()
+    eq[:, 9:11] = tr.equivalent_approach(approach[:, 9:11])
+    ref = dynamic_signals(lin, flat, _circuit(), t, force, 10e6, approach=eq)
+    assert np.array_equal(rec.emf, ref.emf)
+    d10 = approach[:, 9]
+    villari = (force[:, 9:11] - force[0, 9:11]) @ tr.sensitivity_villari
+    expect = villari + table(d10) - table(d10[0]) + 3.7 * (approach[:, 10] - approach[0, 10])
+    # trapezoidal integral of the FFT-differentiated EMF: agreement to 1e-3 of the range
+    assert np.max(np.abs(rec.flux - expect)) < 1e-3 * np.ptp(expect)
+
+
+@pytest.mark.slow
+def test_transducers_with_contact_maps(tmp_path):
+    """``transducer_report(contact_maps=True)``: maps of the contacts around the coil, their
+    static slopes the linear sources' (2 %: two meshes), and the cache read back equal."""
+    from msens.magnetics.transducer import transducer_report
+
+    g = SensorGeometry(beads=BeadChain(first=11, last=15),
+                       sensors=(SensorUnit(Coil(particle=13), BiasMagnet(particle=13)),),
+                       air=AirBox(0.06, 0.05))
+    kw = {"options": COARSE, "cache_dir": tmp_path, "mesh_dir": tmp_path}
+    tr = transducer_report(g, contact_maps=True, **kw).transducers[13]
+    assert tr.approach_map.contacts == (11, 12, 13, 14)
+    for m in tr.approach_map.maps:
+        k = int(np.flatnonzero(tr.contacts == m.contact)[0])
+        assert float(m.slope(m.delta_static)) == pytest.approx(tr.dlambda_dapproach[k],
+                                                               rel=2e-2)
+    again = transducer_report(g, contact_maps=True, **kw).transducers[13]
+    for a, b in zip(tr.approach_map.maps, again.approach_map.maps, strict=True):
+        assert np.array_equal(a.air_flux, b.air_flux)
+        assert np.array_equal(a.steel_flux, b.steel_flux)
+
+
+def test_contact_map_key(tmp_path):
+    """``[field] contact_map``: a boolean, off by default; bad values name the key."""
+    from pathlib import Path
+
+    from msens import api
+
+    tiny = (Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text()
+    path = tmp_path / "tiny.toml"
+    path.write_text(tiny)
+    assert api.load(path).field.contact_map is False
+    path.write_text(tiny + "\n[field]\ncontact_map = true\n")
+    assert api.load(path).field.contact_map is True
+    path.write_text(tiny + "\n[field]\ncontact_map = 1\n")
+    with pytest.raises(InputError, match="contact_map"):
+        api.load(path)

@@ -17,12 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
+from msens.config.fieldsetup import geometry_from_study
+from msens.config.study import load_study
 from msens.design.coil_sweep import build_context, evaluate
 from msens.design.sweep import design_geometry, parse_sweep
 from msens.errors import InputError
-from msens.fieldsetup import geometry_from_study
 from msens.magnetics.transducer import compute_transducers
-from msens.study import load_study
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID = """

@@ -20,13 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from msens.electronics import coil_transfer_function, transfer_function
+from msens.config.fieldsetup import geometry_from_study
+from msens.config.study import load_study
 from msens.field.build import MeshOptions
 from msens.field.eddy import SIGMA_1018
-from msens.fieldsetup import geometry_from_study
 from msens.magnetics.dynamic import SKIN_SIZE, dynamic_report
 from msens.magnetics.mss import readout
-from msens.study import load_study
+from msens.readout.electronics import coil_transfer_function, transfer_function
 
 ROOT = Path(__file__).resolve().parents[1]
 

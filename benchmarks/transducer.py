@@ -25,6 +25,7 @@ from msens.field.geometry import (
     SensorUnit,
 )
 from msens.magnetics.approach import approach_flux_change
+from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import (
     bias_solution,
     coil_linkage,
@@ -32,7 +33,6 @@ from msens.magnetics.transducer import (
     mechanism_potentials,
 )
 from msens.magnetics.villari import nonlinear_flux_change
-from msens.steel_law import law_for_steel
 
 
 def model(name: str) -> tuple[SensorGeometry, MeshOptions | None]:

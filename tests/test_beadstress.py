@@ -1,12 +1,14 @@
-"""Unit tests of msens.beadstress and msens.beadmesh: closed forms, shapes, symmetry, input."""
+"""Unit tests of msens.mechanics.beadstress and msens.mechanics.beadmesh: closed forms, shapes,
+symmetry, input."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from msens.beadmesh import BeadMeshSpec, bead_section_mesh
-from msens.beadstress import (
+from msens.errors import InputError
+from msens.mechanics.beadmesh import BeadMeshSpec, bead_section_mesh
+from msens.mechanics.beadstress import (
     hertz_axis_stress,
     hertz_contact,
     mean_stress,
@@ -15,8 +17,7 @@ from msens.beadstress import (
     stress_along,
     stress_at,
 )
-from msens.errors import InputError
-from msens.materials import BEAD_STEEL
+from msens.params.materials import BEAD_STEEL
 
 R = 2.38e-3
 E, NU = BEAD_STEEL.youngs_modulus, BEAD_STEEL.poisson_ratio

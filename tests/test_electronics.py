@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from msens.electronics import (
+from msens.errors import InputError
+from msens.params.units import K_B
+from msens.readout.electronics import (
     NoiseModel,
     ReadoutCircuit,
     add_readout_noise,
@@ -20,11 +22,9 @@ from msens.electronics import (
     thermal_noise_psd,
     transfer_function,
 )
-from msens.errors import InputError
-from msens.units import K_B
 
 T_ROOM = 293.15
-#: The paper's coil (msens.coil: R 91.9 Ω, Wheeler L 23.0 mH, C_w ~ 10.8 pF) on 1 m RG-58
+#: The paper's coil (msens.readout.coil: R 91.9 Ω, Wheeler L 23.0 mH, C_w ~ 10.8 pF) on 1 m RG-58
 #: into 1 MΩ ∥ 20 pF.
 PAPER = ReadoutCircuit(92.0, 23e-3, 10.8e-12, 100e-12, 1e6, 20e-12)
 WITH_CABLE_R = ReadoutCircuit(92.0, 23e-3, 10.8e-12, 100e-12, 1e6, 20e-12,

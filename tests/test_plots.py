@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from msens import api, plots
-from msens.output import DPI, OutputDir
-from msens.study import default_study_path
+from msens.config.study import default_study_path
+from msens.io.output import DPI, OutputDir
 
 # a file's first bytes, by format
 MAGIC = {"png": b"\x89PNG", "pdf": b"%PDF", "svg": b"<?xml"}
@@ -160,9 +160,9 @@ def test_magnetic_precompression_bars_match_the_summary(result):
 
 
 def test_field_map_smooth_parts_named_units(tmp_path):
+    from msens.config.fieldsetup import geometry_from_study
     from msens.field.report import field_map_figure, plot_field_map
     from msens.field.sensor_model import run_field_model
-    from msens.fieldsetup import geometry_from_study
 
     study = api.load(default_study_path())
     report = run_field_model(geometry_from_study(study), inductance=False)

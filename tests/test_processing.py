@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from msens import processing as P
 from msens.errors import InputError
+from msens.signals import processing as P
 
 DT = 1e-7  # 10 MHz, the paper's sampling rate
 TIME = -2e-5 + DT * np.arange(2000)

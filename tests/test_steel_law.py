@@ -9,9 +9,9 @@ import pytest
 
 import msens.magnetics.transducer as transducer
 from msens.field.geometry import SensorGeometry
-from msens.magnetoelastic import DEFAULT_STEEL, flux_density
-from msens.materials import STEEL_1018_BH, BHCurve
-from msens.steel_law import fit_anhysteretic, law_for_steel
+from msens.magnetics.magnetoelastic import DEFAULT_STEEL, flux_density
+from msens.magnetics.steel_law import fit_anhysteretic, law_for_steel
+from msens.params.materials import STEEL_1018_BH, BHCurve
 
 #: A softer steel: the 1018 table with B scaled by 0.85 at the same H.
 SOFT = BHCurve(name="soft", b=0.85 * STEEL_1018_BH.b, h=STEEL_1018_BH.h.copy(), source="test")

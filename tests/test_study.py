@@ -6,8 +6,7 @@ import math
 
 import pytest
 
-from msens.errors import InputError
-from msens.study import (
+from msens.config.study import (
     PAPER_TABLE2,
     Damping,
     SensorKind,
@@ -16,6 +15,7 @@ from msens.study import (
     load_study,
     parse_study,
 )
+from msens.errors import InputError
 
 MINIMAL = """
 schema = "msens.study/1"

@@ -23,9 +23,10 @@ def _read_contacts(result: StudyResult) -> dict[int, list[int]]:
     """1-based contacts each sensor position reads, by sensor particle, over all setups.
 
     Bead and rod sensors read the two contacts of their particle, an MsS (four-contact or
-    physics) the four around its coil, c_{p-2} .. c_{p+1} (:func:`msens.sensors.sensor_contacts`).
+    physics) the four around its coil, c_{p-2} .. c_{p+1}
+    (:func:`msens.readout.sensors.sensor_contacts`).
     """
-    from msens.sensors import sensor_contacts
+    from msens.readout.sensors import sensor_contacts
 
     out: dict[int, set[int]] = {}
     for s in result.setups:
@@ -88,7 +89,7 @@ def contact_profiles(result: StudyResult, contacts: tuple[int, ...] | None = Non
 
 
 def _sensor_contacts(setup: SetupResult, particle: int) -> list[int]:
-    from msens.sensors import sensor_contacts
+    from msens.readout.sensors import sensor_contacts
 
     kind = next(s.sensor.kind for s in setup.sensors if s.sensor.particle == particle)
     return [int(k) + 1 for k in sensor_contacts(kind, particle, setup.chain.n_particles)]
@@ -125,8 +126,8 @@ def _record_quantity(r) -> tuple[str, np.ndarray, str]:
     from the integrated signal, so its peak times are marked, not values); a four-contact
     MsS is the paper's mean force of its four contacts; bead and rod sensors read a force.
     """
-    from msens.sensors import SensorKind
-    from msens.study import MssModel
+    from msens.config.study import MssModel
+    from msens.readout.sensors import SensorKind
 
     if r.sensor.kind is SensorKind.MSS and r.sensor.model is MssModel.PHYSICS:
         return "DAQ voltage (mV)", np.asarray(r.voltage_shape) * 1e3, "times"
@@ -358,7 +359,7 @@ def mss_voltages(result: StudyResult, t_max_s: float = 600e-6) -> Figure:
 def mss_integrated(result: StudyResult, t_max_s: float = 600e-6) -> Figure:
     """Sensitivity-weighted contact force (the integrated coil signal) next to the paper's
     four-contact average on the same chain run."""
-    from msens.sensors import mss_four_contact
+    from msens.readout.sensors import mss_four_contact
 
     pairs = _physics(result)
     fig, axes = plt.subplots(len(pairs), 1, figsize=(7, 2.6 * len(pairs)), sharex=True,
@@ -392,8 +393,8 @@ def _part_spans(result: StudyResult, setup: SetupResult) -> list[tuple[str, int,
     list of (kind, particle, c0, c1)
         ``kind`` is "coil" or "pole"; empty when the setup has no field-model geometry.
     """
+    from msens.config.fieldsetup import geometry_from_study
     from msens.errors import InputError
-    from msens.fieldsetup import geometry_from_study
 
     try:
         g = geometry_from_study(result.study, setup.setup)

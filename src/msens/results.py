@@ -18,8 +18,8 @@ from msens.calibrate import DissipationFit
 from msens.chain.integrate import ChainResult
 from msens.chain.model import Chain
 from msens.chain.published import GAMMA_CONTACT, GAMMA_WALL
-from msens.features import PulseFeatures
-from msens.study import ReferenceRow, SensorSpec, SetupSpec, Study
+from msens.config.study import ReferenceRow, SensorSpec, SetupSpec, Study
+from msens.signals.features import PulseFeatures
 
 
 @dataclass(frozen=True)
@@ -327,8 +327,8 @@ def physics_summary(result: StudyResult) -> dict:
     for s in result.setups:
         if not s.transducers:
             continue
-        from msens.electronics import resonance
         from msens.magnetics.transducer import magnetic_precompression
+        from msens.readout.electronics import resonance
 
         magnetic = magnetic_precompression(s.transducers)
         for c, f in enumerate(np.cumsum(magnetic)[:-1], start=1):

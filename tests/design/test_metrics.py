@@ -5,15 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from msens.config.study import ElectronicsSpec
 from msens.design.metrics import Wave, design_rows
 from msens.design.report import pareto_mask, range_edges
 from msens.design.sweep import Design
-from msens.electronics import daq_voltage
 from msens.field.geometry import Coil
 from msens.magnetics.mss import readout
 from msens.magnetics.transducer import contact_rates, emf_from_rates
-from msens.study import ElectronicsSpec
-from msens.units import K_B
+from msens.params.units import K_B
+from msens.readout.electronics import daq_voltage
 
 
 def _wave() -> Wave:

@@ -82,8 +82,8 @@ def test_eddy_currents_key_is_validated(tmp_path, capsys):
 
 
 def test_small_signal_permeability_key(tmp_path):
-    from msens.fieldsetup import geometry_from_study
-    from msens.materials import STEEL_REVERSIBILITY
+    from msens.config.fieldsetup import geometry_from_study
+    from msens.params.materials import STEEL_REVERSIBILITY
 
     study = _study(tmp_path)
     assert study.field.steel_reversibility == 1.0
@@ -110,8 +110,8 @@ def test_eddy_current_records_carry_the_coils_thermal_noise(tmp_path, monkeypatc
     The run adds exactly :func:`add_readout_noise` with the coil's Z(f) to the noise-free
     record; a long realisation has the variance ∫S df; and, Z(f) being a passive impedance,
     the total is kT/C of the read-out's capacitance (equipartition) whatever the losses."""
-    from msens.electronics import NoiseModel, add_readout_noise, thermal_noise_psd
-    from msens.units import K_B
+    from msens.params.units import K_B
+    from msens.readout.electronics import NoiseModel, add_readout_noise, thermal_noise_psd
 
     monkeypatch.setenv("MSENS_MESH_DIR", str(tmp_path / "cache"))
     quiet = api.run(_study(tmp_path, EDDY))

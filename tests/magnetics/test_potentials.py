@@ -19,8 +19,8 @@ from msens.magnetics.potentials import (
     rect_integral,
     region_linkage,
 )
+from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import coil_linkage, mechanism_potentials
-from msens.steel_law import law_for_steel
 
 
 def _geometry(magnet: bool) -> SensorGeometry:

@@ -7,7 +7,6 @@ import json
 import numpy as np
 import pytest
 
-from msens.beadstress import stress_at
 from msens.errors import InputError
 from msens.field.build import MeshOptions
 from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
@@ -21,7 +20,8 @@ from msens.magnetics.transducer import (
     transducers_for,
 )
 from msens.magnetics.villari import StressSampler, bead_stress, contact_sensitivity
-from msens.materials import BEAD_STEEL
+from msens.mechanics.beadstress import stress_at
+from msens.params.materials import BEAD_STEEL
 
 #: Coarse mesh: enough for consistency and symmetry checks (~4k elements, ~1 s per model).
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from msens.coil import wheeler_inductance
+from msens.config.study import ElectronicsSpec, Study
 from msens.design.cache import ResultCache, atomic_write_bytes, content_key
 from msens.design.metrics import Wave, design_rows
 from msens.design.physics import study_wave
@@ -36,6 +36,7 @@ from msens.field.geometry import SensorGeometry, SensorUnit
 from msens.field.sensor_model import coil_resistance
 from msens.magnetics.mss import winding_of
 from msens.magnetics.potentials import LinkageTable, linkage_table, rect_integral
+from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import (
     ContactRates,
     bias_solution,
@@ -43,8 +44,7 @@ from msens.magnetics.transducer import (
     mechanism_potentials,
     transducers_for,
 )
-from msens.steel_law import law_for_steel
-from msens.study import ElectronicsSpec, Study
+from msens.readout.coil import wheeler_inductance
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm
 #: gives < 1e-4 relative error against exact mesh quadrature for the paper's coil, tests).

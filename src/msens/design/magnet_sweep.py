@@ -21,11 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
+from msens.config.study import Study
 from msens.design.metrics import design_rows
 from msens.design.physics import study_wave
 from msens.field.geometry import SensorGeometry
 from msens.magnetics.transducer import compute_transducers
-from msens.study import Study
 
 
 @dataclass(frozen=True)

@@ -25,11 +25,11 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
-from msens.electronics import bandwidth, poles, resonance, transfer_function
+from msens.config.study import ElectronicsSpec
 from msens.field.geometry import Coil
 from msens.magnetics.mss import figure_noise_rms, readout
 from msens.magnetics.transducer import ContactRates, emf_from_rates
-from msens.study import ElectronicsSpec
+from msens.readout.electronics import bandwidth, poles, resonance, transfer_function
 
 #: Designs whose EMF records are formed at once (bounds memory: chunk × nt doubles).
 EMF_CHUNK = 256

@@ -143,7 +143,7 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from msens.output import DPI
+    from msens.io.output import DPI
 
     ok = [i for i, r in enumerate(rows) if r["status"] == "ok"]
     s = np.array([abs(rows[i][objective]) for i in ok])

@@ -40,6 +40,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from msens.config.fieldsetup import geometry_from_study, mss_setup, wire_for
+from msens.config.study import SensorSpec, Study
 from msens.errors import InputError
 from msens.field.geometry import (
     BiasMagnet,
@@ -47,10 +49,8 @@ from msens.field.geometry import (
     SensorUnit,
     Tube,
 )
-from msens.fieldsetup import geometry_from_study, mss_setup, wire_for
-from msens.materials import MAGNET_GRADES
-from msens.study import SensorSpec, Study
-from msens.tomlreader import Table, read_document
+from msens.io.tomlreader import Table, read_document
+from msens.params.materials import MAGNET_GRADES
 
 SCHEMA = "msens.sweep/1"
 

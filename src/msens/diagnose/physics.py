@@ -15,11 +15,13 @@ from functools import lru_cache
 
 import numpy as np
 
+from msens.config.fieldsetup import coil_geometry, geometry_from_study
+from msens.config.study import CoilSpec, MssModel
 from msens.diagnose.effects.base import Context, PhysicsMss
 from msens.errors import internal
 from msens.field.geometry import SensorGeometry
-from msens.fieldsetup import coil_geometry, geometry_from_study
 from msens.magnetics.mss import MssSensor, readout
+from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import (
     Transducer,
     cache_key,
@@ -27,9 +29,7 @@ from msens.magnetics.transducer import (
     transducers_for,
 )
 from msens.magnetics.variants import RemanenceFamily, remanence_family
-from msens.materials import BEAD_STEEL
-from msens.steel_law import law_for_steel
-from msens.study import CoilSpec, MssModel
+from msens.params.materials import BEAD_STEEL
 
 # Field models of this process by key: geometry and nominal transducers (families lazily).
 _MODELS: dict[str, tuple[SensorGeometry, dict[int, Transducer]]] = {}

@@ -62,6 +62,7 @@ from tqdm import tqdm
 
 from msens.calibrate import DissipationFit
 from msens.compare import model_record, setup_spec_channels, shot_records, smooth
+from msens.config.study import SetupSpec, Study
 from msens.diagnose.effects import Context, Effect, ModelState, registry
 from msens.diagnose.effects import get as get_effect
 from msens.diagnose.fit import EffectFit, fit_effect, refit_jointly
@@ -78,10 +79,9 @@ from msens.diagnose.predict import (
 from msens.diagnose.shots import fit_shots
 from msens.diagnose.verdict import verdict
 from msens.errors import InputError
-from msens.features import centre_distance
 from msens.io.waveform import Waveform
 from msens.pipeline import calibrate_dissipation, output_times
-from msens.study import SetupSpec, Study
+from msens.signals.features import centre_distance
 
 _log = logging.getLogger(__name__)
 

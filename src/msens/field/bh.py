@@ -20,8 +20,8 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PchipInterpolator, PPoly
 
 from msens.errors import require
-from msens.materials import BHCurve
-from msens.units import MU0
+from msens.params.materials import BHCurve
+from msens.params.units import MU0
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from msens.errors import require
-from msens.materials import BHCurve
+from msens.params.materials import BHCurve
 
 
 @dataclass(frozen=True)

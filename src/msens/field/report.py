@@ -307,7 +307,7 @@ def plot_field_map(report: FieldReport, path: str | Path, fmt: str | None = None
     """
     import matplotlib.pyplot as plt
 
-    from msens.output import DPI
+    from msens.io.output import DPI
 
     path = Path(path)
     fmt = fmt or path.suffix.lstrip(".") or "png"

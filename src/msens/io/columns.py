@@ -243,7 +243,7 @@ def load_column_map(path: str | os.PathLike[str]) -> ColumnMap:
     InputError
         For a missing file, bad TOML, a wrong schema or any bad entry, naming the key.
     """
-    from msens.tomlreader import Table, read_document
+    from msens.io.tomlreader import Table, read_document
 
     source = str(path)
     try:

@@ -45,7 +45,6 @@ import numpy as np
 from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
 from scipy.interpolate import PchipInterpolator
 
-from msens.electronics import NoiseModel, ReadoutCircuit, add_readout_noise, coil_transfer_function
 from msens.errors import internal, require
 from msens.field.eddy import SIGMA_1018, HarmonicOperator, dissipated_power
 from msens.field.geometry import SensorGeometry
@@ -62,7 +61,13 @@ from msens.magnetics.transducer import (
     contact_rates,
 )
 from msens.mechanics.hertz import hertz_approach
-from msens.units import TWO_PI
+from msens.params.units import TWO_PI
+from msens.readout.electronics import (
+    NoiseModel,
+    ReadoutCircuit,
+    add_readout_noise,
+    coil_transfer_function,
+)
 
 #: Frequencies solved by default, Hz: 0 (the static transducer), 12 roughly log-spaced
 #: points over 0.5–200 kHz (1-2-3-5 steps, so the reported 1, 3, 10, 30, 100 kHz are solved)
@@ -413,9 +418,9 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, cache_dir: str | P
     (:func:`join_reports`). The result equals the local one to round-off.
     """
     from msens.field.cache import committed_mesh_dirs, default_mesh_dir
+    from msens.magnetics.steel_law import law_for_steel
     from msens.magnetics.transducer import cache_key
-    from msens.materials import BEAD_STEEL
-    from msens.steel_law import law_for_steel
+    from msens.params.materials import BEAD_STEEL
 
     tkey = cache_key(geometry, options, stress_force=geometry.beads.contact_load,
                      law=law_for_steel(geometry.steel), material=BEAD_STEEL, approach=True)
@@ -459,8 +464,8 @@ def _workers(scheduler: str) -> int:
 
 def _report_task(args: tuple) -> DynamicReport:
     """Mesh, bias, sources and the harmonic solves of one list of frequencies (from 0)."""
+    from msens.magnetics.steel_law import law_for_steel
     from msens.magnetics.transducer import bias_solution, mechanism_potentials
-    from msens.steel_law import law_for_steel
 
     geometry, options, mesh_dir, freqs, steel, magnets = args
     t0 = time.perf_counter()

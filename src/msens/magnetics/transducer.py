@@ -53,6 +53,7 @@ from msens.io._files import atomic_write_bytes
 from msens.io.hashing import canonical as _canonical
 from msens.io.hashing import content_hash
 from msens.magnetics.approach import approach_residuals, hertz_approach_rate, hertz_stiffness
+from msens.magnetics.magnetoelastic import JilesAthertonSablik
 from msens.magnetics.potentials import (
     TangentOperator,
     adjoint_linkage,
@@ -60,6 +61,7 @@ from msens.magnetics.potentials import (
     rect_integral,
     region_linkage,
 )
+from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.villari import (
     StressSampler,
     bead_state,
@@ -68,10 +70,8 @@ from msens.magnetics.villari import (
     contact_sensitivity,
     villari_sources,
 )
-from msens.magnetoelastic import JilesAthertonSablik
-from msens.materials import BEAD_STEEL, ElasticMaterial
 from msens.mechanics.hertz import hertz_approach
-from msens.steel_law import law_for_steel
+from msens.params.materials import BEAD_STEEL, ElasticMaterial
 
 _log = logging.getLogger(__name__)
 
@@ -632,7 +632,7 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
         Force at which the bead stress is solved (the secant sensitivity's force), N; default
         the geometry's ``contact_load`` (the static load that sets the model's flats).
     law : JilesAthertonSablik, optional
-        Magnetoelastic law of the beads; default :func:`msens.steel_law.law_for_steel` of
+        Magnetoelastic law of the beads; default :func:`msens.magnetics.steel_law.law_for_steel` of
         the geometry's B–H table.
     material : ElasticMaterial
         Bead elasticity.

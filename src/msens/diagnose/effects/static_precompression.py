@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import dataclasses
 
-from msens.assemble import precompression_forces
+from msens.config.assemble import precompression_forces
+from msens.config.study import MssModel, PrecompressionSpec
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
-from msens.study import MssModel, PrecompressionSpec
 
 NAME = "static_precompression"
 FIRST, COUNT, FORCE = "first_contact", "contact_count", "precompression_force_n"

@@ -40,8 +40,8 @@ import skfem
 from scipy.integrate import quad
 from skfem import BilinearForm, Functional, LinearForm
 
-from msens.beadmesh import BeadMeshSpec, bead_section_mesh
 from msens.errors import InputError, require
+from msens.mechanics.beadmesh import BeadMeshSpec, bead_section_mesh
 from msens.mechanics.hertz import hertz_contact_radius, identical_spheres_modulus
 
 #: Component order of every stress array returned here.
@@ -132,7 +132,7 @@ class BeadStress:
         Hertz peak pressure p0 at this force, Pa.
     basis : skfem.CellBasis
         P2 vector basis on the quarter section, mesh coordinates (r, s) in m with
-        s = z - R (see :mod:`msens.beadmesh`); components (u_r, u_z).
+        s = z - R (see :mod:`msens.mechanics.beadmesh`); components (u_r, u_z).
     displacement : ndarray, shape (basis.N,)
         Displacement dofs, m.
     stress_basis : skfem.CellBasis
@@ -228,7 +228,7 @@ def solve_traction(mesh: skfem.Mesh, youngs_modulus: float, poisson_ratio: float
     ----------
     mesh : skfem.Mesh
         Triangle mesh in (r, s) coordinates, m, with boundaries "axis" and "equator"
-        (e.g. from :func:`msens.beadmesh.bead_section_mesh`).
+        (e.g. from :func:`msens.mechanics.beadmesh.bead_section_mesh`).
     youngs_modulus, poisson_ratio : float
         E (Pa) and nu.
     traction : callable

@@ -25,10 +25,11 @@ from typing import Any
 
 import numpy as np
 
-from msens import plausible as P
 from msens.chain.model import DampingLaw as Damping
+from msens.config import plausible as P
 from msens.errors import InputError
-from msens.materials import (
+from msens.io.tomlreader import Table, document_table, read_document
+from msens.params.materials import (
     BEAD_STEEL,
     MAGNET_GRADES,
     PIEZO_ROD,
@@ -36,9 +37,8 @@ from msens.materials import (
     PIEZO_ROD_MASS,
     BHCurve,
 )
-from msens.sensors import SensorKind
-from msens.tomlreader import Table, document_table, read_document
-from msens.units import G0, MU0
+from msens.params.units import G0, MU0
+from msens.readout.sensors import SensorKind
 
 SCHEMA = "msens.study/1"
 #: The main job: the paper's MsS predicted from physics.
@@ -236,7 +236,7 @@ class FieldSpec:
         User B–H table of the beads and pole pieces (``steel_bh`` = [[B_T, H_A_per_m], ...]);
         None means the field model's default, AISI 1018 (FEMM library). The beads'
         magnetoelastic (JAS) anhysteretic is fitted to the same table
-        (:func:`msens.steel_law.law_for_steel`).
+        (:func:`msens.magnetics.steel_law.law_for_steel`).
     eddy_currents : bool
         Physics MsS with eddy currents in the conducting beads and pole pieces: frequency
         dependent sensitivities and coil impedance (:mod:`msens.magnetics.dynamic`) instead
@@ -250,7 +250,7 @@ class FieldSpec:
         reversible part c (``reversibility``; :class:`msens.field.regions.NonlinearSoft`).
     reversibility : float or None
         c in (0, 1) with ``"reversible"``; None means
-        :data:`msens.materials.STEEL_REVERSIBILITY`.
+        :data:`msens.params.materials.STEEL_REVERSIBILITY`.
     skin_size_m : float or None
         Element size at the surfaces of the beads near a coil for the eddy-current model, m;
         None means :data:`msens.magnetics.dynamic.SKIN_SIZE`.
@@ -274,7 +274,7 @@ class FieldSpec:
         """The fraction c of the differential susceptibility the signal sees (1 = all)."""
         if self.small_signal_permeability == "differential":
             return 1.0
-        from msens.materials import STEEL_REVERSIBILITY
+        from msens.params.materials import STEEL_REVERSIBILITY
 
         return STEEL_REVERSIBILITY if self.reversibility is None else self.reversibility
 
@@ -583,14 +583,15 @@ def _chain(t: Table) -> ChainSpec:
 
 
 def _modulus(t: Table, default: float) -> float:
-    """``youngs_modulus_pa`` of table ``t`` within :data:`msens.plausible.YOUNGS_MODULUS_PA`."""
+    """``youngs_modulus_pa`` of table ``t`` within
+    :data:`msens.config.plausible.YOUNGS_MODULUS_PA`."""
     return t.number("youngs_modulus_pa", default, low=P.YOUNGS_MODULUS_PA[0],
                     high=P.YOUNGS_MODULUS_PA[1])
 
 
 def _check_dashpot(t: Table, key: str, gamma: float, mass: float, law: Damping) -> None:
     """Refuse a damping coefficient whose dashpot time m/(2 gamma) is below
-    :data:`msens.plausible.MIN_DASHPOT_TIME_S` (see there why)."""
+    :data:`msens.config.plausible.MIN_DASHPOT_TIME_S` (see there why)."""
     hkk = law is Damping.HERTZ_KUWABARA_KONO
     scale = math.sqrt(P.HKK_REFERENCE_APPROACH_M) if hkk else 1.0  # to kg/s
     high = 0.5 * mass / P.MIN_DASHPOT_TIME_S
@@ -656,10 +657,11 @@ def _precompression(t: Table, chain: ChainSpec) -> PrecompressionSpec:
 
 def _check_static_load(t: Table, key: str, force: float, chain: ChainSpec) -> None:
     """Refuse a static contact load that would yield the beads: Hertz's law, which the chain
-    and field models use, holds only below :data:`msens.plausible.MAX_CONTACT_PRESSURE_PA`."""
+    and field models use, holds only below
+    :data:`msens.config.plausible.MAX_CONTACT_PRESSURE_PA`."""
     if force <= 0.0:
         return
-    from msens.beadstress import hertz_contact  # scikit-fem: only when a load is given
+    from msens.mechanics.beadstress import hertz_contact  # scikit-fem: only when a load is given
 
     _, p0 = hertz_contact(chain.bead_diameter_m / 2.0, chain.youngs_modulus_pa,
                           chain.poisson_ratio, force)

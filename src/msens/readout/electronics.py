@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike
 from scipy import integrate, linalg, optimize
 
 from msens.errors import InputError, require
-from msens.units import K_B
+from msens.params.units import K_B
 
 #: Capacitance of 1 m of RG-58 coaxial cable, F (about 100 pF/m; e.g. Belden 8240:
 #: 30.8 pF/ft = 101 pF/m).

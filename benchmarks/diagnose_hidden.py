@@ -14,7 +14,8 @@ import time
 
 import numpy as np
 
-from msens.config.study import PAPER_TABLE2, builtin_study_path, load_study
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import diagnose, diagnose_passes
 from msens.diagnose.effects import NAMES, PHYSICS_MSS_NAMES, Context
 from msens.diagnose.hidden import hidden_case, without_precompression

@@ -21,7 +21,8 @@ from __future__ import annotations
 import json
 import sys
 
-from msens.config.study import PAPER_TABLE2, MssModel, builtin_study_path, load_study
+from msens.config.schema import PAPER_TABLE2, MssModel
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import diagnose_reference
 from msens.diagnose.effects import Context, get
 from msens.diagnose.predict import (

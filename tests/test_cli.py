@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from msens.cli import main
-from msens.config.study import PAPER_TABLE2, builtin_study_path
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path
 
 GOOD = builtin_study_path(PAPER_TABLE2).read_text()
 

@@ -16,7 +16,8 @@ from types import SimpleNamespace
 import pytest
 
 from msens.cli import _parser, main
-from msens.config.study import PAPER_TABLE2, builtin_study_path
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path
 from msens.errors import InputError
 
 # the paper's three bead/rod/mss setups without the Eq. 10 fit, over a short window: ~1 s

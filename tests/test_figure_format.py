@@ -11,7 +11,8 @@ import pytest
 
 from msens import api, plots
 from msens.cli import _parser, main
-from msens.config.study import PAPER_TABLE2, builtin_study_path, default_study_path
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, default_study_path
 from msens.design.report import pareto_plot
 from msens.design.sweep import Design
 

@@ -15,13 +15,8 @@ import dataclasses
 from pathlib import Path
 
 from msens import results
-from msens.config.study import (
-    PAPER_TABLE2,
-    Study,
-    builtin_study_path,
-    default_study_path,
-    load_study,
-)
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import Study, builtin_study_path, default_study_path, load_study
 from msens.io.output import DPI, OutputDir
 from msens.pipeline import run_study
 from msens.results import StudyResult

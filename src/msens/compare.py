@@ -29,7 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
-from msens.config.study import SetupSpec, Study
+from msens.config.schema import SetupSpec
+from msens.config.study import Study
 from msens.errors import InputError
 from msens.io.waveform import Channel, Waveform
 from msens.readout.sensors import SensorKind

@@ -19,7 +19,8 @@ from msens.chain.integrate import ChainResult, simulate
 from msens.chain.model import Chain
 from msens.chain.model import DampingLaw as Damping
 from msens.config.assemble import build_chain
-from msens.config.study import MssModel, SensorSpec, SetupSpec, Study
+from msens.config.schema import MssModel, SensorSpec, SetupSpec
+from msens.config.study import Study
 from msens.errors import InputError
 from msens.readout.sensors import SensorKind, observe, time_derivative
 from msens.results import SensorResult, SetupResult, StudyResult
@@ -47,7 +48,7 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
                  transducers: dict, study: Study, index: int,
                  responses: dict | None = None) -> SensorResult:
     from msens.config.fieldsetup import coil_geometry
-    from msens.config.study import CoilSpec
+    from msens.config.schema import CoilSpec
     from msens.magnetics.mss import mss_record, noise_model, readout, voltage_on
 
     tr = transducers[sensor.particle]

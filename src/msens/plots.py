@@ -126,7 +126,7 @@ def _record_quantity(r) -> tuple[str, np.ndarray, str]:
     from the integrated signal, so its peak times are marked, not values); a four-contact
     MsS is the paper's mean force of its four contacts; bead and rod sensors read a force.
     """
-    from msens.config.study import MssModel
+    from msens.config.schema import MssModel
     from msens.readout.sensors import SensorKind
 
     if r.sensor.kind is SensorKind.MSS and r.sensor.model is MssModel.PHYSICS:

@@ -18,7 +18,8 @@ from msens.calibrate import DissipationFit
 from msens.chain.integrate import ChainResult
 from msens.chain.model import Chain
 from msens.chain.published import GAMMA_CONTACT, GAMMA_WALL
-from msens.config.study import ReferenceRow, SensorSpec, SetupSpec, Study
+from msens.config.schema import ReferenceRow, SensorSpec, SetupSpec
+from msens.config.study import Study
 from msens.signals.features import PulseFeatures
 
 

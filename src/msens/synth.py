@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from msens.config.study import MssModel
+from msens.config.schema import MssModel
 from msens.io.waveform import Channel, Waveform
 from msens.readout.sensors import SensorKind
 from msens.results import SensorResult, SetupResult

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from msens.config.study import ElectronicsSpec
+from msens.config.schema import ElectronicsSpec
 from msens.design.metrics import Wave, design_rows
 from msens.design.report import pareto_mask, range_edges
 from msens.design.sweep import Design

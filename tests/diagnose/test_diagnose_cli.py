@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from msens.cli import main
-from msens.config.study import PAPER_TABLE2, builtin_study_path, load_study
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose.effects import Context
 from msens.diagnose.hidden import hidden_case
 from msens.diagnose.predict import Predictor, baseline_state

@@ -9,7 +9,8 @@ import pytest
 
 from msens.chain.model import DampingLaw
 from msens.config.assemble import build_chain
-from msens.config.study import PAPER_TABLE2, builtin_study_path, default_study_path, load_study
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, default_study_path, load_study
 from msens.diagnose.effects import NAMES, Context, FirstOrderLowpass, get, registry
 from msens.diagnose.predict import _sim_key, baseline_state
 

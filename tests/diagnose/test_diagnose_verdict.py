@@ -10,7 +10,8 @@ import pytest
 
 from msens.calibrate import DissipationFit
 from msens.config.assemble import precompression_forces
-from msens.config.study import PAPER_TABLE2, PrecompressionSpec, builtin_study_path, load_study
+from msens.config.schema import PAPER_TABLE2, PrecompressionSpec
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import diagnose
 from msens.diagnose.effects import Context, get
 from msens.diagnose.hidden import hidden_case, hidden_shots, outside_case

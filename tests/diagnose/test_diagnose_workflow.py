@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from msens.calibrate import DissipationFit
-from msens.config.study import PAPER_TABLE2, builtin_study_path, load_study
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import THRESHOLD, diagnose, diagnose_reference
 from msens.diagnose.effects import Context
 from msens.diagnose.hidden import hidden_case
@@ -155,7 +156,7 @@ def test_feature_mode_on_reference_rows_that_the_model_matches(bench):
     """Reference rows equal to a model with a slower striker (friction in its guide): the
     feature mode names striker_velocity and finds the speed (TOF ~ v^(-1/5))."""
     study, ctx, base, predictor = bench
-    from msens.config.study import ReferenceRow
+    from msens.config.schema import ReferenceRow
     from msens.diagnose.effects import get
     from msens.diagnose.predict import model_features_of
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from msens.chain import simulate_batch
-from msens.config.study import PAPER_TABLE2, builtin_study_path, load_study
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import predict
 from msens.diagnose.effects import Context, FirstOrderLowpass
 from msens.diagnose.predict import Predictor, baseline_state

@@ -19,7 +19,8 @@ import math
 import pytest
 
 from msens.calibrate import DissipationFit
-from msens.config.study import PAPER_TABLE2, builtin_study_path, load_study
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import diagnose, diagnose_passes
 from msens.diagnose.effects import NAMES, PHYSICS_MSS_NAMES, Context
 from msens.diagnose.hidden import hidden_case, without_precompression

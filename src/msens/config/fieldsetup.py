@@ -10,7 +10,8 @@ gives a ``steel_bh`` table).
 
 from __future__ import annotations
 
-from msens.config.study import CoilSpec, MagnetSpec, SensorSpec, SetupSpec, Study
+from msens.config.schema import CoilSpec, MagnetSpec, SensorSpec, SetupSpec
+from msens.config.study import Study
 from msens.errors import InputError
 from msens.field.geometry import (
     WIRES,

@@ -26,7 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from msens.config.study import ElectronicsSpec, Study
+from msens.config.schema import ElectronicsSpec
+from msens.config.study import Study
 from msens.design.cache import ResultCache, atomic_write_bytes, content_key
 from msens.design.metrics import Wave, design_rows
 from msens.design.physics import study_wave

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
-from msens.config.study import ElectronicsSpec
+from msens.config.schema import ElectronicsSpec
 from msens.field.geometry import Coil
 from msens.magnetics.mss import figure_noise_rms, readout
 from msens.magnetics.transducer import ContactRates, emf_from_rates

@@ -41,7 +41,8 @@ from pathlib import Path
 from typing import Any
 
 from msens.config.fieldsetup import geometry_from_study, mss_setup, wire_for
-from msens.config.study import SensorSpec, Study
+from msens.config.schema import SensorSpec
+from msens.config.study import Study
 from msens.errors import InputError
 from msens.field.geometry import (
     BiasMagnet,

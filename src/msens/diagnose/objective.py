@@ -30,7 +30,7 @@ from scipy import fft
 from scipy.optimize import minimize_scalar
 
 from msens.compare import align_shot
-from msens.config.study import MssModel, ReferenceRow, SetupSpec
+from msens.config.schema import MssModel, ReferenceRow, SetupSpec
 from msens.diagnose.noise import MIN_PRETRIGGER, Ensemble, ensemble
 from msens.diagnose.predict import feature_records, model_features_of, signal
 from msens.errors import InputError

@@ -16,7 +16,7 @@ from functools import lru_cache
 import numpy as np
 
 from msens.config.fieldsetup import coil_geometry, geometry_from_study
-from msens.config.study import CoilSpec, MssModel
+from msens.config.schema import CoilSpec, MssModel
 from msens.diagnose.effects.base import Context, PhysicsMss
 from msens.errors import internal
 from msens.field.geometry import SensorGeometry

@@ -62,7 +62,8 @@ from tqdm import tqdm
 
 from msens.calibrate import DissipationFit
 from msens.compare import model_record, setup_spec_channels, shot_records, smooth
-from msens.config.study import SetupSpec, Study
+from msens.config.schema import SetupSpec
+from msens.config.study import Study
 from msens.diagnose.effects import Context, Effect, ModelState, registry
 from msens.diagnose.effects import get as get_effect
 from msens.diagnose.fit import EffectFit, fit_effect, refit_jointly

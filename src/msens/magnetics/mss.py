@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from msens.config.study import ElectronicsSpec
+from msens.config.schema import ElectronicsSpec
 from msens.field.geometry import Coil
 from msens.magnetics.transducer import (
     Transducer,

@@ -16,7 +16,8 @@ import numpy as np
 from scipy.signal import lfilter
 
 from msens.chain.model import Chain
-from msens.config.study import ElectronicsSpec, SetupSpec, Study
+from msens.config.schema import ElectronicsSpec, SetupSpec
+from msens.config.study import Study
 from msens.field.geometry import Coil
 from msens.readout.sensors import SensorKind
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from msens.config.study import MssModel
+from msens.config.schema import MssModel
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 
 NAME = "cable_capacitance"

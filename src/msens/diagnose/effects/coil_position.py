@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from msens.config.study import MssModel
+from msens.config.schema import MssModel
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 from msens.diagnose.effects.sensor_position import names as position_names
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from msens.config.study import MssModel
+from msens.config.schema import MssModel
 from msens.diagnose import physics
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 from msens.magnetics.variants import NODES

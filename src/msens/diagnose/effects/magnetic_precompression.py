@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 
 from msens.config.assemble import precompression_forces
-from msens.config.study import PrecompressionSpec
+from msens.config.schema import PrecompressionSpec
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 from msens.diagnose.effects.static_precompression import (
     FLOOR_N,

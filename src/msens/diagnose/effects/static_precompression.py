@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 
 from msens.config.assemble import precompression_forces
-from msens.config.study import MssModel, PrecompressionSpec
+from msens.config.schema import MssModel, PrecompressionSpec
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 
 NAME = "static_precompression"

@@ -7,7 +7,7 @@ import pytest
 
 from msens import api
 from msens.config.study import default_study_path
-from msens.magnetics.transducer import contact_rates, emf_from_rates
+from msens.magnetics.emf import contact_rates, emf_from_rates
 
 
 @pytest.fixture(scope="module")

@@ -190,7 +190,7 @@ def setup_transducers(study: Study, setup: SetupSpec) -> dict | None:
     if not any(s.model is MssModel.PHYSICS for s in setup.sensors):
         return None
     from msens.config.fieldsetup import geometry_from_study
-    from msens.magnetics.transducer import transducers_for
+    from msens.magnetics.transducer_cache import transducers_for
 
     coils = ", ".join(str(s.particle) for s in setup.sensors if s.model is MssModel.PHYSICS)
     _log.info("setup %s: field model and transducers of the coils at particles %s",

@@ -10,8 +10,8 @@ from msens.design.metrics import Wave, design_rows
 from msens.design.report import pareto_mask, range_edges
 from msens.design.sweep import Design
 from msens.field.geometry import Coil
+from msens.magnetics.emf import contact_rates, emf_from_rates
 from msens.magnetics.mss import readout
-from msens.magnetics.transducer import contact_rates, emf_from_rates
 from msens.params.units import K_B
 from msens.readout.electronics import daq_voltage
 

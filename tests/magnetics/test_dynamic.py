@@ -27,15 +27,10 @@ from msens.magnetics.dynamic import (
     report_to_json,
     sensor_conductivity,
 )
+from msens.magnetics.mechanisms import adjoint_check, coil_linkage, mechanism_potentials
 from msens.magnetics.mss import MssSensor, mss_signals
 from msens.magnetics.steel_law import law_for_steel
-from msens.magnetics.transducer import (
-    Transducer,
-    adjoint_check,
-    bias_solution,
-    coil_linkage,
-    mechanism_potentials,
-)
+from msens.magnetics.transducer import Transducer, bias_solution
 from msens.readout.electronics import coil_transfer_function, readout_circuit, transfer_function
 
 #: The coarse model of test_transducer (~4k elements, ~2 s with its sources).

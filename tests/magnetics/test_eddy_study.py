@@ -40,7 +40,7 @@ def test_eddy_currents_screen_the_coil_signal(tmp_path, monkeypatch):
     eddy = result.setups[0].sensors[0]
     # the mechanisms' EMFs with eddy currents add up to the record's EMF
     from msens.magnetics.dynamic import mechanism_emfs
-    from msens.magnetics.transducer import contact_rates
+    from msens.magnetics.emf import contact_rates
 
     setup = result.setups[0]
     tr = setup.transducers[eddy.sensor.particle]

@@ -11,6 +11,7 @@ import pytest
 from msens.field.geometry import BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
 from msens.field.sensor_model import bias_problem, load_mesh
 from msens.field.solve import solve
+from msens.magnetics.mechanisms import coil_linkage, mechanism_potentials
 from msens.magnetics.potentials import (
     LinkageTable,
     _cumtrapz,
@@ -20,7 +21,6 @@ from msens.magnetics.potentials import (
     region_linkage,
 )
 from msens.magnetics.steel_law import law_for_steel
-from msens.magnetics.transducer import coil_linkage, mechanism_potentials
 
 
 def _geometry(magnet: bool) -> SensorGeometry:

@@ -11,14 +11,9 @@ from msens.errors import InputError
 from msens.field.build import MeshOptions
 from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
 from msens.magnetics.approach import hertz_approach_rate, hertz_stiffness
-from msens.magnetics.transducer import (
-    Transducer,
-    compute_transducers,
-    emf,
-    magnetic_precompression,
-    transducer_report,
-    transducers_for,
-)
+from msens.magnetics.emf import emf
+from msens.magnetics.transducer import Transducer, compute_transducers, magnetic_precompression
+from msens.magnetics.transducer_cache import transducer_report, transducers_for
 from msens.magnetics.villari import StressSampler, bead_stress, contact_sensitivity
 from msens.mechanics.beadstress import stress_at
 from msens.params.materials import BEAD_STEEL

@@ -35,16 +35,13 @@ from msens.design.runner import run_cached
 from msens.design.sweep import Design, design_unit
 from msens.field.geometry import SensorGeometry, SensorUnit
 from msens.field.sensor_model import coil_resistance
+from msens.magnetics.emf import ContactRates
+from msens.magnetics.mechanisms import contact_profiles, mechanism_potentials
 from msens.magnetics.mss import winding_of
 from msens.magnetics.potentials import LinkageTable, linkage_table, rect_integral
 from msens.magnetics.steel_law import law_for_steel
-from msens.magnetics.transducer import (
-    ContactRates,
-    bias_solution,
-    contact_profiles,
-    mechanism_potentials,
-    transducers_for,
-)
+from msens.magnetics.transducer import bias_solution
+from msens.magnetics.transducer_cache import transducers_for
 from msens.readout.coil import wheeler_inductance
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm

@@ -22,12 +22,8 @@ from msens.errors import internal
 from msens.field.geometry import SensorGeometry
 from msens.magnetics.mss import MssSensor, readout
 from msens.magnetics.steel_law import law_for_steel
-from msens.magnetics.transducer import (
-    Transducer,
-    cache_key,
-    magnetic_precompression,
-    transducers_for,
-)
+from msens.magnetics.transducer import Transducer, cache_key, magnetic_precompression
+from msens.magnetics.transducer_cache import transducers_for
 from msens.magnetics.variants import RemanenceFamily, remanence_family
 from msens.params.materials import BEAD_STEEL
 

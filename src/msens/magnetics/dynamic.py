@@ -51,15 +51,11 @@ from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import coil_current_density, coil_resistance
 from msens.io._files import atomic_write_bytes
 from msens.io.hashing import content_hash
+from msens.magnetics.emf import ContactRates, contact_forces_of, contact_rates
+from msens.magnetics.mechanisms import MechanismPotentials
 from msens.magnetics.mss import MssRecord
 from msens.magnetics.potentials import region_linkage
-from msens.magnetics.transducer import (
-    ContactRates,
-    MechanismPotentials,
-    Transducer,
-    contact_forces_of,
-    contact_rates,
-)
+from msens.magnetics.transducer import Transducer
 from msens.mechanics.hertz import hertz_approach
 from msens.params.units import TWO_PI
 from msens.readout.electronics import (
@@ -464,8 +460,9 @@ def _workers(scheduler: str) -> int:
 
 def _report_task(args: tuple) -> DynamicReport:
     """Mesh, bias, sources and the harmonic solves of one list of frequencies (from 0)."""
+    from msens.magnetics.mechanisms import mechanism_potentials
     from msens.magnetics.steel_law import law_for_steel
-    from msens.magnetics.transducer import bias_solution, mechanism_potentials
+    from msens.magnetics.transducer import bias_solution
 
     geometry, options, mesh_dir, freqs, steel, magnets = args
     t0 = time.perf_counter()

@@ -18,12 +18,8 @@ import numpy as np
 
 from msens.config.schema import ElectronicsSpec
 from msens.field.geometry import Coil
-from msens.magnetics.transducer import (
-    Transducer,
-    contact_forces_of,
-    contact_rates,
-    emf_from_rates,
-)
+from msens.magnetics.emf import contact_forces_of, contact_rates, emf_from_rates
+from msens.magnetics.transducer import Transducer
 from msens.mechanics.hertz import hertz_approach
 from msens.readout.coil import Winding, winding_capacitance, winding_from_coil
 from msens.readout.electronics import NoiseModel, ReadoutCircuit, daq_voltage, noise_rms
@@ -128,7 +124,7 @@ def mss_signals(sensor: MssSensor, t: np.ndarray, force: np.ndarray, sample_rate
     approach : ndarray, shape (nt, m), optional
         The chain's contact approaches, m (negative: open), same columns as ``force``;
         default the Hertz approach of the forces (see
-        :func:`msens.magnetics.transducer.contact_rates`).
+        :func:`msens.magnetics.emf.contact_rates`).
     static : ndarray, shape (n,), optional
         Static contact forces (column k is contact k + 1), N; default the first sample.
     columns : ndarray of int, shape (m,), optional

@@ -10,18 +10,15 @@ from scipy import signal
 
 from msens.errors import InputError
 from msens.params.units import K_B
+from msens.readout.daq import daq_voltage
 from msens.readout.electronics import (
-    NoiseModel,
     ReadoutCircuit,
-    add_readout_noise,
     bandwidth,
-    daq_voltage,
-    noise_rms,
     resonance,
     state_space,
-    thermal_noise_psd,
     transfer_function,
 )
+from msens.readout.noise import NoiseModel, add_readout_noise, noise_rms, thermal_noise_psd
 
 T_ROOM = 293.15
 #: The paper's coil (msens.readout.coil: R 91.9 Ω, Wheeler L 23.0 mH, C_w ~ 10.8 pF) on 1 m RG-58

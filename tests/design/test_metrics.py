@@ -13,7 +13,7 @@ from msens.field.geometry import Coil
 from msens.magnetics.emf import contact_rates, emf_from_rates
 from msens.magnetics.mss import readout
 from msens.params.units import K_B
-from msens.readout.electronics import daq_voltage
+from msens.readout.daq import daq_voltage
 
 
 def _wave() -> Wave:

@@ -111,7 +111,7 @@ def test_eddy_current_records_carry_the_coils_thermal_noise(tmp_path, monkeypatc
     record; a long realisation has the variance ∫S df; and, Z(f) being a passive impedance,
     the total is kT/C of the read-out's capacitance (equipartition) whatever the losses."""
     from msens.params.units import K_B
-    from msens.readout.electronics import NoiseModel, add_readout_noise, thermal_noise_psd
+    from msens.readout.noise import NoiseModel, add_readout_noise, thermal_noise_psd
 
     monkeypatch.setenv("MSENS_MESH_DIR", str(tmp_path / "cache"))
     quiet = api.run(_study(tmp_path, EDDY))

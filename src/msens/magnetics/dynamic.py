@@ -58,12 +58,8 @@ from msens.magnetics.potentials import region_linkage
 from msens.magnetics.transducer import Transducer
 from msens.mechanics.hertz import hertz_approach
 from msens.params.units import TWO_PI
-from msens.readout.electronics import (
-    NoiseModel,
-    ReadoutCircuit,
-    add_readout_noise,
-    coil_transfer_function,
-)
+from msens.readout.electronics import ReadoutCircuit, coil_transfer_function
+from msens.readout.noise import NoiseModel, add_readout_noise
 
 #: Frequencies solved by default, Hz: 0 (the static transducer), 12 roughly log-spaced
 #: points over 0.5–200 kHz (1-2-3-5 steps, so the reported 1, 3, 10, 30, 100 kHz are solved)

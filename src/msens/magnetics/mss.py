@@ -22,7 +22,9 @@ from msens.magnetics.emf import contact_forces_of, contact_rates, emf_from_rates
 from msens.magnetics.transducer import Transducer
 from msens.mechanics.hertz import hertz_approach
 from msens.readout.coil import Winding, winding_capacitance, winding_from_coil
-from msens.readout.electronics import NoiseModel, ReadoutCircuit, daq_voltage, noise_rms
+from msens.readout.daq import daq_voltage
+from msens.readout.electronics import ReadoutCircuit
+from msens.readout.noise import NoiseModel, noise_rms
 
 
 @dataclass(frozen=True)

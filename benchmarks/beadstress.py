@@ -18,7 +18,8 @@ import time
 
 import numpy as np
 
-from msens.mechanics.beadstress import mean_stress, mean_stress_exact, solve_bead_stress, stress_at
+from msens.mechanics.beadstress import solve_bead_stress
+from msens.mechanics.stress_sampling import mean_stress, mean_stress_exact, stress_at
 from msens.params.materials import BEAD_STEEL
 
 R = 2.38e-3

@@ -8,15 +8,8 @@ import pytest
 
 from msens.errors import InputError
 from msens.mechanics.beadmesh import BeadMeshSpec, bead_section_mesh
-from msens.mechanics.beadstress import (
-    hertz_axis_stress,
-    hertz_contact,
-    mean_stress,
-    mean_stress_exact,
-    solve_bead_stress,
-    stress_along,
-    stress_at,
-)
+from msens.mechanics.beadstress import hertz_axis_stress, hertz_contact, solve_bead_stress
+from msens.mechanics.stress_sampling import mean_stress, mean_stress_exact, stress_along, stress_at
 from msens.params.materials import BEAD_STEEL
 
 R = 2.38e-3

@@ -15,7 +15,7 @@ from msens.magnetics.emf import emf
 from msens.magnetics.transducer import Transducer, compute_transducers, magnetic_precompression
 from msens.magnetics.transducer_cache import transducer_report, transducers_for
 from msens.magnetics.villari import StressSampler, bead_stress, contact_sensitivity
-from msens.mechanics.beadstress import stress_at
+from msens.mechanics.stress_sampling import stress_at
 from msens.params.materials import BEAD_STEEL
 
 #: Coarse mesh: enough for consistency and symmetry checks (~4k elements, ~1 s per model).

@@ -11,13 +11,8 @@ import numpy as np
 import pytest
 
 from msens.mechanics.beadmesh import BeadMeshSpec
-from msens.mechanics.beadstress import (
-    hertz_axis_stress,
-    mean_stress,
-    mean_stress_exact,
-    solve_bead_stress,
-    stress_at,
-)
+from msens.mechanics.beadstress import hertz_axis_stress, solve_bead_stress
+from msens.mechanics.stress_sampling import mean_stress, mean_stress_exact, stress_at
 from msens.params.materials import BEAD_STEEL
 
 R = 2.38e-3  # 4.76 mm beads

@@ -441,7 +441,8 @@ def equivalent_uniaxial_stress(stress: ArrayLike, h_dir: ArrayLike) -> NDArray[n
     stress : array_like
         Either full tensors, shape (..., 3, 3), Pa, with ``h_dir`` shape (..., 3) in the same
         basis; or axisymmetric components [σ_rr, σ_zz, σ_θθ, σ_rz], shape (..., 4), Pa (the
-        order of msens.mechanics.beadstress.stress_at), with ``h_dir`` = [h_r, h_z], shape (..., 2).
+        order of msens.mechanics.stress_sampling.stress_at), with ``h_dir`` = [h_r, h_z],
+        shape (..., 2).
     h_dir : array_like
         Field direction (any length), broadcast against the stress batch shape.
 

@@ -43,7 +43,8 @@ from msens.magnetics.magnetoelastic import (
     piezomagnetic_coefficient,
 )
 from msens.magnetics.potentials import nonlinear_resolve, region_linkage
-from msens.mechanics.beadstress import BeadStress, solve_bead_stress, stress_at
+from msens.mechanics.beadstress import BeadStress, solve_bead_stress
+from msens.mechanics.stress_sampling import stress_at
 from msens.params.materials import BEAD_STEEL, ElasticMaterial
 
 # ----------------------------------------------------------------------------- bead stress
@@ -51,11 +52,11 @@ from msens.params.materials import BEAD_STEEL, ElasticMaterial
 class StressSampler:
     """Fast evaluation of a bead's stress per newton at many points.
 
-    :func:`msens.mechanics.beadstress.stress_at` locates each point by Newton iterations in a dozen
-    candidate elements (about 0.4 ms per point); here the straight-sided triangulation of the
-    stress mesh's vertices finds the element (matplotlib's trapezoid map), two Newton steps of
-    the isoparametric map give the reference coordinates (exact for interior elements), and
-    points outside the straight triangulation (between a chord and the sphere) fall back to
+    :func:`msens.mechanics.stress_sampling.stress_at` locates each point by Newton iterations in
+    a dozen candidate elements (about 0.4 ms per point); here the straight-sided triangulation
+    of the stress mesh's vertices finds the element (matplotlib's trapezoid map), two Newton
+    steps of the isoparametric map give the reference coordinates (exact for interior
+    elements), and points outside the straight triangulation (between a chord and the sphere) fall back to
     ``stress_at``.
 
     Parameters

@@ -56,8 +56,8 @@ class StressSampler:
     a dozen candidate elements (about 0.4 ms per point); here the straight-sided triangulation
     of the stress mesh's vertices finds the element (matplotlib's trapezoid map), two Newton
     steps of the isoparametric map give the reference coordinates (exact for interior
-    elements), and points outside the straight triangulation (between a chord and the sphere) fall back to
-    ``stress_at``.
+    elements), and points outside the straight triangulation (between a chord and the sphere)
+    fall back to ``stress_at``.
 
     Parameters
     ----------

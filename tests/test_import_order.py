@@ -27,7 +27,7 @@ STAGES = {
     6: ("magnetics",),
     7: ("results",),
     8: ("budget", "pipeline", "synth", "compare"),
-    9: ("plots",),
+    9: ("plots", "plots_mss"),
     10: ("design", "diagnose"),
     11: ("api",),
     12: ("cli",),

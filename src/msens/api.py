@@ -107,7 +107,7 @@ def prepare_outputs(out: str | Path, *, figures: bool = True,
 
 
 def _figure_makers(result: StudyResult) -> dict:
-    from msens import plots
+    from msens import plots, plots_mss
 
     makers = {
         "contact_forces.png": lambda: plots.contact_profiles(result),
@@ -118,10 +118,10 @@ def _figure_makers(result: StudyResult) -> dict:
     if result.study.reference:
         makers["table2.png"] = lambda: plots.table2(result.rows())
     if any(s.transducers for s in result.setups):
-        makers["mss_voltage.png"] = lambda: plots.mss_voltages(result)
-        makers["mss_integrated.png"] = lambda: plots.mss_integrated(result)
-        makers["sensitivity_profile.png"] = lambda: plots.sensitivity_profile(result)
-        makers["magnetic_precompression.png"] = lambda: plots.magnetic_precompression(result)
+        makers["mss_voltage.png"] = lambda: plots_mss.mss_voltages(result)
+        makers["mss_integrated.png"] = lambda: plots_mss.mss_integrated(result)
+        makers["sensitivity_profile.png"] = lambda: plots_mss.sensitivity_profile(result)
+        makers["magnetic_precompression.png"] = lambda: plots_mss.magnetic_precompression(result)
     return makers
 
 

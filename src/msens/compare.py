@@ -35,8 +35,9 @@ from msens.errors import InputError
 from msens.io.waveform import Channel, Waveform
 from msens.readout.sensors import SensorKind
 from msens.results import SensorResult, SetupResult, StudyResult
+from msens.signals.alignment import xcorr_delay
 from msens.signals.features import PulseFeatures, centre_distance, pulse_features, wave_speed
-from msens.signals.processing import integrate_drift_corrected, lowpass, xcorr_delay
+from msens.signals.processing import integrate_drift_corrected, lowpass
 from msens.synth import UNITS, UNITS_KEY, is_physics_mss
 
 #: Peaks and times are read from records low-passed at this frequency, Hz — the model's too,

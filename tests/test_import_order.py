@@ -1,9 +1,10 @@
 """The import graph follows the data flow: no module imports a higher stage, no cycles.
 
 Every top-level unit of ``src/msens`` (a module, or a subpackage as a whole) has a stage,
-from the foundations (errors, parameters, file formats) through mechanics, the chain, the
-study schema, the field model, the transducer core and the results to the workflows and the
-command line. A unit may import its own stage or lower ones; imports inside functions count
+from the foundations (errors, parameters, file formats) through mechanics, read-out and
+signals, the chain and the field model, the transducer core, the study configuration (which
+maps a study onto those models, so no model knows the study schema) and the results to the
+workflows and the command line. A unit may import its own stage or lower ones; imports inside functions count
 too. A unit missing from ``STAGES`` fails the test: give it its place.
 """
 
@@ -23,8 +24,8 @@ STAGES = {
     2: ("mechanics", "readout", "signals"),
     3: ("chain", "field"),
     4: ("calibrate",),
-    5: ("config",),
-    6: ("magnetics",),
+    5: ("magnetics",),
+    6: ("config",),
     7: ("results",),
     8: ("budget", "pipeline", "synth", "compare"),
     9: ("plots", "plots_mss"),

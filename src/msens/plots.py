@@ -17,7 +17,6 @@ matplotlib.use("Agg")
 
 _US = 1e6
 
-
 #: Figure file formats the commands can write (``--format``).
 FORMATS = ("png", "pdf", "svg")
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from msens.config.schema import ElectronicsSpec
 from msens.design.metrics import Wave, design_rows
 from msens.design.report import pareto_mask, range_edges
 from msens.design.sweep import Design
@@ -14,6 +13,7 @@ from msens.magnetics.emf import contact_rates, emf_from_rates
 from msens.magnetics.mss import readout
 from msens.params.units import K_B
 from msens.readout.daq import daq_voltage
+from msens.readout.electronics import ElectronicsSpec
 
 
 def _wave() -> Wave:

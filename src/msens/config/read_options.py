@@ -13,7 +13,6 @@ from msens.config.read_chain import _check_static_load
 from msens.config.schema import (
     ChainSpec,
     DissipationFitSpec,
-    ElectronicsSpec,
     FieldSpec,
     ReferenceRow,
     SetupSpec,
@@ -24,6 +23,7 @@ from msens.params.materials import (
     BHCurve,
 )
 from msens.params.units import MU0
+from msens.readout.electronics import ElectronicsSpec
 
 
 def _simulation(t: Table | None) -> SimulationSpec:
@@ -127,7 +127,6 @@ def _field(t: Table | None, chain: ChainSpec, source: str) -> FieldSpec:
 #: Largest flux density accepted in a B–H table, T (iron-cobalt alloys saturate near 2.4 T;
 #: B = 5 T would need H of order 2e6 A/m, far beyond any sensor's field).
 BH_MAX_B = 5.0
-
 
 #: Smallest slope ΔH/ΔB of a table's last interval, A/(m T): the field model joins the table to
 #: the saturation line B = B_n + μ0 (H − H_n) with a monotone cubic, which needs the last secant

@@ -23,10 +23,8 @@ from msens.readout.sensors import SensorKind
 
 SCHEMA = "msens.study/1"
 
-
 #: The main job: the paper's MsS predicted from physics.
 DEFAULT_STUDY = "paper-mss"
-
 
 #: The paper's three sensing setups (Table 2); the default study of ``msens diagnose``.
 PAPER_TABLE2 = "paper-table2"
@@ -172,26 +170,6 @@ class StrikerSpec:
 
     velocity_m_per_s: float
     drop_height_m: float | None = None
-
-
-@dataclass(frozen=True)
-class ElectronicsSpec:
-    """Coil read-out chain. Capacitances in F, resistance in Ohm, rate in Hz.
-
-    Defaults: 1 m of RG-58 coaxial cable (about 100 pF/m) into a 1 MOhm || 20 pF DAQ input
-    sampled at the paper's 10 MHz; noise off unless asked for.
-    """
-
-    cable_capacitance_f: float = 100e-12
-    input_resistance_ohm: float = 1e6
-    input_capacitance_f: float = 20e-12
-    sample_rate_hz: float = 10e6
-    johnson_noise: bool = False
-    temperature_k: float = 293.15
-    adc_bits: int | None = None
-    adc_range_v: float | None = None
-    input_noise_v_per_rthz: float = 0.0
-    seed: int = 0
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,6 @@ from msens.config.schema import (
     SCHEMA,
     ChainSpec,
     DissipationFitSpec,
-    ElectronicsSpec,
     FieldSpec,
     ReferenceRow,
     SetupSpec,
@@ -51,6 +50,7 @@ from msens.config.schema import (
 )
 from msens.errors import InputError
 from msens.io.tomlreader import Table, document_table, read_document
+from msens.readout.electronics import ElectronicsSpec
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,6 @@ from pathlib import Path
 
 import numpy as np
 
-from msens.config.schema import ElectronicsSpec
 from msens.config.study import Study
 from msens.design.cache import ResultCache, atomic_write_bytes, content_key
 from msens.design.metrics import Wave, design_rows
@@ -43,6 +42,7 @@ from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import bias_solution
 from msens.magnetics.transducer_cache import transducers_for
 from msens.readout.coil import wheeler_inductance
+from msens.readout.electronics import ElectronicsSpec
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm
 #: gives < 1e-4 relative error against exact mesh quadrature for the paper's coil, tests).

@@ -25,11 +25,16 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
-from msens.config.schema import ElectronicsSpec
 from msens.field.geometry import Coil
 from msens.magnetics.emf import ContactRates, emf_from_rates
 from msens.magnetics.mss import figure_noise_rms, readout
-from msens.readout.electronics import bandwidth, poles, resonance, transfer_function
+from msens.readout.electronics import (
+    ElectronicsSpec,
+    bandwidth,
+    poles,
+    resonance,
+    transfer_function,
+)
 
 #: Designs whose EMF records are formed at once (bounds memory: chunk × nt doubles).
 EMF_CHUNK = 256

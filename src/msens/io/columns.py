@@ -40,21 +40,17 @@ from msens.io.waveform import (
 
 SCHEMA = "msens.columns/1"
 
-
 #: Scale to seconds of the time units a map may name.
 TIME_UNITS: Mapping[str, float] = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
 
-
 #: Scale to volts of the value units a map may name (case matters: mV is not MV).
 VALUE_UNITS: Mapping[str, float] = {"V": 1.0, "mV": 1e-3, "uV": 1e-6, "µV": 1e-6, "kV": 1e3}
-
 
 #: The metadata a mapped waveform carries (the §8 ``units`` key that ``msens compare`` checks).
 UNITS_KEY, UNITS = "units", "V"
 
 
 TIME_TARGET = "time"
-
 
 SYNTAX_HELP = ("items are TARGET=COLUMN[:SCALE] separated by commas, TARGET 'time' or a "
                "channel such as bead@13, SCALE a number or a unit")

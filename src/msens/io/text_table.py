@@ -16,7 +16,6 @@ from msens.io.csv import printed_resolution
 #: Cell separators tried, in this order, on each candidate header line.
 DELIMITERS = (",", ";", "\t")
 
-
 #: Rows right after the header without numbers in the mapped columns that are skipped
 #: (instruments print one or two: units, a probe setting); more is an error.
 MAX_SKIPPED_ROWS = 5

@@ -16,14 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from msens.config.schema import ElectronicsSpec
 from msens.field.geometry import Coil
 from msens.magnetics.emf import contact_forces_of, contact_rates, emf_from_rates
 from msens.magnetics.transducer import Transducer
 from msens.mechanics.hertz import hertz_approach
 from msens.readout.coil import Winding, winding_capacitance, winding_from_coil
 from msens.readout.daq import daq_voltage
-from msens.readout.electronics import ReadoutCircuit
+from msens.readout.electronics import ElectronicsSpec, ReadoutCircuit
 from msens.readout.noise import NoiseModel, noise_rms
 
 

@@ -67,13 +67,10 @@ from msens.params.materials import BEAD_STEEL, ElasticMaterial
 
 _log = logging.getLogger(__name__)
 
-
 #: Version of what :func:`transducers_for` computes; part of the cache key.
 TRANSDUCER_VERSION = "transducer/3"
 
-
 Mechanism = Literal["villari", "approach", "both"]
-
 
 MECHANISMS: tuple[str, ...] = ("villari", "approach", "both")
 

@@ -33,12 +33,31 @@ from msens.errors import InputError, require
 #: 30.8 pF/ft = 101 pF/m).
 RG58_CAPACITANCE_PER_M = 100e-12
 
-
 #: A typical oscilloscope / digitiser high-impedance input: 1 MΩ ∥ 20 pF.
 TYPICAL_INPUT_RESISTANCE = 1e6
 
-
 TYPICAL_INPUT_CAPACITANCE = 20e-12
+
+
+@dataclass(frozen=True)
+class ElectronicsSpec:
+    """Settings of a coil's read-out rig, as a study's ``[electronics]`` gives them.
+
+    Capacitances in F, resistance in Ohm, rate in Hz. Defaults: 1 m of RG-58 coaxial cable
+    into a 1 MOhm || 20 pF DAQ input sampled at the paper's 10 MHz; noise off unless asked
+    for. :func:`msens.magnetics.mss.readout` maps them onto a :class:`ReadoutCircuit`.
+    """
+
+    cable_capacitance_f: float = RG58_CAPACITANCE_PER_M * 1.0
+    input_resistance_ohm: float = TYPICAL_INPUT_RESISTANCE
+    input_capacitance_f: float = TYPICAL_INPUT_CAPACITANCE
+    sample_rate_hz: float = 10e6
+    johnson_noise: bool = False
+    temperature_k: float = 293.15
+    adc_bits: int | None = None
+    adc_range_v: float | None = None
+    input_noise_v_per_rthz: float = 0.0
+    seed: int = 0
 
 
 @dataclass(frozen=True)

@@ -120,7 +120,7 @@ def test_diagnosis_logs_candidates_and_decision(monkeypatch, caplog):
 # ----------------------------------------------------------------------------- base install
 
 def test_field_3d_without_pyvista_is_skipped_with_a_hint(tmp_path, monkeypatch, caplog):
-    from msens.field import report
+    from msens import field_outputs as report
 
     monkeypatch.setitem(sys.modules, "pyvista", None)  # what the base install looks like
     with pytest.raises(ImportError, match=r'pip install "msens\[viz\]"'):

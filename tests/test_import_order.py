@@ -4,8 +4,8 @@ Every top-level unit of ``src/msens`` (a module, or a subpackage as a whole) has
 from the foundations (errors, parameters, file formats) through mechanics, read-out and
 signals, the chain and the field model, the transducer core, the study configuration (which
 maps a study onto those models, so no model knows the study schema) and the results to the
-workflows and the command line. A unit may import its own stage or lower ones; imports inside functions count
-too. A unit missing from ``STAGES`` fails the test: give it its place.
+workflows and the command line. A unit may import its own stage or lower ones; imports
+inside functions count too. A unit missing from ``STAGES`` fails the test: give it its place.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ STAGES = {
     5: ("magnetics",),
     6: ("config",),
     7: ("results",),
-    8: ("budget", "pipeline", "synth", "compare"),
+    8: ("budget", "pipeline", "synth", "compare", "field_outputs"),
     9: ("plots", "plots_mss"),
     10: ("design", "diagnose"),
     11: ("api",),

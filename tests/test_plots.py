@@ -161,8 +161,8 @@ def test_magnetic_precompression_bars_match_the_summary(result):
 
 def test_field_map_smooth_parts_named_units(tmp_path):
     from msens.config.fieldsetup import geometry_from_study
-    from msens.field.report import field_map_figure, plot_field_map
     from msens.field.sensor_model import run_field_model
+    from msens.field_outputs import field_map_figure, plot_field_map
 
     study = api.load(default_study_path())
     report = run_field_model(geometry_from_study(study), inductance=False)

@@ -128,8 +128,8 @@ def _figure_makers(result: StudyResult) -> dict:
 def _field_map(result: StudyResult, d: OutputDir, fig_format: str = "png") -> Path | None:
     """The bias-field map of the first physics setup (re-solves the cached field model)."""
     from msens.config.fieldsetup import geometry_from_study
-    from msens.field.report import plot_field_map
     from msens.field.sensor_model import run_field_model
+    from msens.field_outputs import plot_field_map
 
     setup = next((s.setup for s in result.setups if s.transducers), None)
     if setup is None:
@@ -299,8 +299,8 @@ def field(study: Study, out: Path, *, fig_format: str = "png") -> str:
     and figures (the field map in ``fig_format``: png, pdf or svg; the 3-D view is always
     PNG) into ``out``; return a short text report."""
     from msens.config.fieldsetup import geometry_from_study
-    from msens.field.report import write_field_outputs
     from msens.field.sensor_model import run_field_model
+    from msens.field_outputs import write_field_outputs
 
     geometry = geometry_from_study(study)
     target = OutputDir(out)

@@ -10,7 +10,7 @@ gamma_c: fitting Eq. 10 to the measured ARs (0.55, 0.73) gives gamma_w = 0 (at t
 in the paper, but gamma_c = 2.17 kg/s with the linear dashpot of Eq. 6 acting throughout the
 contact, not the paper's 4.8 kg/s; the model ARs at the optimum (0.572, 0.682) are the
 paper's (0.57, 0.68). The paper's numbers are reproduced with gamma_c = 4.8 if the dashpot
-acts only while the contact closes (d(delta)/dt > 0); see /work/notes/progress-features.md.
+acts only while the contact closes (d(delta)/dt > 0).
 """
 
 from __future__ import annotations

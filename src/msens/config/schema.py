@@ -11,6 +11,7 @@ import enum
 from dataclasses import dataclass, field
 
 from msens.chain.model import DampingLaw as Damping
+from msens.chain.published import BEAD_MASS, BEAD_RADIUS, N_PARTICLES
 from msens.params.materials import (
     BEAD_STEEL,
     PIEZO_ROD,
@@ -68,9 +69,9 @@ class ChainSpec:
     wall : WallSpec
     """
 
-    beads: int = 29
-    bead_diameter_m: float = 4.76e-3
-    bead_mass_kg: float = 0.45e-3
+    beads: int = N_PARTICLES - 1
+    bead_diameter_m: float = 2.0 * BEAD_RADIUS
+    bead_mass_kg: float = BEAD_MASS
     material: str = BEAD_STEEL.name
     youngs_modulus_pa: float = BEAD_STEEL.youngs_modulus
     poisson_ratio: float = BEAD_STEEL.poisson_ratio

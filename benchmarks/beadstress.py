@@ -1,6 +1,6 @@
 """Bead stress solver: cost and accuracy under refinement (prints JSON).
 
-Problem: a 4.76 mm steel bead (msens.materials.BEAD_STEEL) squeezed by two opposite Hertz
+Problem: a 4.76 mm steel bead (msens.params.materials.BEAD_STEEL) squeezed by two opposite Hertz
 contacts of force F. For refine = 0..4 (all element sizes halved per level) it reports the
 displacement unknowns, the wall time of mesh + assembly + solve + stress projection (best of
 3), the relative errors of the mean axial stress (against the exact mean-stress-theorem value
@@ -18,8 +18,9 @@ import time
 
 import numpy as np
 
-from msens.beadstress import mean_stress, mean_stress_exact, solve_bead_stress, stress_at
-from msens.materials import BEAD_STEEL
+from msens.mechanics.beadstress import solve_bead_stress
+from msens.mechanics.stress_sampling import mean_stress, mean_stress_exact, stress_at
+from msens.params.materials import BEAD_STEEL
 
 R = 2.38e-3
 

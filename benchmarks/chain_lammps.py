@@ -69,8 +69,8 @@ from msens.chain import (
     striker_velocity,
 )
 from msens.chain.published import BEAD_RADIUS
-from msens.materials import BEAD_STEEL
-from msens.sensors import SensorKind, sensor_contacts
+from msens.params.materials import BEAD_STEEL
+from msens.readout.sensors import SensorKind, sensor_contacts
 
 T_END = 1e-3
 SAMPLE = 0.5e-6

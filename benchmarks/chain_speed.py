@@ -38,7 +38,7 @@ from msens.chain import (
     stable_step,
     striker_velocity,
 )
-from msens.sensors import SensorKind, sensor_contacts
+from msens.readout.sensors import SensorKind, sensor_contacts
 
 #: Timed repeats of each batch (after a warm-up batch); runs_per_s is the best,
 #: runs_per_s_median the median. On a shared VM the same batch's time can vary twofold within

@@ -15,8 +15,8 @@ import json
 import sys
 
 from msens.compare import compare
+from msens.config.study import default_study_path, load_study
 from msens.pipeline import run_study
-from msens.study import default_study_path, load_study
 from msens.synth import RigEffects, synthesize, truth_gain_key
 
 

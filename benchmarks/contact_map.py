@@ -26,11 +26,12 @@ import time
 
 import numpy as np
 
+from msens.config.fieldsetup import geometry_from_study
+from msens.config.study import load_study
 from msens.field.cache import geometry_key
-from msens.fieldsetup import geometry_from_study
 from msens.magnetics.approach import hertz_stiffness
 from msens.magnetics.contact_map import contact_flux, layer_model, mapped_contacts, state_flux
-from msens.magnetics.transducer import transducers_for
+from msens.magnetics.transducer_cache import transducers_for
 from msens.mechanics.hertz import hertz_approach
 from msens.pipeline import (
     calibrate_dissipation,
@@ -38,7 +39,6 @@ from msens.pipeline import (
     setup_transducers,
     simulate_setup,
 )
-from msens.study import load_study
 
 STUDY = "studies/paper-mss.toml"
 LOADS = (7.0, 8.5, 10.0)

@@ -23,13 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
+from msens.config.fieldsetup import eddy_settings, geometry_from_study
+from msens.config.study import load_study
 from msens.design.coil_sweep import build_context, evaluate
 from msens.design.sweep import design_geometry, parse_sweep
 from msens.errors import InputError
-from msens.fieldsetup import eddy_settings, geometry_from_study
 from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.transducer import compute_transducers
-from msens.study import load_study
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID = """

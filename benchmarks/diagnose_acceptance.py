@@ -30,6 +30,8 @@ import time
 
 import numpy as np
 
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, default_study_path, load_study
 from msens.diagnose import diagnose, diagnose_passes
 from msens.diagnose.effects import Context, get
 from msens.diagnose.hidden import (
@@ -43,7 +45,6 @@ from msens.diagnose.objective import WaveformObjective
 from msens.diagnose.predict import Predictor, baseline_state, setup_result
 from msens.diagnose.workflow import baseline_dissipation
 from msens.pipeline import calibrate_dissipation, output_times
-from msens.study import PAPER_TABLE2, builtin_study_path, default_study_path, load_study
 from msens.synth import RigEffects
 
 TOLERANCE = 0.10

@@ -14,12 +14,13 @@ import time
 
 import numpy as np
 
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import diagnose, diagnose_passes
 from msens.diagnose.effects import NAMES, PHYSICS_MSS_NAMES, Context
 from msens.diagnose.hidden import hidden_case, without_precompression
 from msens.diagnose.predict import Predictor, baseline_state
 from msens.pipeline import calibrate_dissipation, output_times
-from msens.study import PAPER_TABLE2, builtin_study_path, load_study
 
 #: The effects of bead, rod and four-contact MsS data (physics MsS: diagnose_mss.py).
 EFFECTS = tuple(n for n in NAMES if n not in PHYSICS_MSS_NAMES)

@@ -17,13 +17,13 @@ import json
 import sys
 import time
 
+from msens.config.study import default_study_path, load_study
 from msens.diagnose import diagnose
 from msens.diagnose.effects import Context
 from msens.diagnose.hidden import hidden_case, parameters_recovered
 from msens.diagnose.predict import Predictor, baseline_state
 from msens.diagnose.workflow import baseline_dissipation
 from msens.pipeline import output_times
-from msens.study import default_study_path, load_study
 from msens.synth import RigEffects
 
 EFFECTS = ("striker_velocity", "wall_stiffness", "wall_dissipation", "magnetic_precompression",

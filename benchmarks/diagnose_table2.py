@@ -21,6 +21,8 @@ from __future__ import annotations
 import json
 import sys
 
+from msens.config.schema import PAPER_TABLE2, MssModel
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import diagnose_reference
 from msens.diagnose.effects import Context, get
 from msens.diagnose.predict import (
@@ -32,7 +34,6 @@ from msens.diagnose.predict import (
 )
 from msens.diagnose.workflow import baseline_dissipation
 from msens.pipeline import calibrate_dissipation, output_times
-from msens.study import PAPER_TABLE2, MssModel, builtin_study_path, load_study
 
 PASSES = 2
 

@@ -20,8 +20,9 @@ import numpy as np
 from msens.field.build import MeshOptions
 from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
 from msens.magnetics.dynamic import frequency_responses
-from msens.magnetics.transducer import bias_solution, mechanism_potentials
-from msens.steel_law import law_for_steel
+from msens.magnetics.mechanisms import mechanism_potentials
+from msens.magnetics.steel_law import law_for_steel
+from msens.magnetics.transducer import bias_solution
 
 FREQS = (0.0, 1e4, 3e4, 1e5, 2e5)
 

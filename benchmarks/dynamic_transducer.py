@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from msens.electronics import coil_transfer_function, transfer_function
-from msens.fieldsetup import eddy_settings, geometry_from_study
+from msens.config.fieldsetup import eddy_settings, geometry_from_study
+from msens.config.study import load_study
 from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.mss import readout
-from msens.study import load_study
+from msens.readout.electronics import coil_transfer_function, transfer_function
 
 ROOT = Path(__file__).resolve().parents[1]
 

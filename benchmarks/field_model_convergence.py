@@ -180,7 +180,7 @@ def main(quick: bool = False) -> dict:
     sens["flat_radius_x2"] = {"mean_force_13": rr["mean_force_13"],
                               "relative_change": rr["mean_force_13"] / f0 - 1}
     for grade in ("N38",):
-        from msens.materials import MAGNET_GRADES
+        from msens.params.materials import MAGNET_GRADES
         gr = MAGNET_GRADES[grade]
         rr = run(replace(base_geom, sensors=magnets(grade=grade, remanence=gr.remanence,
                                                     recoil_permeability=gr.recoil_permeability)),

@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from msens.magnetoelastic import (
+from msens.magnetics.magnetoelastic import (
     DEFAULT_STEEL,
     anhysteretic_magnetisation,
     piezomagnetic_coefficient,

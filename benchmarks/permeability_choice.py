@@ -3,7 +3,7 @@
 The physics MsS sees the steel's permeability for small signals about the bias point. msens
 offers the differential slope of the B–H curve (default) and its reversible part
 (``[field] small_signal_permeability = "reversible"``, c = 0.1 by default: see
-:data:`msens.materials.STEEL_REVERSIBILITY`). This runs ``studies/paper-mss.toml`` four ways
+:data:`msens.params.materials.STEEL_REVERSIBILITY`). This runs ``studies/paper-mss.toml`` four ways
 and prints, per coil, the peak DAQ voltage and its time, the peak EMF, the incremental
 inductance, the read-out resonance, and (with eddy currents) the contact approach of the
 coil's lower contact at 10, 30 and 100 kHz relative to static (magnitude, phase in degrees);
@@ -24,9 +24,9 @@ import json
 import numpy as np
 
 from msens import api
+from msens.config.study import default_study_path
 from msens.field.eddy import SIGMA_1018, conducting_sphere
 from msens.field.geometry import BEAD_DIAMETER
-from msens.study import default_study_path
 
 VARIANTS = {
     "differential": {},

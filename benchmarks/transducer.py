@@ -25,14 +25,10 @@ from msens.field.geometry import (
     SensorUnit,
 )
 from msens.magnetics.approach import approach_flux_change
-from msens.magnetics.transducer import (
-    bias_solution,
-    coil_linkage,
-    compute_transducers,
-    mechanism_potentials,
-)
+from msens.magnetics.mechanisms import coil_linkage, mechanism_potentials
+from msens.magnetics.steel_law import law_for_steel
+from msens.magnetics.transducer import bias_solution, compute_transducers
 from msens.magnetics.villari import nonlinear_flux_change
-from msens.steel_law import law_for_steel
 
 
 def model(name: str) -> tuple[SensorGeometry, MeshOptions | None]:

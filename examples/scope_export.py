@@ -18,7 +18,7 @@ import tempfile
 from pathlib import Path
 
 import msens.api as ms
-from msens.io.columns import mapped
+from msens.io.mapped import mapped
 from msens.io.read import describe, read_waveform, write_waveform
 
 here = Path(__file__).parent / "data"

@@ -1,22 +1,16 @@
-"""Unit tests of msens.beadstress and msens.beadmesh: closed forms, shapes, symmetry, input."""
+"""Unit tests of msens.mechanics.beadstress and msens.mechanics.beadmesh: closed forms, shapes,
+symmetry, input."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from msens.beadmesh import BeadMeshSpec, bead_section_mesh
-from msens.beadstress import (
-    hertz_axis_stress,
-    hertz_contact,
-    mean_stress,
-    mean_stress_exact,
-    solve_bead_stress,
-    stress_along,
-    stress_at,
-)
 from msens.errors import InputError
-from msens.materials import BEAD_STEEL
+from msens.mechanics.beadmesh import BeadMeshSpec, bead_section_mesh
+from msens.mechanics.beadstress import hertz_axis_stress, hertz_contact, solve_bead_stress
+from msens.mechanics.stress_sampling import mean_stress, mean_stress_exact, stress_along, stress_at
+from msens.params.materials import BEAD_STEEL
 
 R = 2.38e-3
 E, NU = BEAD_STEEL.youngs_modulus, BEAD_STEEL.poisson_ratio

@@ -14,7 +14,7 @@ from msens.calibrate import (
     voltage_to_force_factor,
 )
 from msens.errors import InputError
-from msens.longwave import soliton_speed_precompressed, soliton_speed_uncompressed
+from msens.mechanics.longwave import soliton_speed_precompressed, soliton_speed_uncompressed
 
 A_DIAM, E, NU, RHO = 4.76e-3, 200e9, 0.29, 7970.0
 N = 30

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from msens.cli import main
-from msens.study import PAPER_TABLE2, builtin_study_path
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path
 
 GOOD = builtin_study_path(PAPER_TABLE2).read_text()
 
@@ -136,7 +137,7 @@ def test_compare_bad_data_fails_before_the_run(tmp_path, capsys, monkeypatch, st
     import time
 
     from msens import api
-    from msens.study import default_study_path
+    from msens.config.study import default_study_path
 
     def no_run(*args, **kwargs):  # a warm cache makes the run fast: timing alone can't tell
         raise AssertionError("compare ran the study before checking the data")

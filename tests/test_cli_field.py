@@ -7,7 +7,7 @@ import json
 import pytest
 
 from msens.cli import main
-from msens.study import default_study_path
+from msens.config.study import default_study_path
 
 MSS = (default_study_path().parent / "paper-mss.toml").read_text()
 

@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 from scipy import special
 
-from msens.coil import (
+from msens.errors import InputError
+from msens.params.units import ALPHA_COPPER, MU0
+from msens.readout.coil import (
     PACKING,
     Winding,
     awg_diameter,
@@ -18,8 +20,6 @@ from msens.coil import (
     winding_capacitance,
     winding_from_coil,
 )
-from msens.errors import InputError
-from msens.units import ALPHA_COPPER, MU0
 
 PAPER = {"turns": 1100, "length": 7e-3, "inner_radius": 7.95e-3}
 

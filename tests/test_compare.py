@@ -10,10 +10,11 @@ import pytest
 from msens import api
 from msens.cli import main
 from msens.compare import compare
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path
 from msens.errors import InputError
 from msens.io.read import read_waveform
 from msens.io.waveform import Channel, Waveform
-from msens.study import PAPER_TABLE2, builtin_study_path
 from msens.synth import RigEffects, synthesize, truth_gain_key
 
 

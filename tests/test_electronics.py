@@ -8,23 +8,20 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from msens.electronics import (
-    NoiseModel,
+from msens.errors import InputError
+from msens.params.units import K_B
+from msens.readout.daq import daq_voltage
+from msens.readout.electronics import (
     ReadoutCircuit,
-    add_readout_noise,
     bandwidth,
-    daq_voltage,
-    noise_rms,
     resonance,
     state_space,
-    thermal_noise_psd,
     transfer_function,
 )
-from msens.errors import InputError
-from msens.units import K_B
+from msens.readout.noise import NoiseModel, add_readout_noise, noise_rms, thermal_noise_psd
 
 T_ROOM = 293.15
-#: The paper's coil (msens.coil: R 91.9 Ω, Wheeler L 23.0 mH, C_w ~ 10.8 pF) on 1 m RG-58
+#: The paper's coil (msens.readout.coil: R 91.9 Ω, Wheeler L 23.0 mH, C_w ~ 10.8 pF) on 1 m RG-58
 #: into 1 MΩ ∥ 20 pF.
 PAPER = ReadoutCircuit(92.0, 23e-3, 10.8e-12, 100e-12, 1e6, 20e-12)
 WITH_CABLE_R = ReadoutCircuit(92.0, 23e-3, 10.8e-12, 100e-12, 1e6, 20e-12,

@@ -1,4 +1,4 @@
-"""Tests of the pulse features (msens.features) on synthetic records with known answers."""
+"""Tests of the pulse features (msens.signals.features) on synthetic records with known answers."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from msens.errors import InputError
-from msens.features import (
+from msens.signals.features import (
     PulseFeatures,
     centre_distance,
     expected_round_trip,

@@ -16,8 +16,9 @@ from types import SimpleNamespace
 import pytest
 
 from msens.cli import _parser, main
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path
 from msens.errors import InputError
-from msens.study import PAPER_TABLE2, builtin_study_path
 
 # the paper's three bead/rod/mss setups without the Eq. 10 fit, over a short window: ~1 s
 FAST = builtin_study_path(PAPER_TABLE2).read_text().split("[calibration.dissipation]")[0] \
@@ -84,7 +85,7 @@ def test_library_code_does_not_print(tmp_path, capsys, caplog):
 def test_calibration_logs_and_counts_chains(monkeypatch, caplog):
     """The Eq. 10 stage logs its start and result; the bar counts the chains built."""
     from msens import pipeline
-    from msens.study import load_study
+    from msens.config.study import load_study
 
     study = load_study(builtin_study_path(PAPER_TABLE2))
     built = []
@@ -119,7 +120,7 @@ def test_diagnosis_logs_candidates_and_decision(monkeypatch, caplog):
 # ----------------------------------------------------------------------------- base install
 
 def test_field_3d_without_pyvista_is_skipped_with_a_hint(tmp_path, monkeypatch, caplog):
-    from msens.field import report
+    from msens import field_outputs as report
 
     monkeypatch.setitem(sys.modules, "pyvista", None)  # what the base install looks like
     with pytest.raises(ImportError, match=r'pip install "msens\[viz\]"'):

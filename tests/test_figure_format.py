@@ -1,5 +1,5 @@
 """``--format png|pdf|svg``: one figure format for `msens run`, `field`, `compare`, `diagnose`
-and `design`, at one resolution (:data:`msens.output.DPI`); ``summary.json`` is unaffected."""
+and `design`, at one resolution (:data:`msens.io.output.DPI`); ``summary.json`` is unaffected."""
 
 from __future__ import annotations
 
@@ -11,9 +11,10 @@ import pytest
 
 from msens import api, plots
 from msens.cli import _parser, main
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, default_study_path
 from msens.design.report import pareto_plot
 from msens.design.sweep import Design
-from msens.study import PAPER_TABLE2, builtin_study_path, default_study_path
 
 MAGIC = {"png": b"\x89PNG", "pdf": b"%PDF", "svg": b"<?xml"}
 TABLE2 = str(builtin_study_path(PAPER_TABLE2))

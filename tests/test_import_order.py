@@ -1,10 +1,11 @@
 """The import graph follows the data flow: no module imports a higher stage, no cycles.
 
 Every top-level unit of ``src/msens`` (a module, or a subpackage as a whole) has a stage,
-from the foundations (errors, parameters, file formats) through mechanics, the chain, the
-study schema, the field model, the transducer core and the results to the workflows and the
-command line. A unit may import its own stage or lower ones; imports inside functions count
-too. A unit missing from ``STAGES`` fails the test: give it its place.
+from the foundations (errors, parameters, file formats) through mechanics, read-out and
+signals, the chain and the field model, the transducer core, the study configuration (which
+maps a study onto those models, so no model knows the study schema) and the results to the
+workflows and the command line. A unit may import its own stage or lower ones; imports
+inside functions count too. A unit missing from ``STAGES`` fails the test: give it its place.
 """
 
 from __future__ import annotations
@@ -18,18 +19,16 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "msens"
 
 #: Stage of every top-level unit, lowest first.
 STAGES = {
-    0: ("errors", "units", "version", "materials", "magnetostriction_data", "tomlreader",
-        "parallel", "processing", "features", "sensors", "coil", "electronics",
-        "beadmesh", "longwave", "plausible"),
-    1: ("io", "output", "mechanics", "magnetoelastic", "beadstress", "signalcheck"),
-    2: ("chain",),
-    3: ("study",),
-    4: ("field", "assemble", "calibrate"),
-    5: ("steel_law", "fieldsetup", "budget"),
-    6: ("magnetics",),
+    0: ("errors", "version", "parallel", "meshing"),
+    1: ("params", "io"),
+    2: ("mechanics", "readout", "signals"),
+    3: ("chain", "field"),
+    4: ("calibrate",),
+    5: ("magnetics",),
+    6: ("config",),
     7: ("results",),
-    8: ("pipeline", "synth", "compare"),
-    9: ("plots",),
+    8: ("budget", "pipeline", "synth", "compare", "field_outputs"),
+    9: ("plots", "plots_mss"),
     10: ("design", "diagnose"),
     11: ("api",),
     12: ("cli",),

@@ -1,11 +1,15 @@
-"""Tests of the long-wavelength speed formulas (msens.longwave)."""
+"""Tests of the long-wavelength speed formulas (msens.mechanics.longwave)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from msens.longwave import soliton_speed_precompressed, soliton_speed_uncompressed, sound_speed
+from msens.mechanics.longwave import (
+    soliton_speed_precompressed,
+    soliton_speed_uncompressed,
+    sound_speed,
+)
 
 # Paper beads (§2): 4.76 mm, E 200 GPa, nu 0.29, rho 7970 kg/m^3.
 A_DIAM, E, NU, RHO = 4.76e-3, 200e9, 0.29, 7970.0

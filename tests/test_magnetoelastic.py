@@ -1,4 +1,4 @@
-"""Tests of the Jiles–Atherton–Sablik anhysteretic law (msens.magnetoelastic)."""
+"""Tests of the Jiles–Atherton–Sablik anhysteretic law (msens.magnetics.magnetoelastic)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from msens.errors import InputError
-from msens.magnetoelastic import (
+from msens.magnetics.magnetoelastic import (
     DEFAULT_STEEL,
     JilesAthertonSablik,
     PiezomagneticCoefficient,
@@ -22,8 +22,8 @@ from msens.magnetoelastic import (
     stress_sensitivity,
     unique_stress_range,
 )
-from msens.magnetostriction_data import JA_DEFAULTS_STEEL
-from msens.units import MU0
+from msens.params.magnetostriction_data import JA_DEFAULTS_STEEL
+from msens.params.units import MU0
 
 LAW = DEFAULT_STEEL
 LAWS = [DEFAULT_STEEL, JA_DEFAULTS_STEEL]

@@ -14,13 +14,13 @@ import json
 import pytest
 
 from msens.cli import main
+from msens.config.study import default_study_path, load_study
 from msens.diagnose.effects import Context
 from msens.diagnose.hidden import hidden_case
 from msens.diagnose.predict import Predictor, baseline_state
 from msens.diagnose.workflow import baseline_dissipation
 from msens.io.read import write_waveform
 from msens.pipeline import output_times
-from msens.study import default_study_path, load_study
 from msens.synth import RigEffects
 
 STUDY = str(default_study_path())

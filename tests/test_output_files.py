@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from msens.errors import InputError
-from msens.output import OutputDir, to_json
+from msens.io.output import OutputDir, to_json
 
 
 def test_json_is_strict_and_non_finite_numbers_become_null_by_value():

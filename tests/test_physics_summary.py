@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from msens import api
-from msens.magnetics.transducer import contact_rates, emf_from_rates
-from msens.study import default_study_path
+from msens.config.study import default_study_path
+from msens.magnetics.emf import contact_rates, emf_from_rates
 
 
 @pytest.fixture(scope="module")

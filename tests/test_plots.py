@@ -10,9 +10,9 @@ import re
 import numpy as np
 import pytest
 
-from msens import api, plots
-from msens.output import DPI, OutputDir
-from msens.study import default_study_path
+from msens import api, plots, plots_mss
+from msens.config.study import default_study_path
+from msens.io.output import DPI, OutputDir
 
 # a file's first bytes, by format
 MAGIC = {"png": b"\x89PNG", "pdf": b"%PDF", "svg": b"<?xml"}
@@ -64,7 +64,7 @@ def test_every_run_figure_writes_each_format_with_units(result, tmp_path, name):
 
 
 def test_sensitivity_profile_villari_on_its_own_scale_parts_marked(result):
-    fig = plots.sensitivity_profile(result)
+    fig = plots_mss.sensitivity_profile(result)
     try:
         a_app, a_vil = fig.axes
         tr = result.setups[0].transducers[13]
@@ -82,7 +82,7 @@ def test_sensitivity_profile_villari_on_its_own_scale_parts_marked(result):
 
 
 def test_part_spans_put_each_coil_on_its_particle(result):
-    spans = plots._part_spans(result, result.setups[0])
+    spans = plots_mss._part_spans(result, result.setups[0])
     coils = {p: (c0, c1) for kind, p, c0, c1 in spans if kind == "coil"}
     for p, (c0, c1) in coils.items():
         # particle p's centre lies between contacts p-1 and p
@@ -143,7 +143,7 @@ def test_table2_shows_every_setups_rows(table2_result):
 
 def test_magnetic_precompression_bars_match_the_summary(result):
     summary = api.physics_summary(result)["magnetic_precompression_N"]
-    fig = plots.magnetic_precompression(result)
+    fig = plots_mss.magnetic_precompression(result)
     try:
         ax = fig.axes[0]
         (container,) = ax.containers  # one setup: one set of bars
@@ -152,7 +152,7 @@ def test_magnetic_precompression_bars_match_the_summary(result):
             assert bars[row["contact"]] == pytest.approx(row["force_N"])
         # the paper's 1.8 N guess, over the four contacts around each coil
         guess = [c for c in ax.collections if np.allclose(
-            np.asarray(c.get_segments())[:, :, 1], plots.PAPER_PRECOMPRESSION_N)]
+            np.asarray(c.get_segments())[:, :, 1], plots_mss.PAPER_PRECOMPRESSION_N)]
         assert guess
         assert {"coil @13", "coil @18"} <= set(_texts(fig))
     finally:
@@ -160,9 +160,9 @@ def test_magnetic_precompression_bars_match_the_summary(result):
 
 
 def test_field_map_smooth_parts_named_units(tmp_path):
-    from msens.field.report import field_map_figure, plot_field_map
+    from msens.config.fieldsetup import geometry_from_study
     from msens.field.sensor_model import run_field_model
-    from msens.fieldsetup import geometry_from_study
+    from msens.field_outputs import field_map_figure, plot_field_map
 
     study = api.load(default_study_path())
     report = run_field_model(geometry_from_study(study), inductance=False)

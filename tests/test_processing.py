@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from msens import processing as P
 from msens.errors import InputError
+from msens.signals import alignment as A
+from msens.signals import processing as P
 
 DT = 1e-7  # 10 MHz, the paper's sampling rate
 TIME = -2e-5 + DT * np.arange(2000)
@@ -63,7 +64,7 @@ FRACTIONS = [0.0, 0.13, 0.37, 0.5, 0.81, -0.29]
 @pytest.mark.parametrize("fraction", FRACTIONS)
 def test_xcorr_recovers_fractional_shift(fraction: float) -> None:
     delay = (25 + fraction) * DT
-    estimate = P.xcorr_delay(gaussian(5e-5), gaussian(5e-5 + delay), DT)
+    estimate = A.xcorr_delay(gaussian(5e-5), gaussian(5e-5 + delay), DT)
     # Requirement: 1 % of dt. The band-limited refinement gives ~1e-6 dt.
     assert abs(estimate - delay) < 1e-4 * DT
 
@@ -78,7 +79,7 @@ def test_xcorr_with_noise_reaches_the_cramer_rao_bound() -> None:
             P.lowpass(gaussian(5e-5 + d) + rng.normal(scale=noise, size=TIME.size), DT, 2e5)
             for d in (0.0, delay)
         )
-        errors.append((P.xcorr_delay(ref, sig, DT) - delay) / DT)
+        errors.append((A.xcorr_delay(ref, sig, DT) - delay) / DT)
     slope = np.gradient(gaussian(5e-5))  # per sample
     crlb = np.sqrt(2.0) * noise / np.sqrt(np.sum(slope**2))  # 0.082 samples
     assert abs(np.mean(errors)) < 3 * crlb / np.sqrt(len(errors)) + 0.01
@@ -88,16 +89,16 @@ def test_xcorr_with_noise_reaches_the_cramer_rao_bound() -> None:
 def test_xcorr_lag_limit_ignores_a_decoy() -> None:
     delay = -12.4 * DT
     decoy = gaussian(5e-5 + delay) + 3.0 * gaussian(5e-5 + 600 * DT)
-    assert abs(P.xcorr_delay(gaussian(5e-5), decoy, DT) - 600 * DT) < 0.01 * DT
-    assert abs(P.xcorr_delay(gaussian(5e-5), decoy, DT, max_lag=50 * DT) - delay) < 0.01 * DT
+    assert abs(A.xcorr_delay(gaussian(5e-5), decoy, DT) - 600 * DT) < 0.01 * DT
+    assert abs(A.xcorr_delay(gaussian(5e-5), decoy, DT, max_lag=50 * DT) - delay) < 0.01 * DT
 
 
 @pytest.mark.parametrize("fraction", FRACTIONS)
 def test_threshold_crossing_recovers_fractional_shift(fraction: float) -> None:
     delay = (25 + fraction) * DT
     both = np.column_stack([gaussian(5e-5), gaussian(5e-5 + delay)])
-    t_rise = P.threshold_crossing(TIME, both, 0.5)
-    t_fall = P.threshold_crossing(TIME, both, 0.5, rising=False, after=5e-5)
+    t_rise = A.threshold_crossing(TIME, both, 0.5)
+    t_fall = A.threshold_crossing(TIME, both, 0.5, rising=False, after=5e-5)
     # Interpolation error bound 0.05 dt^2/sigma per crossing = 0.0017 dt here.
     assert abs((t_rise[1] - t_rise[0]) - delay) < 0.01 * DT
     assert abs((t_fall[1] - t_fall[0]) - delay) < 0.01 * DT
@@ -107,22 +108,22 @@ def test_threshold_crossing_recovers_fractional_shift(fraction: float) -> None:
 
 def test_threshold_crossing_exact_on_a_ramp_and_nan_when_absent() -> None:
     ramp = 3.0 * TIME
-    assert P.threshold_crossing(TIME, ramp, 3.0 * 1.234567e-5) == pytest.approx(
+    assert A.threshold_crossing(TIME, ramp, 3.0 * 1.234567e-5) == pytest.approx(
         1.234567e-5, rel=1e-12
     )
-    assert np.isnan(P.threshold_crossing(TIME, gaussian(5e-5), 2.0))
+    assert np.isnan(A.threshold_crossing(TIME, gaussian(5e-5), 2.0))
 
 
 @pytest.mark.parametrize("fraction", [0.13, 0.5, 0.81])
 def test_shift_and_align_recover_the_pulse(fraction: float) -> None:
     delays = np.array([0.0, (3 + fraction) * DT, -(7 + fraction) * DT])
     shots = np.stack([gaussian(5e-5 + d) for d in delays])
-    shifted = P.shift_signal(gaussian(5e-5), delays[1], DT)
+    shifted = A.shift_signal(gaussian(5e-5), delays[1], DT)
     np.testing.assert_allclose(shifted, shots[1], rtol=0, atol=1e-12)
-    aligned = P.align_shots(shots, delays, DT)
+    aligned = A.align_shots(shots, delays, DT)
     np.testing.assert_allclose(aligned, np.broadcast_to(gaussian(5e-5), shots.shape), atol=1e-12)
     with pytest.raises(InputError, match="NaN delay"):
-        P.align_shots(shots, np.array([0.0, np.nan, 0.0]), DT)
+        A.align_shots(shots, np.array([0.0, np.nan, 0.0]), DT)
 
 
 def test_threshold_align_average_pipeline() -> None:
@@ -130,10 +131,10 @@ def test_threshold_align_average_pipeline() -> None:
     rng = np.random.default_rng(4)
     jitter = rng.uniform(-5, 5, size=50) * DT
     shots = np.stack([gaussian(5e-5 + j) for j in jitter])
-    crossings = P.threshold_crossing(TIME, shots, 0.5, axis=1)
-    aligned = P.align_shots(shots, crossings - crossings[0], DT)
+    crossings = A.threshold_crossing(TIME, shots, 0.5, axis=1)
+    aligned = A.align_shots(shots, crossings - crossings[0], DT)
     stats = P.shot_statistics(aligned)
-    template = P.shift_signal(gaussian(5e-5), jitter[0], DT)
+    template = A.shift_signal(gaussian(5e-5), jitter[0], DT)
     assert np.max(np.abs(stats.mean - template)) < 1e-3
     assert np.max(stats.std) < 1e-3
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import msens.api as ms
+from msens.config.study import parse_study
 from msens.pipeline import run_study
-from msens.study import parse_study
 
 pd = pytest.importorskip("pandas")
 

@@ -1,4 +1,4 @@
-"""Tests of the sensor observation operators (msens.sensors)."""
+"""Tests of the sensor observation operators (msens.readout.sensors)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from msens.errors import InputError
-from msens.sensors import (
+from msens.readout.sensors import (
     SensorKind,
     bead_sensor,
     contact_mean,

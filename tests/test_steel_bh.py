@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from msens.cli import main
+from msens.config.fieldsetup import geometry_from_study
+from msens.config.study import default_study_path, load_study
 from msens.field.cache import geometry_key
 from msens.field.geometry import SensorGeometry
-from msens.fieldsetup import geometry_from_study
+from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import cache_key
-from msens.materials import BEAD_STEEL, STEEL_1018_BH
-from msens.steel_law import law_for_steel
-from msens.study import default_study_path, load_study
+from msens.params.materials import BEAD_STEEL, STEEL_1018_BH
 
 MSS = default_study_path().read_text()
 

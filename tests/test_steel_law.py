@@ -7,11 +7,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-import msens.magnetics.transducer as transducer
+import msens.magnetics.transducer_cache as transducer_cache
 from msens.field.geometry import SensorGeometry
-from msens.magnetoelastic import DEFAULT_STEEL, flux_density
-from msens.materials import STEEL_1018_BH, BHCurve
-from msens.steel_law import fit_anhysteretic, law_for_steel
+from msens.magnetics.magnetoelastic import DEFAULT_STEEL, flux_density
+from msens.magnetics.steel_law import fit_anhysteretic, law_for_steel
+from msens.params.materials import STEEL_1018_BH, BHCurve
 
 #: A softer steel: the 1018 table with B scaled by 0.85 at the same H.
 SOFT = BHCurve(name="soft", b=0.85 * STEEL_1018_BH.b, h=STEEL_1018_BH.h.copy(), source="test")
@@ -60,8 +60,8 @@ def test_transducers_use_the_geometrys_steel(monkeypatch, tmp_path):
         seen.append(kwargs["law"])
         raise Stop
 
-    monkeypatch.setattr(transducer, "compute_transducers", fake_compute)
+    monkeypatch.setattr(transducer_cache, "compute_transducers", fake_compute)
     for steel, expected in ((STEEL_1018_BH, DEFAULT_STEEL), (SOFT, law_for_steel(SOFT))):
         with pytest.raises(Stop):
-            transducer.transducer_report(SensorGeometry(steel=steel), cache_dir=tmp_path)
+            transducer_cache.transducer_report(SensorGeometry(steel=steel), cache_dir=tmp_path)
         assert seen[-1] is expected

@@ -6,16 +6,16 @@ import math
 
 import pytest
 
-from msens.errors import InputError
-from msens.study import (
-    PAPER_TABLE2,
-    Damping,
-    SensorKind,
+from msens.chain.model import DampingLaw as Damping
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import (
     builtin_study_path,
     default_study_path,
     load_study,
     parse_study,
 )
+from msens.errors import InputError
+from msens.readout.sensors import SensorKind
 
 MINIMAL = """
 schema = "msens.study/1"

@@ -9,14 +9,9 @@ import numpy as np
 import pytest
 
 import msens.api as ms
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, default_study_path, load_study, parse_study
 from msens.errors import InputError
-from msens.study import (
-    PAPER_TABLE2,
-    builtin_study_path,
-    default_study_path,
-    load_study,
-    parse_study,
-)
 
 MSS = default_study_path()
 

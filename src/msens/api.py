@@ -15,10 +15,11 @@ import dataclasses
 from pathlib import Path
 
 from msens import results
-from msens.output import DPI, OutputDir
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import Study, builtin_study_path, default_study_path, load_study
+from msens.io.output import DPI, OutputDir
 from msens.pipeline import run_study
 from msens.results import StudyResult
-from msens.study import PAPER_TABLE2, Study, builtin_study_path, default_study_path, load_study
 
 
 def load(path: str | Path) -> Study:
@@ -38,7 +39,8 @@ def load_paper_table2() -> Study:
 
 def replace(study: Study, changes: dict | None = None, /, **more) -> Study:
     """``study`` with keys changed by their dotted names, validated like a study file
-    (:meth:`msens.study.Study.replace`): ``replace(study, {"sensor[1].coil.turns": 900})``."""
+    (:meth:`msens.config.study.Study.replace`):
+    ``replace(study, {"sensor[1].coil.turns": 900})``."""
     return study.replace(changes, **more)
 
 
@@ -86,7 +88,7 @@ def _check_format(fig_format: str) -> str:
 
 def _figure_names(names, fig_format: str) -> list[str]:
     """Figure file names (listed as .png) in ``fig_format``."""
-    from msens.output import figure_name
+    from msens.io.output import figure_name
 
     return [figure_name(n, fig_format) if n.endswith(".png") else n for n in names]
 
@@ -105,7 +107,7 @@ def prepare_outputs(out: str | Path, *, figures: bool = True,
 
 
 def _figure_makers(result: StudyResult) -> dict:
-    from msens import plots
+    from msens import plots, plots_mss
 
     makers = {
         "contact_forces.png": lambda: plots.contact_profiles(result),
@@ -116,18 +118,18 @@ def _figure_makers(result: StudyResult) -> dict:
     if result.study.reference:
         makers["table2.png"] = lambda: plots.table2(result.rows())
     if any(s.transducers for s in result.setups):
-        makers["mss_voltage.png"] = lambda: plots.mss_voltages(result)
-        makers["mss_integrated.png"] = lambda: plots.mss_integrated(result)
-        makers["sensitivity_profile.png"] = lambda: plots.sensitivity_profile(result)
-        makers["magnetic_precompression.png"] = lambda: plots.magnetic_precompression(result)
+        makers["mss_voltage.png"] = lambda: plots_mss.mss_voltages(result)
+        makers["mss_integrated.png"] = lambda: plots_mss.mss_integrated(result)
+        makers["sensitivity_profile.png"] = lambda: plots_mss.sensitivity_profile(result)
+        makers["magnetic_precompression.png"] = lambda: plots_mss.magnetic_precompression(result)
     return makers
 
 
 def _field_map(result: StudyResult, d: OutputDir, fig_format: str = "png") -> Path | None:
     """The bias-field map of the first physics setup (re-solves the cached field model)."""
-    from msens.field.report import plot_field_map
+    from msens.config.fieldsetup import geometry_from_study
     from msens.field.sensor_model import run_field_model
-    from msens.fieldsetup import geometry_from_study
+    from msens.field_outputs import plot_field_map
 
     setup = next((s.setup for s in result.setups if s.transducers), None)
     if setup is None:
@@ -194,7 +196,7 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
         raise InputError(f"--setup must be one of {', '.join(names)}, got {name!r}")
     if out.exists():
         raise InputError(f"refusing to overwrite '{out}'")
-    from msens import plausible
+    from msens.config import plausible
 
     chosen_setup = study.setup(name)
     samples = round(study.simulation.t_end_s * study.simulation.sample_rate_hz) + 1
@@ -245,7 +247,7 @@ def compare(study: Study, data: Path, out: Path, *,
 
     target = OutputDir(out)
     target.check(["compare.json", f"overlay.{_check_format(fig_format)}"])
-    from msens.signalcheck import check_amplitudes, check_pulses, check_shots
+    from msens.signals.signalcheck import check_amplitudes, check_pulses, check_shots
 
     waveform = read_waveform(data)
     source = str(getattr(data, "path", data))
@@ -296,9 +298,9 @@ def field(study: Study, out: Path, *, fig_format: str = "png") -> str:
     """Solve the field model of the study's MsS sensors; write ``field.json``, ``field.vtu``
     and figures (the field map in ``fig_format``: png, pdf or svg; the 3-D view is always
     PNG) into ``out``; return a short text report."""
-    from msens.field.report import write_field_outputs
+    from msens.config.fieldsetup import geometry_from_study
     from msens.field.sensor_model import run_field_model
-    from msens.fieldsetup import geometry_from_study
+    from msens.field_outputs import write_field_outputs
 
     geometry = geometry_from_study(study)
     target = OutputDir(out)
@@ -403,7 +405,7 @@ def _check_measurement(study: Study, waveform, source: str) -> None:
     plausible amplitudes, and records neither inverted nor time-scaled against the model
     (one model run, seconds)."""
     from msens.compare import check_signal, check_units, match_setup, match_setup_spec
-    from msens.signalcheck import check_amplitudes, check_pulses, check_shots
+    from msens.signals.signalcheck import check_amplitudes, check_pulses, check_shots
 
     check_units(waveform)
     match_setup_spec(study, waveform)

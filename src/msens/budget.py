@@ -11,9 +11,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from msens import plausible as P
+from msens.config import plausible as P
+from msens.config.study import Study
 from msens.errors import InputError
-from msens.study import Study
 
 #: Bytes per output sample and particle of one chain run: the force and approach histories
 #: (float64) that :func:`msens.chain.integrate.simulate` returns.
@@ -61,10 +61,10 @@ def estimate(study: Study) -> Budget:
     -------
     Budget
     """
-    from msens.assemble import build_chain
     from msens.calibrate import GAMMA_C_GRID, GAMMA_W_GRID
     from msens.chain.integrate import stable_step
     from msens.chain.kernel import padded_length
+    from msens.config.assemble import build_chain
 
     sim = study.simulation
     samples = round(sim.t_end_s * sim.sample_rate_hz) + 1
@@ -89,7 +89,7 @@ def estimate(study: Study) -> Budget:
 
 def check(study: Study) -> Budget:
     """Refuse ``study`` (InputError naming the keys) if its chain runs exceed the memory or
-    step budget of :mod:`msens.plausible`; returns the estimate otherwise."""
+    step budget of :mod:`msens.config.plausible`; returns the estimate otherwise."""
     b = estimate(study)
     sim = study.simulation
     if b.memory_bytes > P.MEMORY_BUDGET_BYTES:

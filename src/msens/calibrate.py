@@ -18,9 +18,9 @@ from numpy.typing import ArrayLike
 from scipy.optimize import brentq, minimize
 
 from msens.errors import require
-from msens.features import pulse_features
-from msens.longwave import soliton_speed_precompressed, soliton_speed_uncompressed
-from msens.sensors import SensorKind, observe, read_contacts
+from msens.mechanics.longwave import soliton_speed_precompressed, soliton_speed_uncompressed
+from msens.readout.sensors import SensorKind, observe, read_contacts
+from msens.signals.features import pulse_features
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,7 @@ def fit_dissipation(make_chain: Callable[[float, float], object], sensors: tuple
         Grid of the start search (>= 0).
     min_delay : (float, float)
         Earliest reflection after the incident peak at top and bottom sensors, s
-        (see :func:`msens.features.pulse_features`).
+        (see :func:`msens.signals.features.pulse_features`).
     refine : bool
         Run the local refinement after the grid.
     xatol, fatol : float
@@ -214,7 +214,7 @@ def precompression_from_speed(speed: float, F_m: float, diameter: float, E: floa
                               rho: float, *,
                               amplitude: Literal["dynamic", "total"] = "dynamic") -> float:
     """Static precompression F0 at which the long-wavelength solitary-wave speed equals
-    ``speed`` (inverse of :func:`msens.longwave.soliton_speed_precompressed`, by brentq).
+    ``speed`` (inverse of :func:`msens.mechanics.longwave.soliton_speed_precompressed`, by brentq).
 
     Parameters
     ----------

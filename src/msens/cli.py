@@ -192,7 +192,7 @@ def _synth(args: argparse.Namespace) -> int:
 
 def _data(path: str, columns: str | None):
     """A data file as the readers take it: with its column map (checked now) if given."""
-    from msens.io.columns import mapped
+    from msens.io.mapped import mapped
 
     return mapped(path, columns)
 

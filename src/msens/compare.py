@@ -29,13 +29,15 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
+from msens.config.schema import SetupSpec
+from msens.config.study import Study
 from msens.errors import InputError
-from msens.features import PulseFeatures, centre_distance, pulse_features, wave_speed
 from msens.io.waveform import Channel, Waveform
-from msens.processing import integrate_drift_corrected, lowpass, xcorr_delay
+from msens.readout.sensors import SensorKind
 from msens.results import SensorResult, SetupResult, StudyResult
-from msens.sensors import SensorKind
-from msens.study import SetupSpec, Study
+from msens.signals.alignment import xcorr_delay
+from msens.signals.features import PulseFeatures, centre_distance, pulse_features, wave_speed
+from msens.signals.processing import integrate_drift_corrected, lowpass
 from msens.synth import UNITS, UNITS_KEY, is_physics_mss
 
 #: Peaks and times are read from records low-passed at this frequency, Hz — the model's too,
@@ -166,8 +168,8 @@ def model_record(sensor: SensorResult, t: np.ndarray) -> np.ndarray:
 
 def check_signal(setup: SetupResult, waveform: Waveform, source: str) -> None:
     """Refuse a waveform whose first shot is the model's upside down or on a scaled time
-    axis (:func:`msens.signalcheck.check_against_model`), naming the channel."""
-    from msens.signalcheck import check_against_model
+    axis (:func:`msens.signals.signalcheck.check_against_model`), naming the channel."""
+    from msens.signals.signalcheck import check_against_model
 
     for j, ch in enumerate(waveform.channels):
         if ch.repeat != 1:

@@ -13,17 +13,18 @@ import time
 import numpy as np
 from tqdm import tqdm
 
-from msens.assemble import build_chain
 from msens.calibrate import DissipationFit, fit_dissipation
 from msens.chain.equilibrium import static_contact_forces
 from msens.chain.integrate import ChainResult, simulate
 from msens.chain.model import Chain
 from msens.chain.model import DampingLaw as Damping
+from msens.config.assemble import build_chain
+from msens.config.schema import MssModel, SensorSpec, SetupSpec
+from msens.config.study import Study
 from msens.errors import InputError
-from msens.features import centre_distance, pulse_features, wave_speed
+from msens.readout.sensors import SensorKind, observe, time_derivative
 from msens.results import SensorResult, SetupResult, StudyResult
-from msens.sensors import SensorKind, observe, time_derivative
-from msens.study import MssModel, SensorSpec, SetupSpec, Study
+from msens.signals.features import centre_distance, pulse_features, wave_speed
 
 _log = logging.getLogger(__name__)
 
@@ -46,9 +47,9 @@ def _positions(sensors: tuple[SensorSpec, ...]) -> list[str]:
 def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static: np.ndarray,
                  transducers: dict, study: Study, index: int,
                  responses: dict | None = None) -> SensorResult:
-    from msens.fieldsetup import coil_geometry
+    from msens.config.fieldsetup import coil_geometry
+    from msens.config.schema import CoilSpec
     from msens.magnetics.mss import mss_record, noise_model, readout, voltage_on
-    from msens.study import CoilSpec
 
     tr = transducers[sensor.particle]
     coil = coil_geometry(sensor.coil or CoilSpec(), sensor.particle)
@@ -188,8 +189,8 @@ def setup_transducers(study: Study, setup: SetupSpec) -> dict | None:
     """Field-model transducers of a setup's physics MsS sensors (cached on disk), or None."""
     if not any(s.model is MssModel.PHYSICS for s in setup.sensors):
         return None
-    from msens.fieldsetup import geometry_from_study
-    from msens.magnetics.transducer import transducers_for
+    from msens.config.fieldsetup import geometry_from_study
+    from msens.magnetics.transducer_cache import transducers_for
 
     coils = ", ".join(str(s.particle) for s in setup.sensors if s.model is MssModel.PHYSICS)
     _log.info("setup %s: field model and transducers of the coils at particles %s",
@@ -206,7 +207,7 @@ def setup_responses(study: Study, setup: SetupSpec, *,
     if not study.field.eddy_currents or not any(s.model is MssModel.PHYSICS
                                                 for s in setup.sensors):
         return None
-    from msens.fieldsetup import eddy_settings, geometry_from_study
+    from msens.config.fieldsetup import eddy_settings, geometry_from_study
     from msens.magnetics.dynamic import dynamic_report
 
     eddy = eddy_settings(study)

@@ -18,8 +18,9 @@ from msens.calibrate import DissipationFit
 from msens.chain.integrate import ChainResult
 from msens.chain.model import Chain
 from msens.chain.published import GAMMA_CONTACT, GAMMA_WALL
-from msens.features import PulseFeatures
-from msens.study import ReferenceRow, SensorSpec, SetupSpec, Study
+from msens.config.schema import ReferenceRow, SensorSpec, SetupSpec
+from msens.config.study import Study
+from msens.signals.features import PulseFeatures
 
 
 @dataclass(frozen=True)
@@ -327,8 +328,8 @@ def physics_summary(result: StudyResult) -> dict:
     for s in result.setups:
         if not s.transducers:
             continue
-        from msens.electronics import resonance
         from msens.magnetics.transducer import magnetic_precompression
+        from msens.readout.electronics import resonance
 
         magnetic = magnetic_precompression(s.transducers)
         for c, f in enumerate(np.cumsum(magnetic)[:-1], start=1):
@@ -393,13 +394,13 @@ def mechanism_share(tr, history, response=None) -> dict:
     signal energy ∫EMF_m² dt / Σ_m ∫EMF_m² dt (the two are not orthogonal: their cross term
     is left out, so the shares add to 1). The contact-approach entry also carries the
     beads' rigid translation (contained in it, see
-    :func:`msens.magnetics.transducer.rigid_translation_emf`): its sensitivity, peak EMF and
+    :func:`msens.magnetics.emf.rigid_translation_emf`): its sensitivity, peak EMF and
     fraction of the contact-approach peak, and the part of it from contacts while they are open
-    (extrapolated linearly: :func:`msens.magnetics.transducer.open_contact_emf`), its peak and
+    (extrapolated linearly: :func:`msens.magnetics.emf.open_contact_emf`), its peak and
     share of the contact-approach energy. With an eddy-current ``response`` the two mechanisms'
     EMFs are the frequency-domain ones (:func:`msens.magnetics.dynamic.mechanism_emfs`); the
     rigid-translation and open-contact parts stay magnetostatic estimates."""
-    from msens.magnetics.transducer import (
+    from msens.magnetics.emf import (
         contact_forces_of,
         contact_rates,
         emf_from_rates,

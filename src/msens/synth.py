@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from msens.config.schema import MssModel
 from msens.io.waveform import Channel, Waveform
+from msens.readout.sensors import SensorKind
 from msens.results import SensorResult, SetupResult
-from msens.sensors import SensorKind
-from msens.study import MssModel
 
 #: Metadata key and value saying what unit the channels' samples are in.
 UNITS_KEY = "units"

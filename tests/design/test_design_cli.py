@@ -12,8 +12,8 @@ import pytest
 
 from msens import api
 from msens.cli import main
+from msens.config.study import load_study
 from msens.design import load_sweep, run_design
-from msens.study import load_study
 
 ROOT = Path(__file__).resolve().parents[2]
 

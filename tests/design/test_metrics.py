@@ -8,12 +8,12 @@ import pytest
 from msens.design.metrics import Wave, design_rows
 from msens.design.report import pareto_mask, range_edges
 from msens.design.sweep import Design
-from msens.electronics import daq_voltage
 from msens.field.geometry import Coil
+from msens.magnetics.emf import contact_rates, emf_from_rates
 from msens.magnetics.mss import readout
-from msens.magnetics.transducer import contact_rates, emf_from_rates
-from msens.study import ElectronicsSpec
-from msens.units import K_B
+from msens.params.units import K_B
+from msens.readout.daq import daq_voltage
+from msens.readout.electronics import ElectronicsSpec
 
 
 def _wave() -> Wave:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 from msens.cli import main
+from msens.config.study import load_study
 from msens.design.sweep import base_geometry, parse_sweep, validate_designs
 from msens.errors import InputError
-from msens.study import load_study
 
 HEAD = 'schema = "msens.sweep/1"\nname = "t"\n'
 

@@ -8,13 +8,14 @@ import numpy as np
 import pytest
 
 from msens.cli import main
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose.effects import Context
 from msens.diagnose.hidden import hidden_case
 from msens.diagnose.predict import Predictor, baseline_state
 from msens.io.read import write_waveform
 from msens.io.waveform import Waveform
 from msens.pipeline import output_times
-from msens.study import PAPER_TABLE2, builtin_study_path, load_study
 
 
 @pytest.fixture(scope="module")

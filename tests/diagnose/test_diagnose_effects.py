@@ -7,11 +7,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from msens.assemble import build_chain
 from msens.chain.model import DampingLaw
+from msens.config.assemble import build_chain
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, default_study_path, load_study
 from msens.diagnose.effects import NAMES, Context, FirstOrderLowpass, get, registry
 from msens.diagnose.predict import _sim_key, baseline_state
-from msens.study import PAPER_TABLE2, builtin_study_path, default_study_path, load_study
 
 #: Effects of a physics MsS (its field model): tried on the main study.
 PHYSICS_EFFECTS = ("magnet_remanence", "coil_position", "cable_capacitance")

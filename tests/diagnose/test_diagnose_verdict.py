@@ -8,8 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from msens.assemble import precompression_forces
 from msens.calibrate import DissipationFit
+from msens.config.assemble import precompression_forces
+from msens.config.schema import PAPER_TABLE2, PrecompressionSpec
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import diagnose
 from msens.diagnose.effects import Context, get
 from msens.diagnose.hidden import hidden_case, hidden_shots, outside_case
@@ -19,7 +21,6 @@ from msens.diagnose.verdict import consistency_limit, verdict
 from msens.errors import InputError
 from msens.io.waveform import Channel, Waveform
 from msens.pipeline import output_times
-from msens.study import PAPER_TABLE2, PrecompressionSpec, builtin_study_path, load_study
 from msens.synth import RigEffects
 
 GAMMA_C = 4.8

@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 
 from msens.calibrate import DissipationFit
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import THRESHOLD, diagnose, diagnose_reference
 from msens.diagnose.effects import Context
 from msens.diagnose.hidden import hidden_case
@@ -21,7 +23,6 @@ from msens.diagnose.report import write
 from msens.errors import InputError
 from msens.io.waveform import Waveform
 from msens.pipeline import output_times
-from msens.study import PAPER_TABLE2, builtin_study_path, load_study
 from msens.synth import RigEffects
 
 #: A fixed baseline dissipation (the paper's gamma_c) instead of the Eq. 10 fit: the data are
@@ -167,9 +168,9 @@ def test_feature_mode_on_reference_rows_that_the_model_matches(bench):
     """Reference rows equal to a model with a slower striker (friction in its guide): the
     feature mode names striker_velocity and finds the speed (TOF ~ v^(-1/5))."""
     study, ctx, base, predictor = bench
+    from msens.config.schema import ReferenceRow
     from msens.diagnose.effects import get
     from msens.diagnose.predict import model_features_of
-    from msens.study import ReferenceRow
 
     fast = get("striker_velocity").apply(ctx, base, {"striker_velocity_m_per_s": 0.32})
     f = model_features_of(predictor.records([fast])[0], predictor.t)

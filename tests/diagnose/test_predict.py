@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 
 from msens.chain import simulate_batch
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import predict
 from msens.diagnose.effects import Context, FirstOrderLowpass
 from msens.diagnose.predict import Predictor, baseline_state
-from msens.sensors import observe, read_contacts
-from msens.study import PAPER_TABLE2, builtin_study_path, load_study
+from msens.readout.sensors import observe, read_contacts
 
 T = np.linspace(0.0, 3e-4, 3001)  # 10 MHz, the incident pulse past both sensors
 

@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import pytest
 
+from msens.config.study import default_study_path, load_study
 from msens.diagnose import diagnose
 from msens.diagnose.effects import Context
 from msens.diagnose.hidden import hidden_case
 from msens.diagnose.predict import Predictor, baseline_state
 from msens.diagnose.workflow import baseline_dissipation
 from msens.pipeline import output_times
-from msens.study import default_study_path, load_study
 
 
 @pytest.mark.slow

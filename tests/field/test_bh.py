@@ -9,8 +9,8 @@ from hypothesis import strategies as st
 
 from msens.errors import InputError
 from msens.field.bh import monotone_bh
-from msens.materials import STEEL_1018_BH, BHCurve
-from msens.units import MU0
+from msens.params.materials import STEEL_1018_BH, BHCurve
+from msens.params.units import MU0
 
 LAW = monotone_bh(STEEL_1018_BH)
 

@@ -24,8 +24,8 @@ from msens.field.forms import element_mass, flux_density_qp, potential_qp, quadr
 from msens.field.regions import Air, LinearMagnetic, NonlinearSoft, PermanentMagnet, Winding
 from msens.field.solve import MagnetostaticProblem, incremental, solve
 from msens.field.verification_geometry import Part, build_mesh
-from msens.materials import STEEL_1018_BH
-from msens.units import MU0
+from msens.params.materials import STEEL_1018_BH
+from msens.params.units import MU0
 
 RADIUS = 2.38e-3
 R_OUT = 10 * RADIUS

@@ -22,7 +22,7 @@ from msens.field.geometry import (
     hertz_flat_radius,
 )
 from msens.field.mesh import read_gmsh
-from msens.materials import BEAD_STEEL
+from msens.params.materials import BEAD_STEEL
 
 
 def small_geometry(**beads) -> SensorGeometry:

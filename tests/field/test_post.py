@@ -10,8 +10,8 @@ from msens.field.post import energy, field_strength, flux_density, flux_linkage,
 from msens.field.regions import Air, NonlinearSoft, PermanentMagnet, Winding
 from msens.field.solve import MagnetostaticProblem, incremental, solve
 from msens.field.verification_geometry import Part, build_mesh
-from msens.materials import STEEL_1018_BH
-from msens.units import MU0
+from msens.params.materials import STEEL_1018_BH
+from msens.params.units import MU0
 
 STEEL = NonlinearSoft(STEEL_1018_BH)
 R_BEAD = 2.38e-3

@@ -12,8 +12,8 @@ import pytest
 from msens.field import sensor_model as sm
 from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
 from msens.field.regions import Winding
-from msens.field.report import write_field_outputs
-from msens.units import MU0, RHO_COPPER
+from msens.field_outputs import write_field_outputs
+from msens.params.units import MU0, RHO_COPPER
 
 
 def one_sensor(**beads) -> SensorGeometry:

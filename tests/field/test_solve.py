@@ -11,7 +11,7 @@ from msens.field.regions import Air, LinearMagnetic, NonlinearSoft, PermanentMag
 from msens.field.solve import FieldSolveError, MagnetostaticProblem, incremental, solve
 from msens.field.verification_geometry import Part, build_mesh, rect_mesh
 from msens.field.verify import nonlinear_sphere_exact
-from msens.materials import STEEL_1018_BH
+from msens.params.materials import STEEL_1018_BH
 
 STEEL = NonlinearSoft(STEEL_1018_BH)
 

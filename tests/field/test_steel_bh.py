@@ -10,7 +10,7 @@ import pytest
 from msens.field import sensor_model as sm
 from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
 from msens.field.regions import NonlinearSoft
-from msens.materials import STEEL_1018_BH, BHCurve
+from msens.params.materials import STEEL_1018_BH, BHCurve
 
 SMALL = SensorGeometry(beads=BeadChain(first=10, last=16),
                        sensors=(SensorUnit(Coil(13), BiasMagnet(13)),), air=AirBox(0.06, 0.05))

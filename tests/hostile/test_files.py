@@ -16,7 +16,7 @@ from tests.hostile.conftest import TWENTY, assert_input_error, run_cli
 
 from msens.io import dirlock
 from msens.io.atomic import TEMP_MARK, atomic_write_text, clean_stale
-from msens.output import OutputDir
+from msens.io.output import OutputDir
 
 STUDY = TWENTY
 DATA = Path(__file__).parents[1] / "data"
@@ -34,7 +34,7 @@ def _msens(*args: str) -> list[str]:
 
 def _holder(folder: Path) -> subprocess.Popen:
     """A process holding ``folder``'s lock until killed."""
-    code = ("import sys, time; from msens.output import OutputDir; d = OutputDir(sys.argv[1]); "
+    code = ("import sys, time; from msens.io.output import OutputDir; d = OutputDir(sys.argv[1]); "
             "print('held', flush=True); time.sleep(120)")
     proc = subprocess.Popen([sys.executable, "-c", code, str(folder)], env=_env(),
                             stdout=subprocess.PIPE, text=True)

@@ -23,9 +23,9 @@ from tests.hostile.tomltext import dumps
 
 from msens import budget
 from msens.cli import main
+from msens.config.study import parse_study
 from msens.design.sweep import parse_sweep
 from msens.errors import InputError
-from msens.study import parse_study
 
 ROOT = Path(__file__).parents[2]
 SHIPPED = {p.stem: tomllib.loads(p.read_text()) for p in sorted((ROOT / "studies").glob("*.toml"))
@@ -266,8 +266,8 @@ def test_fuzz_binary_waveform_files(record, tmp_path, capsys, suffix):
 
 @pytest.mark.parametrize("index", range(len(SWEEPS)))
 def test_fuzz_sweep_specs(index):
+    from msens.config.study import load_study
     from msens.design.sweep import base_geometry, sweep_sensor, validate_designs
-    from msens.study import load_study
 
     study = load_study(ROOT / "studies" / "paper-mss.toml")
     base = base_geometry(study)  # outside the timed part: its first call imports the field code

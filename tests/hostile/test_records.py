@@ -10,7 +10,7 @@ import pytest
 from tests.hostile.conftest import TWENTY, assert_input_error, run_cli
 
 from msens.io import Waveform, read_waveform, write_waveform
-from msens.signalcheck import orientation, pulse_width
+from msens.signals.signalcheck import orientation, pulse_width
 
 STUDY = TWENTY
 

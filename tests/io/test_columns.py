@@ -10,19 +10,10 @@ import pytest
 
 from msens.cli import main
 from msens.errors import InputError
-from msens.io.columns import (
-    ColumnMap,
-    ColumnSource,
-    MappedFile,
-    apply_column_map,
-    column_map,
-    load_column_map,
-    mapped,
-    parse_column_map,
-    parse_table,
-    read_mapped,
-)
+from msens.io.columns import ColumnMap, ColumnSource, column_map, load_column_map, parse_column_map
+from msens.io.mapped import MappedFile, apply_column_map, mapped, read_mapped
 from msens.io.read import read_waveform
+from msens.io.text_table import parse_table
 from msens.io.waveform import Channel
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "data"

@@ -28,9 +28,9 @@ from msens.magnetics.contact_map import (
     state_flux,
     static_approach,
 )
-from msens.magnetics.transducer import coil_linkage, mechanism_potentials
+from msens.magnetics.mechanisms import coil_linkage, mechanism_potentials
+from msens.magnetics.steel_law import law_for_steel
 from msens.mechanics.hertz import hertz_approach
-from msens.steel_law import law_for_steel
 
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)
 CONTACT = 12
@@ -204,7 +204,7 @@ def _history():
 
 
 def _circuit():
-    from msens.electronics import ReadoutCircuit
+    from msens.readout.electronics import ReadoutCircuit
 
     return ReadoutCircuit(resistance=100.0, inductance=0.03, winding_capacitance=30e-12,
                           cable_capacitance=100e-12, input_resistance=1e6,
@@ -262,7 +262,7 @@ def test_hammerstein_with_eddy_currents():
 def test_transducers_with_contact_maps(tmp_path):
     """``transducer_report(contact_maps=True)``: maps of the contacts around the coil, their
     static slopes the linear sources' (2 %: two meshes), and the cache read back equal."""
-    from msens.magnetics.transducer import transducer_report
+    from msens.magnetics.transducer_cache import transducer_report
 
     g = SensorGeometry(beads=BeadChain(first=11, last=15),
                        sensors=(SensorUnit(Coil(particle=13), BiasMagnet(particle=13)),),

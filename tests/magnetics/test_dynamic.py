@@ -13,7 +13,6 @@ import json
 import numpy as np
 import pytest
 
-from msens.electronics import coil_transfer_function, readout_circuit, transfer_function
 from msens.errors import InputError
 from msens.field.build import MeshOptions
 from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
@@ -28,15 +27,11 @@ from msens.magnetics.dynamic import (
     report_to_json,
     sensor_conductivity,
 )
+from msens.magnetics.mechanisms import adjoint_check, coil_linkage, mechanism_potentials
 from msens.magnetics.mss import MssSensor, mss_signals
-from msens.magnetics.transducer import (
-    Transducer,
-    adjoint_check,
-    bias_solution,
-    coil_linkage,
-    mechanism_potentials,
-)
-from msens.steel_law import law_for_steel
+from msens.magnetics.steel_law import law_for_steel
+from msens.magnetics.transducer import Transducer, bias_solution
+from msens.readout.electronics import coil_transfer_function, readout_circuit, transfer_function
 
 #: The coarse model of test_transducer (~4k elements, ~2 s with its sources).
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)

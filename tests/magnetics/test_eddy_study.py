@@ -52,7 +52,7 @@ def test_eddy_currents_screen_the_coil_signal(eddy_runs):
     eddy = result.setups[0].sensors[0]
     # the mechanisms' EMFs with eddy currents add up to the record's EMF
     from msens.magnetics.dynamic import mechanism_emfs
-    from msens.magnetics.transducer import contact_rates
+    from msens.magnetics.emf import contact_rates
 
     setup = result.setups[0]
     tr = setup.transducers[eddy.sensor.particle]
@@ -93,8 +93,8 @@ def test_eddy_currents_key_is_validated(tmp_path, capsys):
 
 
 def test_small_signal_permeability_key(tmp_path):
-    from msens.fieldsetup import geometry_from_study
-    from msens.materials import STEEL_REVERSIBILITY
+    from msens.config.fieldsetup import geometry_from_study
+    from msens.params.materials import STEEL_REVERSIBILITY
 
     study = _study(tmp_path)
     assert study.field.steel_reversibility == 1.0
@@ -121,8 +121,8 @@ def test_eddy_current_records_carry_the_coils_thermal_noise(eddy_runs, monkeypat
     The run adds exactly :func:`add_readout_noise` with the coil's Z(f) to the noise-free
     record; a long realisation has the variance ∫S df; and, Z(f) being a passive impedance,
     the total is kT/C of the read-out's capacitance (equipartition) whatever the losses."""
-    from msens.electronics import NoiseModel, add_readout_noise, thermal_noise_psd
-    from msens.units import K_B
+    from msens.params.units import K_B
+    from msens.readout.noise import NoiseModel, add_readout_noise, thermal_noise_psd
 
     tmp_path, _, quiet, _ = eddy_runs
     monkeypatch.setenv("MSENS_MESH_DIR", str(tmp_path / "cache"))

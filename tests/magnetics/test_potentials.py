@@ -11,6 +11,7 @@ import pytest
 from msens.field.geometry import BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
 from msens.field.sensor_model import bias_problem, load_mesh
 from msens.field.solve import solve
+from msens.magnetics.mechanisms import coil_linkage, mechanism_potentials
 from msens.magnetics.potentials import (
     LinkageTable,
     _cumtrapz,
@@ -19,8 +20,7 @@ from msens.magnetics.potentials import (
     rect_integral,
     region_linkage,
 )
-from msens.magnetics.transducer import coil_linkage, mechanism_potentials
-from msens.steel_law import law_for_steel
+from msens.magnetics.steel_law import law_for_steel
 
 
 def _geometry(magnet: bool) -> SensorGeometry:

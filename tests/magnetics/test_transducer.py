@@ -7,21 +7,16 @@ import json
 import numpy as np
 import pytest
 
-from msens.beadstress import stress_at
 from msens.errors import InputError
 from msens.field.build import MeshOptions
 from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
 from msens.magnetics.approach import hertz_approach_rate, hertz_stiffness
-from msens.magnetics.transducer import (
-    Transducer,
-    compute_transducers,
-    emf,
-    magnetic_precompression,
-    transducer_report,
-    transducers_for,
-)
+from msens.magnetics.emf import emf
+from msens.magnetics.transducer import Transducer, compute_transducers, magnetic_precompression
+from msens.magnetics.transducer_cache import transducer_report, transducers_for
 from msens.magnetics.villari import StressSampler, bead_stress, contact_sensitivity
-from msens.materials import BEAD_STEEL
+from msens.mechanics.stress_sampling import stress_at
+from msens.params.materials import BEAD_STEEL
 
 #: Coarse mesh: enough for consistency and symmetry checks (~4k elements, ~1 s per model).
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)

@@ -18,7 +18,8 @@ import pytest
 
 from msens.field.build import MeshOptions
 from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
-from msens.magnetics.transducer import magnetic_precompression, transducers_for
+from msens.magnetics.transducer import magnetic_precompression
+from msens.magnetics.transducer_cache import transducers_for
 from msens.magnetics.variants import remanence_family, scaled_geometry
 
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)

@@ -10,15 +10,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from msens.beadmesh import BeadMeshSpec
-from msens.beadstress import (
-    hertz_axis_stress,
-    mean_stress,
-    mean_stress_exact,
-    solve_bead_stress,
-    stress_at,
-)
-from msens.materials import BEAD_STEEL
+from msens.mechanics.beadmesh import BeadMeshSpec
+from msens.mechanics.beadstress import hertz_axis_stress, solve_bead_stress
+from msens.mechanics.stress_sampling import mean_stress, mean_stress_exact, stress_at
+from msens.params.materials import BEAD_STEEL
 
 R = 2.38e-3  # 4.76 mm beads
 E, NU = BEAD_STEEL.youngs_modulus, BEAD_STEEL.poisson_ratio

@@ -14,8 +14,8 @@ import numpy as np
 import skfem
 from skfem import Functional
 
-from msens.beadmesh import BeadMeshSpec, bead_section_mesh
-from msens.beadstress import axisymmetric_stress, lame_parameters, solve_traction
+from msens.mechanics.beadmesh import BeadMeshSpec, bead_section_mesh
+from msens.mechanics.elasticity import axisymmetric_stress, lame_parameters, solve_traction
 
 R = 2.38e-3
 E, NU = 200e9, 0.29

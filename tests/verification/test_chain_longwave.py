@@ -2,7 +2,7 @@
 
 The speed is measured between the force peaks at contacts 50 and 120 of a 150-bead chain (no
 gravity), each peak time refined by a parabola through three samples; F_m is the mean of the
-two peak (total) forces. msens.longwave states the convention: F_m is the maximum *total*
+two peak (total) forces. msens.mechanics.longwave states the convention: F_m is the maximum *total*
 contact force (static + dynamic), f_r = F_m / F0 (Nesterenko 2001 §1.3; Sen et al. 2008).
 With the dynamic-only convention the F0 = 2 N case below would be off by 3.1 %.
 """
@@ -12,8 +12,8 @@ import pytest
 
 from msens.chain import hertz_sphere_flat, hertz_sphere_sphere, simulate, uniform_chain
 from msens.chain.published import BEAD_MASS, BEAD_RADIUS
-from msens.longwave import soliton_speed_precompressed, soliton_speed_uncompressed
-from msens.materials import BEAD_STEEL
+from msens.mechanics.longwave import soliton_speed_precompressed, soliton_speed_uncompressed
+from msens.params.materials import BEAD_STEEL
 
 E, NU = BEAD_STEEL.youngs_modulus, BEAD_STEEL.poisson_ratio
 A = 2.0 * BEAD_RADIUS

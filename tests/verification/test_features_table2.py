@@ -1,7 +1,7 @@
 """Paper Table 2 (numerical column) from the chain, the sensors, the features and Eq. 10.
 
-Low-level check of msens.sensors / msens.features / msens.calibrate on the paper chain
-(§2, §4): striker + 29 steel beads, R = 2.38 mm, m = 0.45 g, E = 200 GPa, nu = 0.29, steel
+Low-level check of msens.readout.sensors / msens.signals.features / msens.calibrate on the paper
+chain (§2, §4): striker + 29 steel beads, R = 2.38 mm, m = 0.45 g, E = 200 GPa, nu = 0.29, steel
 wall, striker dropped from 7.2 mm, gravity; piezo rods (0.8144 g, 63 GPa, 0.31, 6 mm) replace
 particles 13 and 18 in the rod setup. Targets (the issue): TOF within 2 % and AR within 0.03
 of the paper's numerical values for the bead and rod rows.
@@ -10,7 +10,7 @@ gamma_c: fitting Eq. 10 to the measured ARs (0.55, 0.73) gives gamma_w = 0 (at t
 in the paper, but gamma_c = 2.17 kg/s with the linear dashpot of Eq. 6 acting throughout the
 contact, not the paper's 4.8 kg/s; the model ARs at the optimum (0.572, 0.682) are the
 paper's (0.57, 0.68). The paper's numbers are reproduced with gamma_c = 4.8 if the dashpot
-acts only while the contact closes (d(delta)/dt > 0); see /work/notes/progress-features.md.
+acts only while the contact closes (d(delta)/dt > 0).
 """
 
 from __future__ import annotations
@@ -20,9 +20,9 @@ import pytest
 
 from msens.calibrate import fit_dissipation
 from msens.chain import Chain, hertz_sphere_flat, hertz_sphere_sphere, simulate_batch, uniform_chain
-from msens.features import centre_distance, pulse_features, wave_speed
-from msens.longwave import soliton_speed_precompressed
-from msens.sensors import observe
+from msens.mechanics.longwave import soliton_speed_precompressed
+from msens.readout.sensors import observe
+from msens.signals.features import centre_distance, pulse_features, wave_speed
 
 N, R, M, E, NU, RHO = 30, 2.38e-3, 0.45e-3, 200e9, 0.29, 7970.0
 ROD_MASS, ROD_E, ROD_NU, ROD_LENGTH = 0.8144e-3, 63e9, 0.31, 6e-3

@@ -17,7 +17,7 @@ from msens.field.analytic import (
     thick_solenoid_bz,
     thin_solenoid_bz,
 )
-from msens.units import MU0
+from msens.params.units import MU0
 
 
 @pytest.mark.parametrize("check", verify.CHECKS, ids=lambda c: c.__name__)

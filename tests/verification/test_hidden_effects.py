@@ -19,12 +19,13 @@ import math
 import pytest
 
 from msens.calibrate import DissipationFit
+from msens.config.schema import PAPER_TABLE2
+from msens.config.study import builtin_study_path, load_study
 from msens.diagnose import diagnose, diagnose_passes
 from msens.diagnose.effects import NAMES, PHYSICS_MSS_NAMES, Context
 from msens.diagnose.hidden import hidden_case, without_precompression
 from msens.diagnose.predict import Predictor, baseline_state
 from msens.pipeline import output_times
-from msens.study import PAPER_TABLE2, builtin_study_path, load_study
 
 GAMMA_C = 4.8
 #: The effects of bead, rod and four-contact MsS data (physics MsS: test_hidden_mss.py).

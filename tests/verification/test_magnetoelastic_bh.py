@@ -1,6 +1,6 @@
 """The JAS anhysteretic against the 1018 steel B–H curve the field solver uses.
 
-msens.materials.STEEL_1018_BH (FEMM library) is a measured normal magnetisation curve; the
+msens.params.materials.STEEL_1018_BH (FEMM library) is a measured normal magnetisation curve; the
 Langevin anhysteretic can only approximate it. This file states the misfit of the design.md
 §7 defaults and re-derives the stored least-squares fit (STEEL_1018_FIT = DEFAULT_STEEL).
 """
@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from msens.magnetoelastic import DEFAULT_STEEL, flux_density
-from msens.magnetostriction_data import JA_DEFAULTS_STEEL, STEEL_1018_FIT
-from msens.materials import STEEL_1018_BH
-from msens.steel_law import fit_anhysteretic
+from msens.magnetics.magnetoelastic import DEFAULT_STEEL, flux_density
+from msens.magnetics.steel_law import fit_anhysteretic
+from msens.params.magnetostriction_data import JA_DEFAULTS_STEEL, STEEL_1018_FIT
+from msens.params.materials import STEEL_1018_BH
 
 H = STEEL_1018_BH.h[1:]
 B = STEEL_1018_BH.b[1:]

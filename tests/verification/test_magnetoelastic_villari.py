@@ -16,7 +16,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from msens.magnetoelastic import (
+from msens.magnetics.magnetoelastic import (
     DEFAULT_STEEL,
     anhysteretic_magnetisation,
     flux_density,
@@ -28,8 +28,8 @@ from msens.magnetoelastic import (
     unique_stress_range,
     villari_reversal_field,
 )
-from msens.magnetostriction_data import JA_DEFAULTS_STEEL
-from msens.units import MU0
+from msens.params.magnetostriction_data import JA_DEFAULTS_STEEL
+from msens.params.units import MU0
 
 H_PTS = np.array([200.0, 800.0, 1.5e3, 2.5e3, 5e3, 1e4, 2e4, 5e4])
 

@@ -25,9 +25,9 @@ from msens.field.regions import Winding
 from msens.field.sensor_model import bias_problem, coil_current_density, group_force, load_mesh
 from msens.field.solve import incremental, solve
 from msens.magnetics.approach import approach_flux_change, hertz_stiffness, morphed_flux_linkage
-from msens.magnetics.transducer import adjoint_check, coil_linkage, mechanism_potentials
+from msens.magnetics.mechanisms import adjoint_check, coil_linkage, mechanism_potentials
+from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.villari import coil_flux_linkage, nonlinear_flux_change
-from msens.steel_law import law_for_steel
 
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)
 

@@ -291,7 +291,7 @@ def simulate_batch(chains: Sequence[Chain], striker_velocities: ArrayLike, t_out
         Nominal steps, s; default :func:`stable_step` of each run.
     contacts : array_like of int, shape (c,), optional
         Output only these contacts (0-based, distinct, any order), e.g. those a sensor
-        averages (:func:`msens.sensors.sensor_contacts`): the output then takes about c/n of
+        averages (:func:`msens.readout.sensors.sensor_contacts`): the output then takes about c/n of
         the memory (all contacts of the paper chain at 10 MHz over 1 ms: 5.1 MB per run) and
         less of the sampling work. Default: all.
 

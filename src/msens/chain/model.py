@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from msens.units import G0
+from msens.params.units import G0
 
 
 class DampingLaw(enum.Enum):

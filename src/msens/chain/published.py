@@ -16,9 +16,9 @@ from collections.abc import Iterable
 import numpy as np
 
 from msens.chain.model import Chain, DampingLaw
-from msens.materials import BEAD_STEEL, PIEZO_ROD, PIEZO_ROD_LENGTH, PIEZO_ROD_MASS
 from msens.mechanics.hertz import hertz_sphere_flat, hertz_sphere_sphere
-from msens.units import G0
+from msens.params.materials import BEAD_STEEL, PIEZO_ROD, PIEZO_ROD_LENGTH, PIEZO_ROD_MASS
+from msens.params.units import G0
 
 #: Bead radius, m (4.76 mm diameter, paper §2).
 BEAD_RADIUS = 2.38e-3

@@ -17,6 +17,8 @@ import logging
 from dataclasses import dataclass
 from pathlib import Path
 
+from msens.config.fieldsetup import geometry_from_study
+from msens.config.study import Study
 from msens.design.cache import ResultCache, atomic_write_bytes, content_key
 from msens.design.report import csv_text, pareto_plot, recommend
 from msens.design.sweep import (
@@ -28,9 +30,7 @@ from msens.design.sweep import (
     sweep_sensor,
     validate_designs,
 )
-from msens.fieldsetup import geometry_from_study
-from msens.output import OutputDir, to_json
-from msens.study import Study
+from msens.io.output import OutputDir, to_json
 
 
 def files(fig_format: str = "png") -> tuple[str, ...]:

@@ -2,7 +2,7 @@
 
 The coil is a passive receiver and (magnetically) air, so the bias state and the incremental
 potentials of both mechanisms' sources do not depend on it
-(:func:`msens.magnetics.transducer.mechanism_potentials`). A coil of N turns on the rectangle
+(:func:`msens.magnetics.mechanisms.mechanism_potentials`). A coil of N turns on the rectangle
 [r_in, r_out] × [z0, z1] links each source by (N/S) ∫∫ 2π r a_s dr dz, read from a
 summed-area table of the same potentials the run's transducer integrates exactly
 (:mod:`msens.magnetics.potentials`); the per-contact sensitivities, EMF and read-out follow
@@ -17,7 +17,7 @@ the study's own coil, an approximation of a few per cent for coils near it (magn
 compute L_inc exactly).
 
 With eddy currents (``[field] eddy_currents = true``) the one field model is the run's
-eddy-current model (:func:`msens.fieldsetup.eddy_settings`: the mesh graded into the bead
+eddy-current model (:func:`msens.config.fieldsetup.eddy_settings`: the mesh graded into the bead
 surfaces, the steel's conductivity) and the table holds every source's harmonic potential at
 each of the run's frequencies (:mod:`msens.magnetics.harmonic_tables`); a design's complex
 S_c(ω), D_c(ω) come from it, its impedance from the study coil's L(ω) scaled by the Wheeler
@@ -33,7 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from msens.coil import wheeler_inductance
+from msens.config.fieldsetup import eddy_settings
+from msens.config.study import Study
 from msens.design.cache import ResultCache, atomic_write_bytes, content_key
 from msens.design.metrics import Wave, design_rows, dynamic_design_rows
 from msens.design.physics import study_wave
@@ -42,20 +43,17 @@ from msens.design.sweep import Design, design_unit
 from msens.errors import internal
 from msens.field.geometry import SensorGeometry, SensorUnit
 from msens.field.sensor_model import coil_resistance
-from msens.fieldsetup import eddy_settings
 from msens.magnetics.dynamic import dynamic_report
+from msens.magnetics.emf import ContactRates
 from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables
+from msens.magnetics.mechanisms import contact_profiles, mechanism_potentials
 from msens.magnetics.mss import winding_of
 from msens.magnetics.potentials import LinkageTable, linkage_table, rect_integral
-from msens.magnetics.transducer import (
-    ContactRates,
-    bias_solution,
-    contact_profiles,
-    mechanism_potentials,
-    transducers_for,
-)
-from msens.steel_law import law_for_steel
-from msens.study import ElectronicsSpec, Study
+from msens.magnetics.steel_law import law_for_steel
+from msens.magnetics.transducer import bias_solution
+from msens.magnetics.transducer_cache import transducers_for
+from msens.readout.coil import wheeler_inductance
+from msens.readout.electronics import ElectronicsSpec
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm
 #: gives < 1e-4 relative error against exact mesh quadrature for the paper's coil, tests).

@@ -25,13 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
+from msens.config.fieldsetup import eddy_settings
+from msens.config.study import Study
 from msens.design.metrics import design_rows, dynamic_design_rows
 from msens.design.physics import study_wave
 from msens.field.geometry import SensorGeometry
-from msens.fieldsetup import eddy_settings
 from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.transducer import compute_transducers
-from msens.study import Study
 
 
 @dataclass(frozen=True)

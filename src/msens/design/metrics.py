@@ -2,18 +2,18 @@
 
 A design's coil signal is computed exactly as ``msens run`` computes it: the open-circuit EMF
 V = -Σ_c [(∂Λ/∂F_c) dF_c/dt + (∂Λ/∂δ_c) dδ_c/dt] of both mechanisms
-(:func:`msens.magnetics.transducer.emf_from_rates`) for the study's wave, and the read-out
+(:func:`msens.magnetics.emf.emf_from_rates`) for the study's wave, and the read-out
 circuit of :func:`msens.magnetics.mss.readout` (coil R and bias-point L, winding, cable and
 DAQ input capacitances, DAQ input resistance). From them:
 
 - ``peak_emf_V``: max |EMF| (the figure ``summary.json`` reports per coil);
 - ``peak_voltage_V``: max |V_DAQ| of the noise-free DAQ voltage, the EMF filtered by the
-  circuit's transfer function (:func:`msens.electronics.transfer_function`, by FFT on a grid
+  circuit's transfer function (:func:`msens.readout.electronics.transfer_function`, by FFT on a grid
   padded by 14 decay times of the circuit's slowest pole, so the ringing of a resonance
   inside the band counts and does not wrap around);
 - ``noise_rms_V``: :func:`msens.magnetics.mss.figure_noise_rms` (Johnson noise of the circuit,
   DAQ noise, quantisation); ``snr`` = peak_voltage_V / noise_rms_V;
-- resonance, Q, DC gain and -3 dB bandwidth of the circuit (:mod:`msens.electronics`).
+- resonance, Q, DC gain and -3 dB bandwidth of the circuit (:mod:`msens.readout.electronics`).
 """
 
 from __future__ import annotations
@@ -25,18 +25,18 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
-from msens.electronics import (
+from msens.field.geometry import Coil
+from msens.magnetics.dynamic import PAD, coil_impedance, emf_spectra
+from msens.magnetics.emf import ContactRates, emf_from_rates
+from msens.magnetics.mss import figure_noise_rms, readout
+from msens.readout.electronics import (
+    ElectronicsSpec,
     bandwidth,
     coil_transfer_function,
     poles,
     resonance,
     transfer_function,
 )
-from msens.field.geometry import Coil
-from msens.magnetics.dynamic import PAD, coil_impedance, emf_spectra
-from msens.magnetics.mss import figure_noise_rms, readout
-from msens.magnetics.transducer import ContactRates, emf_from_rates
-from msens.study import ElectronicsSpec
 
 #: Designs whose EMF records are formed at once (bounds memory: chunk × nt doubles).
 EMF_CHUNK = 256
@@ -157,7 +157,7 @@ def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductanc
     (:func:`msens.magnetics.dynamic.dynamic_signals`): the contact rates' spectra times the
     complex sensitivities (:func:`msens.magnetics.dynamic.emf_spectra`), then the read-out
     circuit with the coil's series impedance Z(ω) = R + jωL(ω)
-    (:func:`msens.electronics.coil_transfer_function`), on the run's FFT length
+    (:func:`msens.readout.electronics.coil_transfer_function`), on the run's FFT length
     (:data:`msens.magnetics.dynamic.PAD`). Resonance, Q, bandwidth and noise are the static
     circuit's (R, bias-point L), as ``summary.json`` reports them.
 

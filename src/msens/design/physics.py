@@ -13,14 +13,15 @@ from dataclasses import replace
 
 import numpy as np
 
-from msens.assemble import build_chain
 from msens.chain.equilibrium import static_contact_forces
+from msens.config.assemble import build_chain
+from msens.config.fieldsetup import mss_setup
+from msens.config.study import Study
 from msens.design.metrics import Wave
-from msens.fieldsetup import mss_setup
-from msens.longwave import soliton_speed_precompressed
-from msens.magnetics.transducer import Transducer, contact_rates, magnetic_precompression
+from msens.magnetics.emf import contact_rates
+from msens.magnetics.transducer import Transducer, magnetic_precompression
+from msens.mechanics.longwave import soliton_speed_precompressed
 from msens.pipeline import calibrate_dissipation, output_times, simulate_setup
-from msens.study import Study
 
 
 def study_wave(study: Study, transducers: Mapping[int, Transducer], particle: int) -> Wave:

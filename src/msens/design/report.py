@@ -136,14 +136,14 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
                 best: int | None, objective: str = "snr") -> None:
     """The objective against precompression and against bandwidth, Pareto fronts marked.
 
-    Written in the format of ``path``'s suffix (png, pdf or svg) at :data:`msens.output.DPI`.
+    Written in the format of ``path``'s suffix (png, pdf or svg) at :data:`msens.io.output.DPI`.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from msens.output import DPI
+    from msens.io.output import DPI
 
     ok = [i for i, r in enumerate(rows) if r["status"] == "ok"]
     s = np.array([abs(rows[i][objective]) for i in ok])

@@ -40,6 +40,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from msens.config.fieldsetup import geometry_from_study, mss_setup, wire_for
+from msens.config.schema import SensorSpec
+from msens.config.study import Study
 from msens.errors import InputError
 from msens.field.geometry import (
     BiasMagnet,
@@ -47,10 +50,8 @@ from msens.field.geometry import (
     SensorUnit,
     Tube,
 )
-from msens.fieldsetup import geometry_from_study, mss_setup, wire_for
-from msens.materials import MAGNET_GRADES
-from msens.study import SensorSpec, Study
-from msens.tomlreader import Table, read_document
+from msens.io.tomlreader import Table, read_document
+from msens.params.materials import MAGNET_GRADES
 
 SCHEMA = "msens.sweep/1"
 
@@ -59,7 +60,7 @@ COIL_PARAMETERS: dict[str, tuple[str, float, float]] = {
     "turns": ("int", 1, 100_000),
     "length_m": ("float", 0.2e-3, 0.1),
     "inner_radius_m": ("float", 1e-3, 0.1),
-    "wire": ("wire", 30, 40),  # AWG gauges with heavy-build data in msens.coil
+    "wire": ("wire", 30, 40),  # AWG gauges with heavy-build data in msens.readout.coil
     "axial_offset_m": ("float", -0.05, 0.05),
 }
 #: Magnet parameters (see :class:`msens.field.geometry.BiasMagnet`); SI units.

@@ -39,13 +39,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
+from msens.config.study import Study
 from msens.diagnose.effects import Context, ModelState, get
 from msens.diagnose.effects.coil_position import names as coil_names
 from msens.diagnose.effects.sensor_position import names as position_names
 from msens.diagnose.predict import Predictor, setup_result
 from msens.io.waveform import Channel, Waveform
 from msens.mechanics.hertz import hertz_sphere_flat, hertz_sphere_sphere
-from msens.study import Study
 from msens.synth import RigEffects, synthesize, truth_gain_key
 
 

@@ -30,13 +30,13 @@ from scipy import fft
 from scipy.optimize import minimize_scalar
 
 from msens.compare import align_shot
+from msens.config.schema import MssModel, ReferenceRow, SetupSpec
 from msens.diagnose.noise import MIN_PRETRIGGER, Ensemble, ensemble
 from msens.diagnose.predict import feature_records, model_features_of, signal
 from msens.errors import InputError
 from msens.io.waveform import Channel, Waveform
+from msens.readout.sensors import SensorKind
 from msens.results import SetupResult
-from msens.sensors import SensorKind
-from msens.study import MssModel, ReferenceRow, SetupSpec
 
 #: Largest change of the impact-to-trigger offset searched per candidate model, s. A 3x
 #: faster striker moves the first arrival by less than this.

@@ -19,22 +19,18 @@ from functools import lru_cache
 
 import numpy as np
 
+from msens.config.fieldsetup import EddySettings, coil_geometry, eddy_settings, geometry_from_study
+from msens.config.schema import CoilSpec, MssModel
 from msens.diagnose.effects.base import Context, PhysicsMss
 from msens.errors import internal
 from msens.field.geometry import SensorGeometry
-from msens.fieldsetup import EddySettings, coil_geometry, eddy_settings, geometry_from_study
 from msens.magnetics.dynamic import FrequencyResponse, dynamic_report, dynamic_signals
 from msens.magnetics.mss import MssRecord, MssSensor, mss_signals, readout
-from msens.magnetics.transducer import (
-    Transducer,
-    cache_key,
-    magnetic_precompression,
-    transducers_for,
-)
+from msens.magnetics.steel_law import law_for_steel
+from msens.magnetics.transducer import Transducer, cache_key, magnetic_precompression
+from msens.magnetics.transducer_cache import transducers_for
 from msens.magnetics.variants import RemanenceFamily, remanence_family
-from msens.materials import BEAD_STEEL
-from msens.steel_law import law_for_steel
-from msens.study import CoilSpec, MssModel
+from msens.params.materials import BEAD_STEEL
 
 # Field models of this process by key: geometry, nominal transducers and (with eddy
 # currents) frequency responses; remanence families lazily.

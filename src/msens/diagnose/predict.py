@@ -16,16 +16,16 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
-from msens.assemble import build_chain
 from msens.chain.equilibrium import static_contact_forces
 from msens.chain.integrate import ChainResult, simulate_batch
 from msens.compare import smoothed_features as model_features_of
+from msens.config.assemble import build_chain
 from msens.diagnose import physics
 from msens.diagnose.effects.base import Context, ModelState
-from msens.features import pulse_features
 from msens.magnetics.mss import voltage_on
+from msens.readout.sensors import SensorKind, observe, read_contacts, time_derivative
 from msens.results import SensorResult, SetupResult
-from msens.sensors import SensorKind, observe, read_contacts, time_derivative
+from msens.signals.features import pulse_features
 
 #: Nodes (in standard deviations) and weights of the 3-point Gauss-Hermite rule for the mean
 #: over a normal distribution.

@@ -20,7 +20,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from msens.diagnose.diagnosis import Diagnosis
-from msens.output import OutputDir
+from msens.io.output import OutputDir
 
 FILES = ("diagnosis.json", "diagnosis.png")
 
@@ -112,7 +112,7 @@ def write(passes: Sequence[Diagnosis], out: str | Path | OutputDir, *,
     """Write ``diagnosis.json`` and ``diagnosis.<fig_format>`` (png, pdf or svg; atomically,
     never over a user's file); ``provenance`` (msens version, study hash) is recorded in
     the JSON."""
-    from msens.output import DPI
+    from msens.io.output import DPI
 
     d = out if isinstance(out, OutputDir) else OutputDir(out)
     written = [d.write_json("diagnosis.json",

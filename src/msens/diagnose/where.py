@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 
 from msens.compare import model_record, shot_records, smooth
+from msens.config.schema import SetupSpec
 from msens.diagnose.objective import FeatureObjective, WaveformObjective
 from msens.diagnose.predict import feature_records, model_features_of
-from msens.features import centre_distance
 from msens.io.waveform import Waveform
-from msens.study import SetupSpec
+from msens.signals.features import centre_distance
 
 #: Half-width of the incident / reflected windows, in incident pulse widths (FWHM).
 WINDOW_WIDTHS = 1.5

@@ -60,6 +60,8 @@ import numpy as np
 
 from msens.calibrate import DissipationFit
 from msens.compare import setup_spec_channels
+from msens.config.schema import SetupSpec
+from msens.config.study import Study
 from msens.diagnose.candidates import (
     THRESHOLD,
     candidate_effects,
@@ -82,7 +84,6 @@ from msens.diagnose.where import feature_residuals, feature_table, window_residu
 from msens.errors import InputError
 from msens.io.waveform import Waveform
 from msens.pipeline import calibrate_dissipation, output_times
-from msens.study import SetupSpec, Study
 
 __all__ = ["THRESHOLD", "Candidate", "Diagnosis", "baseline_dissipation", "diagnose",
            "diagnose_passes", "diagnose_reference", "match_setup_spec"]

@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import ellipe, ellipk
 
-from msens.units import MU0
+from msens.params.units import MU0
 
 
 def thin_solenoid_bz(z: ArrayLike, radius: float, length: float, n_per_m: float,

@@ -1,6 +1,6 @@
 """Monotone B–H interpolation for nonlinear soft magnetic regions.
 
-The table H(B) of a :class:`msens.materials.BHCurve` is interpolated with a shape-preserving
+The table H(B) of a :class:`msens.params.materials.BHCurve` is interpolated with a shape-preserving
 piecewise-cubic Hermite interpolant (PCHIP slopes, Fritsch & Carlson 1980), which keeps H(B)
 strictly increasing when the data are, so the magnetic energy density w(B) = ∫ H dB is convex and
 Newton's method has a unique solution to converge to. Beyond the last table point the curve
@@ -20,8 +20,8 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PchipInterpolator, PPoly
 
 from msens.errors import require
-from msens.materials import BHCurve
-from msens.units import MU0
+from msens.params.materials import BHCurve
+from msens.params.units import MU0
 
 
 @dataclass(frozen=True)

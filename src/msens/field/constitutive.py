@@ -22,7 +22,7 @@ from msens.field.regions import (
     Region,
     Winding,
 )
-from msens.units import MU0
+from msens.params.units import MU0
 
 NU0 = 1.0 / MU0
 #: Flux density (T) whose secant reluctivity starts Newton in nonlinear regions.

@@ -53,7 +53,7 @@ from msens.field.forms import (
 from msens.field.mesh import AxiMesh
 from msens.field.regions import Winding
 from msens.field.solve import Discretisation, FieldSolution, MagnetostaticProblem, discretise
-from msens.units import MU0, TWO_PI
+from msens.params.units import MU0, TWO_PI
 
 #: Electrical conductivity of 1018 steel, S/m. ASSUMPTION (no measurement of the beads):
 #: annealed AISI 1018 has a resistivity of 15.9 µΩ cm at 0 °C and 21.9 µΩ cm at 100 °C

@@ -27,7 +27,8 @@ import gmsh
 import numpy as np
 
 from msens.errors import internal, require
-from msens.field.mesh import AxiMesh, facets_of_lines, from_arrays, generate_sized
+from msens.field.mesh import AxiMesh, facets_of_lines, from_arrays
+from msens.meshing import generate_sized
 
 
 @dataclass(frozen=True)

@@ -31,9 +31,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from msens.errors import InputError, require
-from msens.materials import BEAD_STEEL, MAGNET_GRADES, STEEL_1018_BH, BHCurve
 from msens.mechanics.hertz import hertz_contact_radius, identical_spheres_modulus
-from msens.units import G0
+from msens.params.materials import BEAD_STEEL, MAGNET_GRADES, STEEL_1018_BH, BHCurve
+from msens.params.units import G0
 
 #: Bead diameter of the paper, m (McMaster-Carr 96455K51, paper §2).
 BEAD_DIAMETER = 4.76e-3

@@ -7,7 +7,7 @@ the boundaries.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -100,23 +100,6 @@ def facets_of_lines(mesh: skfem.MeshTri, lines: np.ndarray) -> np.ndarray:
     found = fkey[order[pos]] == lkey
     require(bool(np.all(found)), f"{int(np.sum(~found))} boundary lines are not mesh edges")
     return order[pos]
-
-
-def generate_sized(size: Callable[..., float]) -> None:
-    """Mesh the current gmsh model in 2-D with the element sizes of ``size`` alone.
-
-    ``size(dim, tag, x, y, z, lc)`` returns the element size (m) at a point; sizes from the
-    boundary, the points and the curvature are switched off so that it alone decides, and
-    the Frontal-Delaunay algorithm (6) gives well-shaped triangles.
-    """
-    import gmsh
-
-    gmsh.model.mesh.setSizeCallback(size)
-    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
-    gmsh.option.setNumber("Mesh.Algorithm", 6)
-    gmsh.model.mesh.generate(2)
 
 
 def read_gmsh(path: str | Path) -> AxiMesh:

@@ -22,7 +22,7 @@ from msens.field.forms import flux_density_qp, potential_qp
 from msens.field.mesh import AxiMesh
 from msens.field.regions import Air, Winding
 from msens.field.solve import FieldSolution, solve
-from msens.units import MU0
+from msens.params.units import MU0
 
 __all__ = ["eggshell", "energy", "field_strength", "flux_density",
            "flux_linkage", "force_z", "potential_energy"]

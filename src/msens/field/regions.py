@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from msens.errors import require
-from msens.materials import BHCurve
+from msens.params.materials import BHCurve
 
 
 @dataclass(frozen=True)
@@ -40,7 +40,7 @@ class NonlinearSoft:
     Attributes
     ----------
     curve : BHCurve
-        Anhysteretic curve, e.g. :data:`msens.materials.STEEL_1018_BH`.
+        Anhysteretic curve, e.g. :data:`msens.params.materials.STEEL_1018_BH`.
     reversibility : float
         Fraction c in (0, 1] of the differential susceptibility that small signals about the
         bias see (the reversible part, Jiles–Atherton's c): along B the small-signal

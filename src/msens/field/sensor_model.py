@@ -39,8 +39,8 @@ from msens.field.geometry import Coil, SensorGeometry
 from msens.field.mesh import AxiMesh, from_arrays, read_gmsh
 from msens.field.regions import Air, NonlinearSoft, PermanentMagnet, Region, Winding
 from msens.field.solve import FieldSolution, MagnetostaticProblem, incremental, solve
-from msens.materials import BHCurve
-from msens.units import MU0, RHO_COPPER, TWO_PI
+from msens.params.materials import BHCurve
+from msens.params.units import MU0, RHO_COPPER, TWO_PI
 
 _log = logging.getLogger(__name__)
 

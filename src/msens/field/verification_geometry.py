@@ -19,7 +19,8 @@ import gmsh
 import numpy as np
 
 from msens.errors import require
-from msens.field.mesh import AxiMesh, generate_sized, read_gmsh
+from msens.field.mesh import AxiMesh, read_gmsh
+from msens.meshing import generate_sized
 
 
 @dataclass(frozen=True)

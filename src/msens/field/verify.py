@@ -14,7 +14,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from msens.coil import winding_from_coil
 from msens.field import analytic
 from msens.field.bh import monotone_bh
 from msens.field.mesh import AxiMesh, refined
@@ -28,8 +27,9 @@ from msens.field.verification_geometry import (
     sphere_mesh,
     two_spheres_mesh,
 )
-from msens.materials import STEEL_1018_BH, BHCurve
-from msens.units import MU0
+from msens.params.materials import STEEL_1018_BH, BHCurve
+from msens.params.units import MU0
+from msens.readout.coil import winding_from_coil
 
 
 @dataclass(frozen=True)

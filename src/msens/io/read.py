@@ -9,7 +9,7 @@ suffix        format
 ============  ===========================================
 
 An instrument's own text export (``Time,CH1,CH2``) is read through a column map
-(:mod:`msens.io.columns`): pass ``columns=`` or a :class:`~msens.io.columns.MappedFile`.
+(:mod:`msens.io.columns`): pass ``columns=`` or a :class:`~msens.io.mapped.MappedFile`.
 """
 
 from __future__ import annotations
@@ -20,8 +20,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from msens.errors import InputError
-from msens.io.columns import ColumnMap, MappedFile, read_mapped
+from msens.io.columns import ColumnMap
 from msens.io.csv import read_csv, write_csv
+from msens.io.mapped import MappedFile, read_mapped
 from msens.io.npz import read_npz, write_npz
 from msens.io.tdms import read_tdms, write_tdms
 from msens.io.waveform import Waveform
@@ -57,7 +58,7 @@ def read_waveform(path: str | os.PathLike[str],
     ----------
     path : path-like
         File to read; the (case-insensitive) suffix selects the format. A
-        :class:`~msens.io.columns.MappedFile` is read through its column map.
+        :class:`~msens.io.mapped.MappedFile` is read through its column map.
     columns : str, path-like or ColumnMap, optional
         Column map of an instrument's text export (inline ``time=Time:ms,bead@13=CH1:mV``
         or a ``.toml`` file; :mod:`msens.io.columns`); the file is then read as that export.

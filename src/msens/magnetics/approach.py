@@ -30,8 +30,8 @@ from msens.field.sensor_model import shell_function
 from msens.field.solve import FieldSolution
 from msens.magnetics.potentials import bias_residual, nonlinear_resolve
 from msens.magnetics.villari import coil_flux_linkage
-from msens.materials import BEAD_STEEL, ElasticMaterial
 from msens.mechanics.hertz import hertz_approach, hertz_sphere_sphere
+from msens.params.materials import BEAD_STEEL, ElasticMaterial
 
 
 def _morphed_quadrature(sol: FieldSolution, points: np.ndarray):

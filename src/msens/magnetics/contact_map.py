@@ -398,7 +398,7 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     """The contact maps of every coil of ``geometry`` (cached ``contact-map-<key>.json``).
 
     The key joins the transducer key (mesh, steel, magnets) and the table nodes. Lookup as
-    :func:`msens.magnetics.transducer.transducer_report`: with ``cache_dir`` only there;
+    :func:`msens.magnetics.transducer_cache.transducer_report`: with ``cache_dir`` only there;
     otherwise the committed folders, then the user cache, where new maps are written. Cold:
     one layer mesh and about 20 nonlinear solves per contact of :func:`mapped_contacts`
     (about a minute each on the default geometry).

@@ -29,7 +29,8 @@ Approximations (say so wherever the numbers are used):
 In time (:func:`dynamic_signals`) the contact force and approach rates are Fourier
 transformed, multiplied by −S_c(ω) and −D_c(ω) (interpolated between the solved
 frequencies, :meth:`FrequencyResponse.villari_at`) and by the read-out circuit's transfer
-function with the coil's series impedance Z(ω) (:func:`msens.electronics.coil_transfer_function`).
+function with the coil's series impedance Z(ω)
+(:func:`msens.readout.electronics.coil_transfer_function`).
 """
 
 from __future__ import annotations
@@ -45,24 +46,21 @@ import numpy as np
 from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
 from scipy.interpolate import PchipInterpolator
 
-from msens.electronics import NoiseModel, ReadoutCircuit, add_readout_noise, coil_transfer_function
 from msens.errors import internal, require
 from msens.field.eddy import SIGMA_1018, HarmonicOperator, dissipated_power
 from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import coil_current_density, coil_resistance
 from msens.io._files import atomic_write_bytes
 from msens.io.hashing import content_hash
+from msens.magnetics.emf import ContactRates, contact_forces_of, contact_rates
+from msens.magnetics.mechanisms import MechanismPotentials
 from msens.magnetics.mss import MssRecord
 from msens.magnetics.potentials import region_linkage
-from msens.magnetics.transducer import (
-    ContactRates,
-    MechanismPotentials,
-    Transducer,
-    contact_forces_of,
-    contact_rates,
-)
+from msens.magnetics.transducer import Transducer
 from msens.mechanics.hertz import hertz_approach
-from msens.units import TWO_PI
+from msens.params.units import TWO_PI
+from msens.readout.electronics import ReadoutCircuit, coil_transfer_function
+from msens.readout.noise import NoiseModel, add_readout_noise
 
 #: Frequencies solved by default, Hz: 0 (the static transducer), 12 roughly log-spaced
 #: points over 0.5–200 kHz (1-2-3-5 steps, so the reported 1, 3, 10, 30, 100 kHz are solved)
@@ -73,7 +71,8 @@ DEFAULT_FREQUENCIES: tuple[float, ...] = (0.0, 10.0, 30.0, 100.0, 300.0, 500.0, 
                                           3e3, 5e3, 10e3, 20e3, 30e3, 50e3, 100e3, 150e3,
                                           200e3)
 
-#: Electrical conductivity of the magnet grades of :data:`msens.materials.MAGNET_GRADES`, S/m.
+#: Electrical conductivity of the magnet grades of
+#: :data:`msens.params.materials.MAGNET_GRADES`, S/m.
 #: ceramic8: hard ferrite is an oxide ceramic, an insulator for eddy-current purposes
 #: (ASSUMPTION: resistivity of order 1e4 Ω m on typical ferrite data sheets — not measured;
 #: any value below ~1 S/m gives no screening at 200 kHz in a 7 mm wall). NdFeB: resistivity
@@ -422,7 +421,7 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, cache_dir: str | P
 
     The sources are those of the default static transducer (:func:`transducer_report`'s
     defaults: stress at the geometry's contact load, the steel's JAS law, both mechanisms);
-    lookup and storage follow :func:`msens.magnetics.transducer.transducer_report`.
+    lookup and storage follow :func:`msens.magnetics.transducer_cache.transducer_report`.
 
     With ``scheduler`` (a Dask distributed scheduler address) the frequencies are split into
     one chunk per worker; each task meshes (through the shared mesh cache ``mesh_dir``),
@@ -430,9 +429,9 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, cache_dir: str | P
     (:func:`join_reports`). The result equals the local one to round-off.
     """
     from msens.field.cache import committed_mesh_dirs, default_mesh_dir
+    from msens.magnetics.steel_law import law_for_steel
     from msens.magnetics.transducer import cache_key
-    from msens.materials import BEAD_STEEL
-    from msens.steel_law import law_for_steel
+    from msens.params.materials import BEAD_STEEL
 
     tkey = cache_key(geometry, options, stress_force=geometry.beads.contact_load,
                      law=law_for_steel(geometry.steel), material=BEAD_STEEL, approach=True)
@@ -476,8 +475,9 @@ def _workers(scheduler: str) -> int:
 
 def _report_task(args: tuple) -> DynamicReport:
     """Mesh, bias, sources and the harmonic solves of one list of frequencies (from 0)."""
-    from msens.magnetics.transducer import bias_solution, mechanism_potentials
-    from msens.steel_law import law_for_steel
+    from msens.magnetics.mechanisms import mechanism_potentials
+    from msens.magnetics.steel_law import law_for_steel
+    from msens.magnetics.transducer import bias_solution
 
     geometry, options, mesh_dir, freqs, steel, magnets = args
     t0 = time.perf_counter()
@@ -619,10 +619,10 @@ def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
     The contact force and approach rates (as :func:`msens.magnetics.mss.mss_signals`) are
     zero-padded to ``pad`` × their length and Fourier transformed; the EMF spectrum is
     :func:`emf_spectrum` and the DAQ voltage that times the read-out transfer function with
-    the coil's impedance Z(ω) (:func:`msens.electronics.coil_transfer_function`); inverse
+    the coil's impedance Z(ω) (:func:`msens.readout.electronics.coil_transfer_function`); inverse
     FFT. The circuit starts at rest and the EMF is zero before ``t[0]`` (chain histories
     start static). Noise (optional) is the read-out's, with the coil's Johnson noise from
-    4kT Re Z(f) (:func:`msens.electronics.add_readout_noise`). With σ = 0 this is
+    4kT Re Z(f) (:func:`msens.readout.noise.add_readout_noise`). With σ = 0 this is
     :func:`~msens.magnetics.mss.mss_signals` up to its first-order-hold EMF (agreement to
     ~(ωΔt)²/12 at the signal frequencies).
 

@@ -22,8 +22,8 @@ from msens.errors import require
 from msens.field.eddy import SIGMA_1018, HarmonicOperator
 from msens.field.geometry import SensorGeometry
 from msens.magnetics.dynamic import sensor_conductivity
+from msens.magnetics.mechanisms import MechanismPotentials
 from msens.magnetics.potentials import LinkageTable, linkage_table, rect_integral
-from msens.magnetics.transducer import MechanismPotentials
 
 
 @dataclass(frozen=True)

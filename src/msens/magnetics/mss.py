@@ -3,7 +3,7 @@
 The transducer (:mod:`msens.magnetics.transducer`) gives each contact's Villari sensitivity
 ∂Λ/∂F_c and contact-approach sensitivity ∂Λ/∂δ_c; the EMF is
 V = -Σ_c [(∂Λ/∂F_c) dF_c/dt + (∂Λ/∂δ_c) dδ_c/dt]. The read-out circuit (coil resistance and
-bias-point inductance, winding capacitance, cable, DAQ input; :mod:`msens.electronics`) then
+bias-point inductance, winding capacitance, cable, DAQ input; :mod:`msens.readout.electronics`) then
 shapes it: :func:`readout` is the one place a coil's circuit is built, for runs and design
 sweeps alike. The *flux change* ΔΛ(t) — what an integrated coil voltage measures — divided by
 Σ_c ∂Λ/∂F_c (both mechanisms, at the reference load) is a sensitivity-weighted mean contact
@@ -16,17 +16,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from msens.coil import Winding, winding_capacitance, winding_from_coil
-from msens.electronics import NoiseModel, ReadoutCircuit, daq_voltage, noise_rms
 from msens.field.geometry import Coil
-from msens.magnetics.transducer import (
-    Transducer,
-    contact_forces_of,
-    contact_rates,
-    emf_from_rates,
-)
+from msens.magnetics.emf import contact_forces_of, contact_rates, emf_from_rates
+from msens.magnetics.transducer import Transducer
 from msens.mechanics.hertz import hertz_approach
-from msens.study import ElectronicsSpec
+from msens.readout.coil import Winding, winding_capacitance, winding_from_coil
+from msens.readout.daq import daq_voltage
+from msens.readout.electronics import ElectronicsSpec, ReadoutCircuit
+from msens.readout.noise import NoiseModel, noise_rms
 
 
 @dataclass(frozen=True)
@@ -58,7 +55,7 @@ class MssRecord:
 
 
 def winding_of(coil: Coil) -> Winding:
-    """The :mod:`msens.coil` winding of a field-model coil (same wire, packing, size)."""
+    """The :mod:`msens.readout.coil` winding of a field-model coil (same wire, packing, size)."""
     return winding_from_coil(coil.turns, coil.length, coil.inner_radius, coil.wire.name,
                              coil.packing_factor, insulated_diameter=coil.wire.insulated_diameter)
 
@@ -66,7 +63,7 @@ def winding_of(coil: Coil) -> Winding:
 def readout(coil: Coil, resistance: float, inductance: float,
             electronics: ElectronicsSpec) -> ReadoutCircuit:
     """A coil's read-out circuit: its R (Ω) and bias-point L (H), the winding capacitance
-    estimate of :mod:`msens.coil`, the study's cable and DAQ input."""
+    estimate of :mod:`msens.readout.coil`, the study's cable and DAQ input."""
     return ReadoutCircuit(resistance=resistance, inductance=inductance,
                           winding_capacitance=winding_capacitance(winding_of(coil)),
                           cable_capacitance=electronics.cable_capacitance_f,
@@ -128,7 +125,7 @@ def mss_signals(sensor: MssSensor, t: np.ndarray, force: np.ndarray, sample_rate
     approach : ndarray, shape (nt, m), optional
         The chain's contact approaches, m (negative: open), same columns as ``force``;
         default the Hertz approach of the forces (see
-        :func:`msens.magnetics.transducer.contact_rates`).
+        :func:`msens.magnetics.emf.contact_rates`).
     static : ndarray, shape (n,), optional
         Static contact forces (column k is contact k + 1), N; default the first sample.
     columns : ndarray of int, shape (m,), optional

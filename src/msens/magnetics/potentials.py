@@ -31,7 +31,7 @@ from msens.field.assembly import assemble_matrix, assemble_vector, factorize
 from msens.field.constitutive import reluctivities, small_signal_tangent, tangent
 from msens.field.forms import element_stiffness, flux_density_qp
 from msens.field.solve import FieldSolution
-from msens.units import TWO_PI
+from msens.params.units import TWO_PI
 
 
 class TangentOperator:

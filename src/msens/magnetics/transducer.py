@@ -2,12 +2,15 @@
 
 :func:`compute_transducers` runs the field model of a
 :class:`~msens.field.geometry.SensorGeometry` (cached mesh, nonlinear bias solve), builds the
-incremental potentials of both mechanisms' sources (:func:`mechanism_potentials`: the Villari
-magnetisation of every bead per newton, and the contact approach of every contact per metre)
-with one factorisation, and reads each coil's flux linkage of them by exact quadrature over
-its winding (:mod:`msens.magnetics.potentials`). Design sweeps read the same potentials
+incremental potentials of both mechanisms' sources
+(:func:`msens.magnetics.mechanisms.mechanism_potentials`: the Villari magnetisation of every
+bead per newton, and the contact approach of every contact per metre) with one
+factorisation, and reads each coil's flux linkage of them by exact quadrature over its
+winding (:mod:`msens.magnetics.potentials`). Design sweeps read the same potentials
 through a summed-area table (:mod:`msens.design.coil_sweep`), so a design and ``msens run``
-share one implementation. Results are cached on disk as JSON keyed by a content hash.
+share one implementation. Results are cached on disk as JSON keyed by a content hash
+(:mod:`msens.magnetics.transducer_cache`); the EMF from the chain's contact states is in
+:mod:`msens.magnetics.emf`.
 
 Mechanisms (one name each, everywhere): ``"villari"`` (stress-induced magnetisation of the
 beads, :mod:`msens.magnetics.villari`) and ``"approach"`` (the contact approach: the beads
@@ -16,7 +19,7 @@ move closer and the saturated contact necks grow, :mod:`msens.magnetics.approach
 Sign conventions
 ----------------
 * Λ is the coil's flux linkage for its current positive along +φ (B_z > 0 inside the coil);
-  the open-circuit EMF is V = -dΛ/dt (:func:`emf`).
+  the open-circuit EMF is V = -dΛ/dt (:func:`msens.magnetics.emf.emf`).
 * Contact c (1-based, the paper's numbering) joins particles c and c + 1; contact N (the last
   particle) is the wall. Contact forces are compressive positive; the approach δ_c is the
   Hertz approach of the contact's force.
@@ -26,21 +29,20 @@ Sign conventions
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 
-from msens.errors import InputError, internal, require
+from msens.errors import internal, require
 from msens.field.build import MeshOptions
-from msens.field.cache import committed_mesh_dirs, default_mesh_dir, geometry_key
-from msens.field.geometry import Coil, SensorGeometry
+from msens.field.cache import geometry_key
+from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import (
     bias_problem,
     coil_resistance,
@@ -49,40 +51,28 @@ from msens.field.sensor_model import (
     load_mesh,
 )
 from msens.field.solve import FieldSolution, solve
-from msens.io._files import atomic_write_bytes
 from msens.io.hashing import canonical as _canonical
 from msens.io.hashing import content_hash
-from msens.magnetics.approach import approach_residuals, hertz_approach_rate, hertz_stiffness
+from msens.magnetics.approach import hertz_approach_rate, hertz_stiffness
 from msens.magnetics.contact_map import ApproachMap
-from msens.magnetics.potentials import (
-    TangentOperator,
-    adjoint_linkage,
-    linkage_table,
-    rect_integral,
-    region_linkage,
+from msens.magnetics.magnetoelastic import JilesAthertonSablik
+from msens.magnetics.mechanisms import (
+    adjoint_check,
+    coil_linkage,
+    mechanism_potentials,
+    offset_profiles,
 )
-from msens.magnetics.villari import (
-    StressSampler,
-    bead_state,
-    bead_stress,
-    coil_flux_linkage,
-    contact_sensitivity,
-    villari_sources,
-)
-from msens.magnetoelastic import JilesAthertonSablik
-from msens.materials import BEAD_STEEL, ElasticMaterial
+from msens.magnetics.steel_law import law_for_steel
 from msens.mechanics.hertz import hertz_approach
-from msens.steel_law import law_for_steel
+from msens.params.materials import BEAD_STEEL, ElasticMaterial
 
 _log = logging.getLogger(__name__)
 
 #: Version of what :func:`transducers_for` computes; part of the cache key.
 TRANSDUCER_VERSION = "transducer/3"
-#: Coil offsets tabulated per transducer: ±OFFSET_SPAN in steps of OFFSET_STEP, m.
-OFFSET_SPAN = 3e-3
-OFFSET_STEP = 0.1e-3
 
 Mechanism = Literal["villari", "approach", "both"]
+
 MECHANISMS: tuple[str, ...] = ("villari", "approach", "both")
 
 
@@ -196,205 +186,6 @@ def _check_mechanism(mechanism: str) -> None:
             f"mechanism must be one of {', '.join(MECHANISMS)}, got {mechanism!r}")
 
 
-# ----------------------------------------------------------------------------- signal
-
-@dataclass(frozen=True)
-class ContactRates:
-    """Rates of the contacts a transducer reads, for one chain history.
-
-    Attributes
-    ----------
-    t : ndarray, shape (nt,)
-        s.
-    force : ndarray, shape (nt, n_c)
-        dF_c/dt, N/s (zero for contacts beyond the chain's columns).
-    approach : ndarray, shape (nt, n_c)
-        dδ_c/dt of the Hertz approach δ_c = ([F_c]_+/A)^{2/3}, m/s.
-    """
-
-    t: np.ndarray
-    force: np.ndarray
-    approach: np.ndarray
-
-
-def contact_forces_of(force: np.ndarray, contacts: np.ndarray,
-                      columns: np.ndarray | None = None) -> np.ndarray:
-    """The columns of ``contacts`` from a chain's contact forces, zeros where absent.
-
-    Parameters
-    ----------
-    force : ndarray, shape (nt, m)
-        Contact forces, N.
-    contacts : ndarray of int, shape (n_c,)
-        1-based contact numbers wanted.
-    columns : ndarray of int, shape (m,), optional
-        Contact number of each column of ``force`` (sorted); default column k is contact
-        k + 1 (as in :mod:`msens.chain`).
-
-    Returns
-    -------
-    ndarray, shape (nt, n_c)
-    """
-    f = np.asarray(force, dtype=float)
-    contacts = np.asarray(contacts, dtype=int)
-    if columns is None:
-        columns = np.arange(1, f.shape[1] + 1)
-    columns = np.asarray(columns, dtype=int)
-    k = np.clip(np.searchsorted(columns, contacts), 0, max(columns.size - 1, 0))
-    use = (columns.size > 0) & (columns[k] == contacts)
-    out = np.zeros((f.shape[0], contacts.size))
-    out[:, use] = f[:, k[use]]
-    return out
-
-
-def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
-                  stiffness: float, columns: np.ndarray | None = None,
-                  approach: np.ndarray | None = None,
-                  equivalent: Callable[[np.ndarray], np.ndarray] | None = None
-                  ) -> ContactRates:
-    """Force and approach rates of ``contacts`` from a chain's contact states.
-
-    Parameters
-    ----------
-    t : ndarray, shape (nt,)
-        Strictly increasing times, s.
-    force : ndarray, shape (nt, m)
-        Contact forces, N.
-    contacts : ndarray of int, shape (n_c,)
-        1-based contact numbers.
-    stiffness : float
-        Hertz prefactor A, N/m^1.5.
-    columns : ndarray of int, shape (m,), optional
-        Contact number of each column of ``force`` (see :func:`contact_forces_of`).
-    approach : ndarray, shape (nt, m), optional
-        The chain's contact approaches δ_c(t), m (negative: open), same columns as
-        ``force``. Without it δ_c = ([F_c]_+/A)^{2/3}, whose slope in F is infinite at
-        F = 0: a contact that unloads or opens between two samples then gives a spike.
-    equivalent : callable, optional
-        Maps the approaches (nt, n_c) of ``contacts`` to those the linear sources read:
-        :meth:`Transducer.equivalent_approach` (the nonlinear contact maps). Every reading of
-        a chain history passes its transducer's here.
-
-    Notes
-    -----
-    Rates are :func:`numpy.gradient` (second order, also on non-uniform times).
-    """
-    t = np.asarray(t, dtype=float)
-    require(t.ndim == 1 and t.size >= 2, "t must be 1-D with at least 2 samples")
-    require(bool(np.all(np.diff(t) > 0)), "t must be strictly increasing")
-    require(np.ndim(force) == 2 and np.shape(force)[0] == t.size,
-            f"force must have shape (nt={t.size}, n_contacts), got "
-            f"{np.shape(force)}")
-    fc = contact_forces_of(force, contacts, columns)
-    delta = hertz_approach(fc, stiffness) if approach is None else \
-        contact_forces_of(approach, contacts, columns)
-    if equivalent is not None:
-        delta = equivalent(delta)
-    return ContactRates(t=t, force=np.gradient(fc, t, axis=0),
-                        approach=np.gradient(delta, t, axis=0))
-
-
-def emf_from_rates(rates: ContactRates, sensitivity_villari: np.ndarray,
-                   dlambda_dapproach: np.ndarray, mechanism: Mechanism = "both"
-                   ) -> np.ndarray:
-    """Open-circuit EMF V = -Σ_c [(∂Λ/∂F_c) dF_c/dt + (∂Λ/∂δ_c) dδ_c/dt], V.
-
-    Parameters
-    ----------
-    rates : ContactRates
-    sensitivity_villari, dlambda_dapproach : ndarray, shape (..., n_c)
-        Wb/N and Wb/m; leading axes (e.g. coil designs) broadcast.
-    mechanism : {"villari", "approach", "both"}
-
-    Returns
-    -------
-    ndarray, shape (..., nt)
-    """
-    _check_mechanism(mechanism)
-    out = 0.0
-    if mechanism in ("villari", "both"):
-        out = out - np.asarray(sensitivity_villari) @ rates.force.T
-    if mechanism in ("approach", "both"):
-        out = out - np.asarray(dlambda_dapproach) @ rates.approach.T
-    return out
-
-
-def rigid_translation_emf(transducer: Transducer, rates: ContactRates) -> np.ndarray:
-    """The part of the contact-approach EMF that is the beads' rigid translation, V.
-
-    Each approach source moves every modelled bead above its contact rigidly, so summed over
-    contacts the sources move bead p by u_p = Σ_{c ≥ p} δ_c (the wall does not move): the
-    beads' translation in the coil's and magnet's field gradients is contained in the
-    contact-approach EMF. Its size is the sensitivity to translating all modelled beads
-    together, T = ∂Λ/∂δ of the lowest modelled contact (no contact changes then), times the
-    speed of the coil's bead: -T du_p/dt. Beads near the coil move together to within a few
-    contact approaches, so this estimates the translation part of the signal.
-
-    Parameters
-    ----------
-    transducer : Transducer
-    rates : ContactRates
-        Rates of ``transducer.contacts`` (:func:`contact_rates`).
-
-    Returns
-    -------
-    ndarray, shape (nt,)
-    """
-    contacts = np.asarray(transducer.contacts)
-    below = contacts >= transducer.particle
-    speed = np.sum(rates.approach[:, below], axis=1)
-    return -float(transducer.dlambda_dapproach[-1]) * speed
-
-
-def open_contact_emf(transducer: Transducer, rates: ContactRates,
-                     approach: np.ndarray) -> np.ndarray:
-    """The part of the contact-approach EMF from contacts while they are open (δ_c < 0), V.
-
-    The approach sources are linearised about the static load; for an open gap they are
-    extrapolated linearly (a gap changes the field mesh's topology). This is how much of the
-    signal rests on that extrapolation.
-
-    Parameters
-    ----------
-    transducer : Transducer
-    rates : ContactRates
-        Rates of ``transducer.contacts``.
-    approach : ndarray, shape (nt, n_c)
-        δ_c(t) of the same contacts, m.
-
-    Returns
-    -------
-    ndarray, shape (nt,)
-    """
-    parts = -rates.approach * np.asarray(transducer.dlambda_dapproach)[None, :]
-    return np.where(np.asarray(approach) < 0.0, parts, 0.0).sum(axis=1)
-
-
-def emf(transducer: Transducer, t: np.ndarray, force: np.ndarray,
-        mechanism: Mechanism = "both", approach: np.ndarray | None = None) -> np.ndarray:
-    """Open-circuit coil EMF of one transducer for a chain's contact forces, V.
-
-    Parameters
-    ----------
-    transducer : Transducer
-    t : ndarray, shape (nt,)
-        s.
-    force : ndarray, shape (nt, m)
-        Contact forces, N (column k is contact k + 1).
-    mechanism : {"villari", "approach", "both"}
-    approach : ndarray, shape (nt, m), optional
-        The chain's contact approaches, m (see :func:`contact_rates`).
-
-    Returns
-    -------
-    ndarray, shape (nt,)
-    """
-    rates = contact_rates(t, force, transducer.contacts, transducer.contact_stiffness,
-                          approach=approach, equivalent=transducer.equivalent_approach)
-    return emf_from_rates(rates, transducer.sensitivity_villari, transducer.dlambda_dapproach,
-                          mechanism)
-
-
 def magnetic_precompression(transducers: Mapping[int, Transducer] | list[Transducer]
                             ) -> np.ndarray:
     """Static magnetic force on each particle for the chain, N, + toward the wall.
@@ -416,8 +207,6 @@ def magnetic_precompression(transducers: Mapping[int, Transducer] | list[Transdu
     return np.sum(list(seen.values()), axis=0)
 
 
-# ----------------------------------------------------------------------------- computation
-
 def particle_forces(sol: FieldSolution, geometry: SensorGeometry) -> np.ndarray:
     """Static magnetic force on every particle, N, + toward the wall, shape (count,).
 
@@ -432,187 +221,6 @@ def particle_forces(sol: FieldSolution, geometry: SensorGeometry) -> np.ndarray:
     for p in b.particles:
         out[p - 1] = comp[p] - comp.get(p - 1, 0.0)
     return out
-
-
-@dataclass(frozen=True)
-class MechanismPotentials:
-    """Incremental potentials of every mechanism source at one bias point.
-
-    Attributes
-    ----------
-    solution : FieldSolution
-        The bias solution (mesh, basis).
-    particles : ndarray of int, shape (n_b,)
-        Beads with a Villari source, top to bottom (consecutive).
-    contacts : ndarray of int, shape (n_a,)
-        Contacts with an approach source (all beads above c move; empty when the approach
-        mechanism is off).
-    potentials : ndarray, shape (n_b + n_a, n_dofs)
-        A_φ per newton of symmetric load on each bead (T m/N), then per metre of approach
-        of each contact (T).
-    count : int
-        Particles in the chain.
-    operator : TangentOperator
-    villari_sources : list of (elements, mu0_dM)
-        The Villari sources (for the adjoint check).
-    approach_rhs : ndarray, shape (n_a, n_dofs)
-        -∂R/∂δ_c (for the adjoint check).
-    rhs : ndarray, shape (n_b + n_a, n_dofs), optional
-        The load vectors f_s of all sources, in the order of ``potentials`` (K_t a_s = f_s;
-        the eddy-current model :mod:`msens.magnetics.dynamic` solves the same sources with
-        K_t + jωM_σ).
-    """
-
-    solution: FieldSolution
-    particles: np.ndarray
-    contacts: np.ndarray
-    potentials: np.ndarray
-    count: int
-    operator: TangentOperator
-    villari_sources: list
-    approach_rhs: np.ndarray
-    rhs: np.ndarray | None = None
-
-    def contact_profiles(self, linkage: np.ndarray) -> tuple[np.ndarray, np.ndarray,
-                                                             np.ndarray]:
-        """:func:`contact_profiles` of this model's sources."""
-        return contact_profiles(self.particles, self.contacts, self.count, linkage)
-
-
-def contact_profiles(particles: np.ndarray, approach_contacts: np.ndarray, count: int,
-                     linkage: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per-contact sensitivities from the sources' flux linkages with some coil(s).
-
-    Parameters
-    ----------
-    particles : ndarray of int, shape (n_b,)
-        Beads with a Villari source (consecutive).
-    approach_contacts : ndarray of int, shape (n_a,)
-        Contacts with an approach source.
-    count : int
-        Particles in the chain.
-    linkage : ndarray, shape (..., n_b + n_a)
-        Flux linkage of each source's potential with the coil(s), Wb per unit: Villari
-        sources first, then approach sources.
-
-    Returns
-    -------
-    contacts : ndarray of int, shape (n_b + 1,)
-    sensitivity_villari : ndarray, shape (..., n_b + 1)
-        ∂Λ/∂F_c, Wb/N.
-    dlambda_dapproach : ndarray, shape (..., n_b + 1)
-        ∂Λ/∂δ_c, Wb/m (zero where no approach source).
-    """
-    nb = np.asarray(particles).size
-    contacts, s_vil = contact_sensitivity(particles, linkage[..., :nb], count)
-    dl = np.zeros_like(s_vil)
-    dl[..., np.searchsorted(contacts, approach_contacts)] = linkage[..., nb:]
-    return contacts, s_vil, dl
-
-
-def mechanism_potentials(sol: FieldSolution, geometry: SensorGeometry, *,
-                         stress_force: float, law: JilesAthertonSablik,
-                         material: ElasticMaterial = BEAD_STEEL, approach: bool = True,
-                         timings: dict | None = None) -> MechanismPotentials:
-    """Villari and contact-approach sources of every modelled bead and contact, solved.
-
-    Parameters
-    ----------
-    sol : FieldSolution
-        Bias solution of ``geometry``.
-    geometry : SensorGeometry
-    stress_force : float
-        Force at which the bead stress is solved, N.
-    law : JilesAthertonSablik
-        Magnetoelastic law of the bead steel.
-    material : ElasticMaterial
-        Bead elasticity.
-    approach : bool
-        Include the contact-approach sources.
-    timings : dict, optional
-        Filled with the seconds each stage took.
-    """
-    timings = {} if timings is None else timings
-    b = geometry.beads
-    t0 = time.perf_counter()
-    sampler = StressSampler(bead_stress(geometry, stress_force, material))
-    operator = TangentOperator(sol)
-    particles = np.array(list(b.particles))
-    sources = villari_sources(sol, geometry, particles, sampler, law)
-    timings["stress_and_tangent"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    if approach:
-        res = approach_residuals(sol, geometry, list(b.particles))
-        contacts = np.array(sorted(res))
-        a_rhs = -np.array([res[int(c)] for c in contacts])
-    else:
-        contacts = np.zeros(0, dtype=int)
-        a_rhs = np.zeros((0, sol.basis.N))
-    timings["approach_residuals"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    rhs = np.vstack([*(operator.magnetisation_rhs(el, m) for el, m in sources), a_rhs])
-    pots = operator.solve(rhs)
-    timings["source_solves"] = time.perf_counter() - t0
-    return MechanismPotentials(solution=sol, particles=particles, contacts=contacts,
-                               potentials=pots, count=b.count, operator=operator,
-                               villari_sources=sources, approach_rhs=a_rhs, rhs=rhs)
-
-
-def coil_linkage(model: MechanismPotentials, coil: Coil) -> np.ndarray:
-    """Flux linkage of every source with a coil of the mesh (exact quadrature), shape (n_s,)."""
-    return region_linkage(model.solution, model.potentials, f"coil_{coil.particle}",
-                          coil.turns, coil.area)
-
-
-def offset_profiles(model: MechanismPotentials, geometry: SensorGeometry, coil: Coil
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per-contact sensitivities of a coil moved axially over ±OFFSET_SPAN.
-
-    A summed-area table of the source potentials over the coil's radial span (the coil is
-    air, so the potentials do not change when it moves) integrated over the moved winding.
-
-    Returns
-    -------
-    offsets : ndarray, shape (n_o,)
-        m.
-    villari, approach : ndarray, shape (n_o, n_c)
-        ∂Λ/∂F_c (Wb/N) and ∂Λ/∂δ_c (Wb/m) at each offset.
-    """
-    rect = geometry.coil_rect(next(u for u in geometry.sensors
-                                   if u.coil.particle == coil.particle))
-    n = round(OFFSET_SPAN / OFFSET_STEP)
-    offsets = np.arange(-n, n + 1) * OFFSET_STEP
-    pad = 2 * OFFSET_STEP
-    table = linkage_table(model.solution, model.potentials, (rect.r0, rect.r1),
-                          (rect.z0 - OFFSET_SPAN - pad, rect.z1 + OFFSET_SPAN + pad),
-                          spacing=OFFSET_STEP / 2)
-    ones = np.ones(offsets.size)
-    link = coil.turns / coil.area * rect_integral(table, rect.r0 * ones, rect.r1 * ones,
-                                                  rect.z0 + offsets, rect.z1 + offsets)
-    _, vil, app = model.contact_profiles(link)
-    return offsets, vil, app
-
-
-def adjoint_check(model: MechanismPotentials, coil: Coil, linkage: np.ndarray
-                  ) -> tuple[float, float]:
-    """The coil's own incremental field against the source potentials (reciprocity).
-
-    Returns
-    -------
-    inductance : float
-        Incremental inductance of the coil at the bias point, H.
-    error : float
-        max |Λ_s(adjoint) - Λ_s(potentials)| / max |Λ_s| over all sources.
-    """
-    sol = model.solution
-    state = bead_state(sol, coil)
-    w = sol.disc.quad.w
-    vil = [adjoint_linkage(state.h_coil, el, m, w) for el, m in model.villari_sources]
-    app = [2 * math.pi * float(state.incremental.a @ r) for r in model.approach_rhs]
-    adj = np.array(vil + app)
-    scale = float(np.max(np.abs(linkage))) or 1.0
-    inductance = coil_flux_linkage(sol, state.incremental.a, coil)
-    return inductance, float(np.max(np.abs(adj - linkage))) / scale
 
 
 @dataclass(frozen=True)
@@ -656,7 +264,7 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
         Force at which the bead stress is solved (the secant sensitivity's force), N; default
         the geometry's ``contact_load`` (the static load that sets the model's flats).
     law : JilesAthertonSablik, optional
-        Magnetoelastic law of the beads; default :func:`msens.steel_law.law_for_steel` of
+        Magnetoelastic law of the beads; default :func:`msens.magnetics.steel_law.law_for_steel` of
         the geometry's B–H table.
     material : ElasticMaterial
         Bead elasticity.
@@ -739,145 +347,15 @@ def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
     return content_hash(payload, 16)
 
 
-def _to_json(report: TransducerReport) -> dict:
-    trs = {}
-    for p, tr in report.transducers.items():
-        trs[str(p)] = {
-            "particle": tr.particle, "contacts": np.asarray(tr.contacts).tolist(),
-            "sensitivity_villari_Wb_per_N": np.asarray(tr.sensitivity_villari).tolist(),
-            "dLambda_dapproach_Wb_per_m": np.asarray(tr.dlambda_dapproach).tolist(),
-            "contact_stiffness_N_per_m1.5": tr.contact_stiffness,
-            "reference_force_N": tr.reference_force,
-            "magnetic_particle_force_N": np.asarray(tr.magnetic_particle_force).tolist(),
-            "resistance_ohm": tr.resistance_ohm, "inductance_H": tr.inductance_H,
-            "turns": tr.turns, "source": tr.source,
-            "offsets_m": _list(tr.offsets),
-            "villari_by_offset_Wb_per_N": _list(tr.villari_by_offset),
-            "approach_by_offset_Wb_per_m": _list(tr.approach_by_offset)}
-    return {"schema": "msens.transducers/3", "transducers": trs, "details": report.details}
-
-
-def _from_json(data: dict) -> TransducerReport:
-    require(data.get("schema") == "msens.transducers/3",
-            f"not a transducer cache file (schema {data.get('schema')!r})")
-    out = {}
-    for v in data["transducers"].values():
-        out[int(v["particle"])] = Transducer(
-            particle=int(v["particle"]), contacts=np.array(v["contacts"], dtype=int),
-            sensitivity_villari=np.array(v["sensitivity_villari_Wb_per_N"]),
-            dlambda_dapproach=np.array(v["dLambda_dapproach_Wb_per_m"]),
-            contact_stiffness=float(v["contact_stiffness_N_per_m1.5"]),
-            reference_force=float(v["reference_force_N"]),
-            magnetic_particle_force=np.array(v["magnetic_particle_force_N"]),
-            resistance_ohm=float(v["resistance_ohm"]), inductance_H=float(v["inductance_H"]),
-            turns=int(v["turns"]), source=str(v["source"]),
-            offsets=_array(v.get("offsets_m")),
-            villari_by_offset=_array(v.get("villari_by_offset_Wb_per_N")),
-            approach_by_offset=_array(v.get("approach_by_offset_Wb_per_m")))
-    return TransducerReport(out, data.get("details", {}))
-
-
-def _list(a: np.ndarray | None) -> list | None:
-    return None if a is None else np.asarray(a).tolist()
-
-
-def _array(v: list | None) -> np.ndarray | None:
-    return None if v is None else np.array(v, dtype=float)
-
-
-def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None = None,
-                      cache_dir: str | Path | None = None, mesh_dir: str | Path | None = None,
-                      stress_force: float | None = None,
-                      law: JilesAthertonSablik | None = None,
-                      material: ElasticMaterial = BEAD_STEEL, approach: bool = True,
-                      refresh: bool = False, contact_maps: bool = False) -> TransducerReport:
-    """Cached :func:`compute_transducers` (``transducer-<key>.json``).
-
-    With ``contact_maps`` every transducer also gets the nonlinear contact maps of its
-    contacts near the coils (:func:`msens.magnetics.contact_map.approach_maps`, cached
-    beside it as ``contact-map-<key>.json``).
-
-    Lookup follows the mesh cache (:mod:`msens.field.cache`): with ``cache_dir`` only that
-    folder; otherwise the committed folders (:func:`msens.field.cache.committed_mesh_dirs`,
-    where the project commits the transducers of its default studies beside their meshes),
-    and new results go to :func:`msens.field.cache.default_mesh_dir` (the user cache, never
-    the committed ``meshes/``). ``refresh`` recomputes.
-    """
-    force = geometry.beads.contact_load if stress_force is None else float(stress_force)
-    law = law_for_steel(geometry.steel) if law is None else law
-    key = cache_key(geometry, options, stress_force=force, law=law, material=material,
-                    approach=approach)
-    name = f"transducer-{key}.json"
-    if cache_dir is not None:
-        directory = Path(cache_dir)
-        search = [directory]
-    else:
-        directory = default_mesh_dir()
-        search = [*committed_mesh_dirs(), directory]
-    if contact_maps:
-        from msens.magnetics.contact_map import approach_maps
-
-        report = transducer_report(geometry, options=options, cache_dir=cache_dir,
-                                   mesh_dir=mesh_dir, stress_force=force, law=law,
-                                   material=material, approach=approach, refresh=refresh)
-        maps = approach_maps(geometry, key, options=options, mesh_dir=mesh_dir,
-                             cache_dir=cache_dir)
-        return TransducerReport({p: replace(tr, approach_map=maps[p])
-                                 for p, tr in report.transducers.items()}, report.details)
-    if not refresh:
-        for d in search:
-            path = d / name
-            if path.is_file():
-                _log.info("transducers %s (cached: yes, %s)", key, path)
-                try:
-                    return _from_json(json.loads(path.read_text()))
-                except (ValueError, KeyError) as exc:
-                    raise InputError(f"transducer cache {path} is unreadable ({exc}); "
-                                     "delete it") from exc
-    _log.info("transducers %s (cached: no): computing them, usually under a minute", key)
-    report = compute_transducers(geometry, options=options, mesh_dir=mesh_dir,
-                                 stress_force=force, law=law, material=material,
-                                 approach=approach)
-    directory.mkdir(parents=True, exist_ok=True)
-    atomic_write_bytes(directory / name, json.dumps(_to_json(report), indent=1).encode(),
-                       overwrite=True)
-    _log.info("transducers %s cached in %s", key, directory / name)
-    return report
-
-
-def transducers_for(geometry: SensorGeometry, **kwargs) -> dict[int, Transducer]:
-    """One :class:`Transducer` per coil of ``geometry``, keyed by particle (cached on disk).
-
-    Keyword arguments as :func:`transducer_report`.
-    """
-    return transducer_report(geometry, **kwargs).transducers
-
-
 __all__ = [
     "MECHANISMS",
-    "OFFSET_SPAN",
-    "OFFSET_STEP",
     "TRANSDUCER_VERSION",
-    "ContactRates",
-    "MechanismPotentials",
+    "Mechanism",
     "Transducer",
     "TransducerReport",
-    "adjoint_check",
     "bias_solution",
     "cache_key",
-    "coil_linkage",
     "compute_transducers",
-    "contact_forces_of",
-    "contact_profiles",
-    "contact_rates",
-    "emf",
-    "emf_from_rates",
     "magnetic_precompression",
-    "mechanism_potentials",
-    "offset_profiles",
-    "open_contact_emf",
     "particle_forces",
-    "rigid_translation_emf",
-    "transducer_report",
-    "transducers_for",
 ]

@@ -19,7 +19,8 @@ from scipy.interpolate import CubicSpline
 
 from msens.errors import require
 from msens.field.geometry import SensorGeometry
-from msens.magnetics.transducer import Transducer, magnetic_precompression, transducers_for
+from msens.magnetics.transducer import Transducer, magnetic_precompression
+from msens.magnetics.transducer_cache import transducers_for
 
 #: Remanence factors (B_r / nominal) at which the field model is solved.
 NODES = (0.5, 0.75, 1.0, 1.25, 1.5)
@@ -92,7 +93,7 @@ def remanence_family(geometry: SensorGeometry, nodes: tuple[float, ...] = NODES,
                      **kwargs) -> RemanenceFamily:
     """Solve (or read from the transducer cache) the geometry at each remanence factor.
 
-    Keyword arguments go to :func:`msens.magnetics.transducer.transducers_for`.
+    Keyword arguments go to :func:`msens.magnetics.transducer_cache.transducers_for`.
     """
     require(all(a < b for a, b in pairwise(nodes)) and len(nodes) >= 2,
             "internal: remanence nodes must increase")

@@ -7,14 +7,15 @@ f = ∫ ν_t μ0 ΔM · B(v) r, and ΔΛ is the coil's flux linkage of that fiel
 (:mod:`msens.magnetics.potentials`, which the transducer uses; the h1 reading is its check).
 
 Magnetoelastic source. For a bead squeezed between two opposite contact forces F, the stress is
-σ(r, z; F) (:mod:`msens.beadstress`); along the local bias direction ĥ it is the equivalent
-uniaxial stress σ_eq (Daniel & Hubert, :func:`msens.magnetoelastic.equivalent_uniaxial_stress`),
-and μ0 ΔM = d(|H|) σ_eq ĥ with the JAS law's linear piezomagnetic coefficient
-d = (∂B/∂σ)_H at σ = 0 (the contact stresses reach GPa, outside the nonlinear law's range;
-the linear response at the bias point is what a small force change produces). A bead's source
-is per newton of symmetric load; σ/F is linear for bead-average quantities but not near the
-contacts (the contact radius grows as F^{1/3}), so S_i belongs to the force at which the
-stress was solved (a secant sensitivity).
+σ(r, z; F) (:mod:`msens.mechanics.beadstress`); along the local bias direction ĥ it is the
+equivalent uniaxial stress σ_eq (Daniel & Hubert,
+:func:`msens.magnetics.magnetoelastic.equivalent_uniaxial_stress`), and
+μ0 ΔM = d(|H|) σ_eq ĥ with the JAS law's linear piezomagnetic coefficient d = (∂B/∂σ)_H
+at σ = 0 (the contact stresses reach GPa, outside the nonlinear law's range; the linear
+response at the bias point is what a small force change produces). A bead's source is per newton
+of symmetric load; σ/F is linear for bead-average quantities but not near the contacts (the
+contact radius grows as F^{1/3}), so S_i belongs to the force at which the stress was solved
+(a secant sensitivity).
 
 Per contact. Bead i carries F_{i-1} on its upper pole and F_i on its lower pole (contact c is
 between particles c and c+1). Its load splits into the symmetric part (F_{i-1} + F_i)/2, which
@@ -32,30 +33,31 @@ from dataclasses import dataclass
 import numpy as np
 from matplotlib.tri import Triangulation
 
-from msens.beadstress import BeadStress, solve_bead_stress, stress_at
 from msens.errors import require
 from msens.field.geometry import Coil, SensorGeometry
 from msens.field.regions import Winding
 from msens.field.solve import FieldSolution, incremental, internal_field_strength
-from msens.magnetics.potentials import nonlinear_resolve, region_linkage
-from msens.magnetoelastic import (
+from msens.magnetics.magnetoelastic import (
     JilesAthertonSablik,
     equivalent_uniaxial_stress,
     piezomagnetic_coefficient,
 )
-from msens.materials import BEAD_STEEL, ElasticMaterial
+from msens.magnetics.potentials import nonlinear_resolve, region_linkage
+from msens.mechanics.beadstress import BeadStress, solve_bead_stress
+from msens.mechanics.stress_sampling import stress_at
+from msens.params.materials import BEAD_STEEL, ElasticMaterial
 
 # ----------------------------------------------------------------------------- bead stress
 
 class StressSampler:
     """Fast evaluation of a bead's stress per newton at many points.
 
-    :func:`msens.beadstress.stress_at` locates each point by Newton iterations in a dozen
-    candidate elements (about 0.4 ms per point); here the straight-sided triangulation of the
-    stress mesh's vertices finds the element (matplotlib's trapezoid map), two Newton steps of
-    the isoparametric map give the reference coordinates (exact for interior elements), and
-    points outside the straight triangulation (between a chord and the sphere) fall back to
-    ``stress_at``.
+    :func:`msens.mechanics.stress_sampling.stress_at` locates each point by Newton iterations in
+    a dozen candidate elements (about 0.4 ms per point); here the straight-sided triangulation
+    of the stress mesh's vertices finds the element (matplotlib's trapezoid map), two Newton
+    steps of the isoparametric map give the reference coordinates (exact for interior
+    elements), and points outside the straight triangulation (between a chord and the sphere)
+    fall back to ``stress_at``.
 
     Parameters
     ----------

@@ -16,9 +16,11 @@ import numpy as np
 from scipy.signal import lfilter
 
 from msens.chain.model import Chain
+from msens.config.schema import SetupSpec
+from msens.config.study import Study
 from msens.field.geometry import Coil
-from msens.sensors import SensorKind
-from msens.study import ElectronicsSpec, SetupSpec, Study
+from msens.readout.electronics import ElectronicsSpec
+from msens.readout.sensors import SensorKind
 
 #: A record operation: (records (..., nt), sample interval s) -> records (..., nt).
 RecordOp = Callable[[np.ndarray, float], np.ndarray]

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import dataclasses
 
+from msens.config.schema import MssModel
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
-from msens.study import MssModel
 
 NAME = "cable_capacitance"
 PARAM = "cable_capacitance_f"

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import dataclasses
 
+from msens.config.schema import MssModel
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 from msens.diagnose.effects.sensor_position import names as position_names
-from msens.study import MssModel
 
 NAME = "coil_position"
 #: Largest offset searched, m.

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import dataclasses
 
+from msens.config.schema import MssModel
 from msens.diagnose import physics
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 from msens.magnetics.variants import NODES
-from msens.study import MssModel
 
 NAME = "magnet_remanence"
 PARAM = "remanence_factor"

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from msens.assemble import precompression_forces
+from msens.config.assemble import precompression_forces
+from msens.config.schema import PrecompressionSpec
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 from msens.diagnose.effects.static_precompression import (
     FLOOR_N,
@@ -19,8 +20,7 @@ from msens.diagnose.effects.static_precompression import (
     PLAUSIBLE_MAX_N,
     PLAUSIBLE_REASON,
 )
-from msens.sensors import SensorKind
-from msens.study import PrecompressionSpec
+from msens.readout.sensors import SensorKind
 
 NAME = "magnetic_precompression"
 PARAM = "precompression_force_n"

@@ -18,7 +18,7 @@ import dataclasses
 import numpy as np
 
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
-from msens.sensors import SensorKind
+from msens.readout.sensors import SensorKind
 
 NAME = "sensor_mass"
 PARAM = "sensor_mass_kg"

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import dataclasses
 
+from msens.config.schema import MssModel
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
-from msens.sensors import SensorKind
-from msens.study import MssModel
+from msens.readout.sensors import SensorKind
 
 NAME = "sensor_position"
 #: Largest displacement searched, particles.

@@ -3,9 +3,9 @@
 Parameters ``first_contact`` (1-based contact number c_k, between particles k and k + 1),
 ``contact_count`` (how many consecutive contacts) and ``precompression_force_n`` (N): a force
 +F on particle ``first_contact`` and -F on particle ``first_contact + contact_count``
-compresses c_first..c_last by F and no other contact (:func:`msens.assemble.precompression_forces`,
-the same forces a study's ``[[setup.precompression]]`` declares). A magnet or a clamp near a
-sensor does this; the run can sit anywhere between the striker's contact and the wall's.
+compresses c_first..c_last by F and no other contact
+(:func:`msens.config.assemble.precompression_forces`, the same forces a study's
+``[[setup.precompression]]`` declares). A magnet or a clamp near a sensor does this; the run can sit anywhere between the striker's contact and the wall's.
 Baseline: no added compression (force 0). The compressed run is faster and stiffer: the pulse
 arrives early below it and its shape changes where a sensor sits inside it.
 
@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import dataclasses
 
-from msens.assemble import precompression_forces
+from msens.config.assemble import precompression_forces
+from msens.config.schema import MssModel, PrecompressionSpec
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
-from msens.study import MssModel, PrecompressionSpec
 
 NAME = "static_precompression"
 FIRST, COUNT, FORCE = "first_contact", "contact_count", "precompression_force_n"

@@ -18,7 +18,7 @@ import dataclasses
 import math
 
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
-from msens.units import G0
+from msens.params.units import G0
 
 NAME = "striker_velocity"
 PARAM = "striker_velocity_m_per_s"

@@ -1,6 +1,6 @@
 """Physical plausibility limits of the numbers a study gives, each with its reason.
 
-The study schema (:mod:`msens.study`) refuses a value outside these ranges up front, naming
+The study schema (:mod:`msens.config.study`) refuses a value outside these ranges up front, naming
 the key, so that nonsense (a bead of 1e-300 m, a modulus of 1e308 Pa) never reaches the chain
 integrator or the field model, where it would hang, exhaust memory or give confident
 nonsense. The ranges are generous: every granular chain and magnetostrictive sensor a

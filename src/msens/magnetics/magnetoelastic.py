@@ -17,7 +17,7 @@ Maxwell relation (∂B/∂σ)_H = (∂ε/∂H)_σ holds exactly; with κ = 1 and
 the textbook (∂B/∂σ)_H = (∂λ/∂H)_σ. With Sablik–Jiles' κ = 3/2 the model's conjugate strain is
 (3/2)λ: d is 1.5 times what λ read as the measured strain would imply (documented choice).
 
-References: see :mod:`msens.magnetostriction_data`; [DH09] L. Daniel, O. Hubert, "An
+References: see :mod:`msens.params.magnetostriction_data`; [DH09] L. Daniel, O. Hubert, "An
 equivalent stress for the influence of multiaxial stress on the magnetic behavior",
 J. Appl. Phys. 105, 07A313 (2009).
 """
@@ -34,8 +34,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
 from msens.errors import InputError, require
-from msens.magnetostriction_data import STEEL_1018_FIT, JilesAthertonSablik
-from msens.units import MU0
+from msens.params.magnetostriction_data import STEEL_1018_FIT, JilesAthertonSablik
+from msens.params.units import MU0
 
 __all__ = [
     "DEFAULT_STEEL",
@@ -57,7 +57,7 @@ __all__ = [
 
 #: Default low-carbon steel: the anhysteretic fitted to the FEMM 1018 B–H curve (the curve
 #: the field solver uses), with the [J95] magnetostriction and κ = 3/2. See
-#: :mod:`msens.magnetostriction_data` for both sets and their sources.
+#: :mod:`msens.params.magnetostriction_data` for both sets and their sources.
 DEFAULT_STEEL: JilesAthertonSablik = STEEL_1018_FIT
 
 # Below |x| = 1 the Langevin function and its derivative use their Taylor series: the closed
@@ -441,7 +441,8 @@ def equivalent_uniaxial_stress(stress: ArrayLike, h_dir: ArrayLike) -> NDArray[n
     stress : array_like
         Either full tensors, shape (..., 3, 3), Pa, with ``h_dir`` shape (..., 3) in the same
         basis; or axisymmetric components [σ_rr, σ_zz, σ_θθ, σ_rz], shape (..., 4), Pa (the
-        order of msens.beadstress.stress_at), with ``h_dir`` = [h_r, h_z], shape (..., 2).
+        order of msens.mechanics.stress_sampling.stress_at), with ``h_dir`` = [h_r, h_z],
+        shape (..., 2).
     h_dir : array_like
         Field direction (any length), broadcast against the stress batch shape.
 

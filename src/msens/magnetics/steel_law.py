@@ -1,11 +1,11 @@
 """The bead steel's magnetoelastic law from the B–H table the field model uses.
 
 The field solver takes the steel's normal B–H curve as a table (``[field] steel_bh``); the
-Villari law (:mod:`msens.magnetoelastic`) needs Jiles–Atherton–Sablik anhysteretic
+Villari law (:mod:`msens.magnetics.magnetoelastic`) needs Jiles–Atherton–Sablik anhysteretic
 parameters. So that both describe the same steel, the anhysteretic (M_s, a, α) is fitted to
 the table by least squares on the relative misfit B_model(H_i)/B_i − 1 over the points with
 H > 0, started from the design.md §7 defaults, the procedure that gave the stored 1018 fit
-(:data:`msens.magnetostriction_data.STEEL_1018_FIT`). The magnetostriction coefficients and
+(:data:`msens.params.magnetostriction_data.STEEL_1018_FIT`). The magnetostriction coefficients and
 the coupling κ are kept from that law: a B–H table says nothing about them.
 """
 
@@ -18,9 +18,9 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from msens.field.geometry import same_bh
-from msens.magnetoelastic import DEFAULT_STEEL, JilesAthertonSablik, flux_density
-from msens.magnetostriction_data import JA_DEFAULTS_STEEL
-from msens.materials import STEEL_1018_BH, BHCurve
+from msens.magnetics.magnetoelastic import DEFAULT_STEEL, JilesAthertonSablik, flux_density
+from msens.params.magnetostriction_data import JA_DEFAULTS_STEEL
+from msens.params.materials import STEEL_1018_BH, BHCurve
 
 
 def fit_anhysteretic(bh: BHCurve, base: JilesAthertonSablik = JA_DEFAULTS_STEEL,
@@ -55,14 +55,14 @@ def fit_anhysteretic(bh: BHCurve, base: JilesAthertonSablik = JA_DEFAULTS_STEEL,
     law = dataclasses.replace(
         law_of(sol.x),
         source=f"Ms, a, alpha: least-squares fit to the B-H table '{bh.name}' "
-               f"(msens.steel_law); magnetostriction and coupling: {base.source}")
+               f"(msens.magnetics.steel_law); magnetostriction and coupling: {base.source}")
     return law, float(np.sqrt(np.mean(sol.fun**2)))
 
 
 def law_for_steel(bh: BHCurve) -> JilesAthertonSablik:
     """Magnetoelastic law of a bead steel given by its B–H table.
 
-    The default 1018 curve gets the stored fit :data:`msens.magnetoelastic.DEFAULT_STEEL`
+    The default 1018 curve gets the stored fit :data:`msens.magnetics.magnetoelastic.DEFAULT_STEEL`
     itself (so results and caches of the default studies do not move); any other table its
     own :func:`fit_anhysteretic`.
     """

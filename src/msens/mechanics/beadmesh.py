@@ -24,6 +24,7 @@ import numpy as np
 import skfem
 
 from msens.errors import require
+from msens.meshing import generate_sized
 
 #: gmsh model name, so that we remove only our own model from a shared gmsh session.
 _MODEL = "msens-bead-section"
@@ -120,12 +121,7 @@ def bead_section_mesh(radius: float, contact_radius: float,
             d = np.hypot(x, y)
             return min(h_bulk, h_pole + slope * d)
 
-        gmsh.model.mesh.setSizeCallback(size)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
-        gmsh.option.setNumber("Mesh.Algorithm", 6)
-        gmsh.model.mesh.generate(2)
+        generate_sized(size)
         if spec.order == 2:
             gmsh.model.mesh.setOrder(2)
         etype = 9 if spec.order == 2 else 2  # gmsh: 9 = 6-node triangle, 2 = 3-node

@@ -10,8 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from msens.chain.model import Chain
+from msens.config.schema import PrecompressionSpec, SetupSpec
+from msens.config.study import Study
 from msens.mechanics.hertz import hertz_sphere_flat, hertz_sphere_sphere
-from msens.study import PrecompressionSpec, SetupSpec, Study
 
 
 def precompression_forces(n_particles: int,

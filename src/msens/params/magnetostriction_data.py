@@ -1,7 +1,7 @@
 """Parameter sets for the Jiles–Atherton–Sablik (JAS) anhysteretic magnetoelastic law.
 
 Each set is one frozen record with its citation (PyBaMM style); the laws that use them live
-in :mod:`msens.magnetoelastic`. All values SI.
+in :mod:`msens.magnetics.magnetoelastic`. All values SI.
 
 The magnetostriction follows Sablik & Jiles [SJ93]: λ(M, σ) = γ₁(σ) M² + γ₂(σ) M⁴ with
 γ₁ = γ₁₁ + γ₁₂ σ and γ₂ = γ₂₁ + γ₂₂ σ. γ₂ < 0 makes λ rise, peak and change sign at higher
@@ -48,7 +48,7 @@ class JilesAthertonSablik:
     coupling : float
         κ in the magnetoelastic field κ σ/μ₀ ∂λ/∂M. Sablik and Jiles use κ = 3/2 [SJ93, J95];
         κ = 1 is the choice for which λ itself is the strain thermodynamically conjugate to
-        σ (see :func:`msens.magnetoelastic.magnetoelastic_strain`).
+        σ (see :func:`msens.magnetics.magnetoelastic.magnetoelastic_strain`).
     source : str
         Where the numbers come from; estimates say so.
     """
@@ -96,7 +96,7 @@ JA_DEFAULTS_STEEL = JilesAthertonSablik(
            "as quoted (estimate for mild steel); coupling 3/2 [SJ93]",
 )
 
-#: Anhysteretic fitted to the FEMM 1018 B–H curve (:data:`msens.materials.STEEL_1018_BH`, the
+#: Anhysteretic fitted to the FEMM 1018 B–H curve (:data:`msens.params.materials.STEEL_1018_BH`, the
 #: curve the field solver uses): least squares (scipy.optimize.least_squares, from the
 #: design.md §7 defaults) on the relative misfit B_model(H_i)/B_i − 1 over the 12 points with
 #: H > 0; result rounded to 5 digits. Relative misfit: rms 5.7 %, max 14.8 % (at 795.8 A/m);

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from msens.errors import InputError, require
-from msens.units import ALPHA_COPPER, MU0, RHO_COPPER
+from msens.params.units import ALPHA_COPPER, MU0, RHO_COPPER
 
 #: Vacuum permittivity, F/m (CODATA 2018), from ε0 = 1/(μ0 c²).
 EPS0 = 1.0 / (MU0 * 299_792_458.0**2)
@@ -174,7 +174,7 @@ class Winding:
         """DC copper resistance of the winding, Ω.
 
         R = ρ₂₀ (1 + α (T − 293.15 K)) · N · 2π r_mean / (π d²/4), with ρ₂₀ and α of annealed
-        copper (IEC 60028, :mod:`msens.units`). Leads are not included.
+        copper (IEC 60028, :mod:`msens.params.units`). Leads are not included.
 
         Parameters
         ----------

@@ -299,7 +299,7 @@ def plot_field_map(report: FieldReport, path: str | Path, fmt: str | None = None
     path : str or Path
     fmt : {"png", "pdf", "svg"}, optional
         File format (default: from ``path``'s suffix, else PNG); rasters at
-        :data:`msens.output.DPI`.
+        :data:`msens.io.output.DPI`.
 
     Returns
     -------
@@ -307,7 +307,7 @@ def plot_field_map(report: FieldReport, path: str | Path, fmt: str | None = None
     """
     import matplotlib.pyplot as plt
 
-    from msens.output import DPI
+    from msens.io.output import DPI
 
     path = Path(path)
     fmt = fmt or path.suffix.lstrip(".") or "png"

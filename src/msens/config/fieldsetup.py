@@ -2,7 +2,7 @@
 
 The field package knows nothing of studies; this module maps a setup's MsS sensors (coil and
 magnet tables) and the study's ``[field]`` options onto :class:`SensorGeometry`, the way
-:mod:`msens.assemble` maps a setup onto the chain. Dimensions a study leaves out take the
+:mod:`msens.config.assemble` maps a setup onto the chain. Dimensions a study leaves out take the
 field model's documented defaults (the paper's coil; an *equivalent* ring magnet with two
 pole pieces standing in for the undocumented bridge magnet; 1018 steel unless ``[field]``
 gives a ``steel_bh`` table).
@@ -12,7 +12,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from msens.coil import awg_diameter, heavy_build_diameter
+from msens.config.schema import CoilSpec, MagnetSpec, SensorSpec, SetupSpec
+from msens.config.study import Study
 from msens.errors import InputError
 from msens.field.build import MeshOptions
 from msens.field.eddy import SIGMA_1018, SKIN_SIZE
@@ -26,9 +27,9 @@ from msens.field.geometry import (
     SensorUnit,
     Wire,
 )
-from msens.materials import MAGNET_GRADES
-from msens.sensors import SensorKind
-from msens.study import CoilSpec, MagnetSpec, SensorSpec, SetupSpec, Study
+from msens.params.materials import MAGNET_GRADES
+from msens.readout.coil import awg_diameter, heavy_build_diameter
+from msens.readout.sensors import SensorKind
 
 
 def mss_setup(study: Study) -> SetupSpec:
@@ -45,7 +46,7 @@ def _given(**kw: float | None) -> dict[str, float]:
 
 def wire_for(name: str) -> Wire:
     """Heavy-build enamelled wire of an AWG name (``"AWG36"``): the field model's table
-    where it has the gauge, else ASTM B258 bare and heavy-build diameters (msens.coil)."""
+    where it has the gauge, else ASTM B258 bare and heavy-build diameters (msens.readout.coil)."""
     name = name.upper()
     if name in WIRES:
         return WIRES[name]

@@ -233,7 +233,7 @@ def expected_round_trip(distance_to_wall: ArrayLike, speed: ArrayLike) -> np.nda
     distance_to_wall : array_like
         Distance from the sensor's centre to the wall, m.
     speed : array_like
-        Pulse speed, m/s (e.g. :func:`msens.longwave.soliton_speed_uncompressed`).
+        Pulse speed, m/s (e.g. :func:`msens.mechanics.longwave.soliton_speed_uncompressed`).
     """
     return 2.0 * np.asarray(distance_to_wall, dtype=float) / np.asarray(speed, dtype=float)
 

@@ -1,0 +1,1 @@
+"""Published parameter sets and material records, each cited, and physical constants."""

@@ -1,0 +1,294 @@
+"""Read-out circuit of the pick-up coil: from the induced EMF to the voltage the DAQ records.
+
+Circuit (one node per capacitor)::
+
+    EMF ─ R ─ L ─┬─ R_c ─┬──────┬─────┐
+                 C_w     C_B   R_in   DAQ       C_B = C_cable + C_in
+                 ⏚       ⏚      ⏚
+
+The EMF source is in series with the coil's copper resistance R and inductance L; the
+winding's self-capacitance C_w sits across the coil terminals (node A); a cable with lumped
+series resistance R_c (default 0) carries the signal to the DAQ (node B), where the cable
+capacitance and the DAQ input (R_in ∥ C_in) load it. With R_c = 0 the two nodes merge and the
+circuit is a second-order low-pass; with R_c > 0 it is third order.
+
+This module holds the circuit, its transfer functions, state space, poles and bandwidth;
+the sampled DAQ record is in :mod:`msens.readout.daq`, the circuit's noise in
+:mod:`msens.readout.noise`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy import linalg, optimize
+
+from msens.errors import InputError, require
+
+#: Capacitance of 1 m of RG-58 coaxial cable, F (about 100 pF/m; e.g. Belden 8240:
+#: 30.8 pF/ft = 101 pF/m).
+RG58_CAPACITANCE_PER_M = 100e-12
+
+#: A typical oscilloscope / digitiser high-impedance input: 1 MΩ ∥ 20 pF.
+TYPICAL_INPUT_RESISTANCE = 1e6
+
+TYPICAL_INPUT_CAPACITANCE = 20e-12
+
+
+@dataclass(frozen=True)
+class ElectronicsSpec:
+    """Settings of a coil's read-out rig, as a study's ``[electronics]`` gives them.
+
+    Capacitances in F, resistance in Ohm, rate in Hz. Defaults: 1 m of RG-58 coaxial cable
+    into a 1 MOhm || 20 pF DAQ input sampled at the paper's 10 MHz; noise off unless asked
+    for. :func:`msens.magnetics.mss.readout` maps them onto a :class:`ReadoutCircuit`.
+    """
+
+    cable_capacitance_f: float = RG58_CAPACITANCE_PER_M * 1.0
+    input_resistance_ohm: float = TYPICAL_INPUT_RESISTANCE
+    input_capacitance_f: float = TYPICAL_INPUT_CAPACITANCE
+    sample_rate_hz: float = 10e6
+    johnson_noise: bool = False
+    temperature_k: float = 293.15
+    adc_bits: int | None = None
+    adc_range_v: float | None = None
+    input_noise_v_per_rthz: float = 0.0
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class ReadoutCircuit:
+    """Lumped coil–cable–DAQ circuit (SI units).
+
+    Attributes
+    ----------
+    resistance : float
+        Coil copper resistance R, Ω (> 0).
+    inductance : float
+        Coil inductance L, H (>= 0; > 0 for time-domain use).
+    winding_capacitance : float
+        Winding self-capacitance C_w across the coil terminals, F.
+    cable_capacitance : float
+        Lumped cable capacitance, F (placed at the DAQ end).
+    input_resistance : float
+        DAQ input resistance R_in, Ω (``math.inf`` allowed).
+    input_capacitance : float
+        DAQ input capacitance C_in, F.
+    cable_resistance : float
+        Lumped series resistance of the cable R_c, Ω (default 0).
+    """
+
+    resistance: float
+    inductance: float
+    winding_capacitance: float
+    cable_capacitance: float
+    input_resistance: float
+    input_capacitance: float
+    cable_resistance: float = 0.0
+
+    def __post_init__(self) -> None:
+        require(math.isfinite(self.resistance) and self.resistance > 0,
+                f"coil resistance must be a finite value > 0 Ω, got {self.resistance}")
+        require(math.isfinite(self.inductance) and self.inductance >= 0,
+                f"coil inductance must be >= 0 H, got {self.inductance}")
+        for name in ("winding_capacitance", "cable_capacitance", "input_capacitance",
+                     "cable_resistance"):
+            value = getattr(self, name)
+            require(math.isfinite(value) and value >= 0, f"{name} must be >= 0, got {value}")
+        require(self.input_resistance > 0,
+                f"input_resistance must be > 0 Ω (inf allowed), got {self.input_resistance}")
+
+    @property
+    def load_capacitance(self) -> float:
+        """C_B = cable + DAQ input capacitance, F."""
+        return self.cable_capacitance + self.input_capacitance
+
+    @property
+    def total_capacitance(self) -> float:
+        """All capacitance across the coil when R_c = 0, F."""
+        return self.winding_capacitance + self.load_capacitance
+
+
+def readout_circuit(resistance: float, inductance: float, winding_capacitance: float, *,
+                    cable_length_m: float = 1.0,
+                    cable_capacitance_per_m: float = RG58_CAPACITANCE_PER_M,
+                    input_resistance: float = TYPICAL_INPUT_RESISTANCE,
+                    input_capacitance: float = TYPICAL_INPUT_CAPACITANCE,
+                    cable_resistance: float = 0.0) -> ReadoutCircuit:
+    """A :class:`ReadoutCircuit` with the typical cable (1 m RG-58) and DAQ (1 MΩ ∥ 20 pF)."""
+    require(cable_length_m >= 0, f"cable length must be >= 0 m, got {cable_length_m}")
+    return ReadoutCircuit(resistance, inductance, winding_capacitance,
+                          cable_length_m * cable_capacitance_per_m, input_resistance,
+                          input_capacitance, cable_resistance)
+
+
+def _conductance(resistance: float) -> float:
+    return 0.0 if math.isinf(resistance) else 1.0 / resistance
+
+
+def _admittances(circuit: ReadoutCircuit, f: np.ndarray):
+    """s, series coil impedance Z_s = R + sL, load admittance Y_B = 1/R_in + s C_B."""
+    s = 2j * np.pi * f
+    z_s = circuit.resistance + s * circuit.inductance
+    y_b = _conductance(circuit.input_resistance) + s * circuit.load_capacitance
+    return s, z_s, y_b
+
+
+def transfer_function(circuit: ReadoutCircuit, f: ArrayLike) -> np.ndarray:
+    """H(j2πf) = V_daq / EMF.
+
+    H = 1 / ((1 + Z_s Y_p)(1 + R_c Y_B)) with Z_s = R + sL, Y_B = 1/R_in + s C_B and
+    Y_p = s C_w + Y_B / (1 + R_c Y_B) the admittance across the coil terminals.
+
+    Parameters
+    ----------
+    circuit : ReadoutCircuit
+    f : array_like, shape (n,)
+        Frequencies, Hz (>= 0).
+
+    Returns
+    -------
+    ndarray of complex, shape (n,)
+    """
+    f = np.asarray(f, dtype=float)
+    s, z_s, y_b = _admittances(circuit, f)
+    return _transfer(circuit, s, z_s, y_b)
+
+
+def _transfer(circuit: ReadoutCircuit, s: np.ndarray, z_s: np.ndarray,
+              y_b: np.ndarray) -> np.ndarray:
+    """1 / ((1 + Z_s Y_p)(1 + R_c Y_B)) for a series coil impedance Z_s (any model)."""
+    div = 1.0 + circuit.cable_resistance * y_b
+    y_p = s * circuit.winding_capacitance + y_b / div
+    return 1.0 / ((1.0 + z_s * y_p) * div)
+
+
+def coil_transfer_function(circuit: ReadoutCircuit, f: ArrayLike,
+                           coil_impedance: ArrayLike) -> np.ndarray:
+    """H(j2πf) = V_daq / EMF with an arbitrary series coil impedance Z(f).
+
+    As :func:`transfer_function` with Z_s = ``coil_impedance`` in place of R + sL (e.g. the
+    eddy-current impedance R_dc + jωΛ(ω)/I of :mod:`msens.magnetics.dynamic`); the
+    circuit's own ``resistance`` and ``inductance`` are not used. The winding capacitance,
+    cable and DAQ input are the circuit's.
+
+    Parameters
+    ----------
+    circuit : ReadoutCircuit
+    f : array_like, shape (n,)
+        Frequencies, Hz (>= 0).
+    coil_impedance : array_like of complex, shape (n,)
+        Z_s at ``f``, Ω.
+
+    Returns
+    -------
+    ndarray of complex, shape (n,)
+    """
+    f = np.asarray(f, dtype=float)
+    z = np.asarray(coil_impedance, dtype=complex)
+    require(z.shape == f.shape, f"coil_impedance must have the shape of f {f.shape}, got "
+            f"{z.shape}")
+    s, _, y_b = _admittances(circuit, f)
+    return _transfer(circuit, s, z, y_b)
+
+
+def state_space(circuit: ReadoutCircuit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Continuous state-space model ẋ = A x + B u, v_daq = C x.
+
+    States: coil current i_L and the capacitor voltages (v_A when R_c > 0, then v_B).
+    Inputs u = [EMF (+ coil thermal noise), cable thermal noise, R_in noise current].
+
+    Returns
+    -------
+    A : ndarray, shape (n, n)
+    B : ndarray, shape (n, 3)
+    C : ndarray, shape (n,)
+    """
+    c = circuit
+    require(c.inductance > 0, "the circuit's state-space model (time domain, resonance, "
+            "bandwidth, total noise) needs coil inductance > 0 H")
+    g_in = _conductance(c.input_resistance)
+    inv_l = 1.0 / c.inductance
+    if c.cable_resistance == 0.0:
+        require(c.total_capacitance > 0,
+                "the circuit's state-space model needs winding + cable + input capacitance "
+                "> 0 F")
+        inv_c = 1.0 / c.total_capacitance
+        a = np.array([[-c.resistance * inv_l, -inv_l],
+                      [inv_c, -g_in * inv_c]])
+        b = np.array([[inv_l, 0.0, 0.0],
+                      [0.0, 0.0, inv_c]])
+        return a, b, np.array([0.0, 1.0])
+    require(c.winding_capacitance > 0 and c.load_capacitance > 0,
+            "with cable_resistance > 0 both the winding capacitance and cable + input "
+            "capacitance must be > 0 F")
+    g_c = 1.0 / c.cable_resistance
+    inv_a = 1.0 / c.winding_capacitance
+    inv_b = 1.0 / c.load_capacitance
+    a = np.array([[-c.resistance * inv_l, -inv_l, 0.0],
+                  [inv_a, -g_c * inv_a, g_c * inv_a],
+                  [0.0, g_c * inv_b, -(g_c + g_in) * inv_b]])
+    b = np.array([[inv_l, 0.0, 0.0],
+                  [0.0, -g_c * inv_a, 0.0],
+                  [0.0, g_c * inv_b, inv_b]])
+    return a, b, np.array([0.0, 0.0, 1.0])
+
+
+def poles(circuit: ReadoutCircuit) -> np.ndarray:
+    """Poles of H(s), rad/s, sorted by magnitude (complex, shape (2,) or (3,))."""
+    p = linalg.eigvals(state_space(circuit)[0])
+    return p[np.argsort(np.abs(p))]
+
+
+def resonance(circuit: ReadoutCircuit) -> tuple[float, float]:
+    """Self-resonance frequency f0 (Hz) and quality factor Q of the coil read-out.
+
+    From the two poles of smallest magnitude p1, p2 (the coil–capacitance pair; with
+    R_c > 0 the third pole is the fast R_c pole): ω0 = √(p1 p2), Q = ω0 / (−(p1 + p2)).
+    For a complex pair −σ ± jω_d this is ω0 = |p|, Q = |p|/(2σ); for R_c = 0,
+    ω0² = (1 + R/R_in)/(L C) and Q = ω0 L C / (R C + L/R_in).
+    """
+    p = poles(circuit)[:2]
+    omega0 = math.sqrt(abs((p[0] * p[1]).real))
+    return omega0 / (2.0 * math.pi), omega0 / float(-(p[0] + p[1]).real)
+
+
+def bandwidth(circuit: ReadoutCircuit) -> float:
+    """−3 dB bandwidth, Hz: the lowest f at which |H(f)| falls to |H(0)|/√2.
+
+    Above any resonance peak: the peak itself (|H| > |H(0)|) is inside the band.
+    """
+    f0, _ = resonance(circuit)
+    target = abs(transfer_function(circuit, [0.0])[0]) / math.sqrt(2.0)
+    grid = np.geomspace(f0 * 1e-6, f0 * 1e6, 4001)
+    below = np.nonzero(np.abs(transfer_function(circuit, grid)) < target)[0]
+    if below.size == 0:
+        raise InputError("circuit has no -3 dB point below 1e6 × its resonance frequency")
+    k = int(below[0])
+    if k == 0:
+        return float(grid[0])
+
+    def excess(f: float) -> float:
+        return abs(transfer_function(circuit, [f])[0]) - target
+
+    return float(optimize.brentq(excess, grid[k - 1], grid[k], xtol=1e-12 * grid[k],
+                                 rtol=1e-14))
+
+
+@numba.njit(cache=True)
+def _linear_recursion(phi, x0, drive):  # pragma: no cover - compiled
+    """x[0] = x0, x[k+1] = Φ x[k] + drive[k]; returns x, shape (K+1, n)."""
+    k_steps, n = drive.shape
+    x = np.empty((k_steps + 1, n))
+    x[0] = x0
+    for k in range(k_steps):
+        for i in range(n):
+            acc = drive[k, i]
+            for j in range(n):
+                acc += phi[i, j] * x[k, j]
+            x[k + 1, i] = acc
+    return x

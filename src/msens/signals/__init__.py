@@ -1,0 +1,1 @@
+"""Sampled signals: processing, pulse features, checks of measured records."""

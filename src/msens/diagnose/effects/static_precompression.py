@@ -5,7 +5,8 @@ Parameters ``first_contact`` (1-based contact number c_k, between particles k an
 +F on particle ``first_contact`` and -F on particle ``first_contact + contact_count``
 compresses c_first..c_last by F and no other contact
 (:func:`msens.config.assemble.precompression_forces`, the same forces a study's
-``[[setup.precompression]]`` declares). A magnet or a clamp near a sensor does this; the run can sit anywhere between the striker's contact and the wall's.
+``[[setup.precompression]]`` declares). A magnet or a clamp near a sensor does this; the
+run can sit anywhere between the striker's contact and the wall's.
 Baseline: no added compression (force 0). The compressed run is faster and stiffer: the pulse
 arrives early below it and its shape changes where a sensor sits inside it.
 

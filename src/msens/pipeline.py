@@ -55,7 +55,7 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
     coil = coil_geometry(sensor.coil or CoilSpec(), sensor.particle)
     circuit = readout(coil, tr.resistance_ohm, tr.inductance_H, study.electronics)
     if responses:
-        from msens.magnetics.dynamic import dynamic_signals
+        from msens.magnetics.eddy_readout import dynamic_signals
 
         rec = dynamic_signals(tr, responses[sensor.particle], circuit, history.t,
                               history.force, study.electronics.sample_rate_hz,

@@ -79,7 +79,7 @@ class SetupResult:
         Physics MsS transducers by coil particle (:class:`msens.magnetics.transducer.Transducer`).
     responses : dict or None
         With eddy currents: each coil's frequency response by particle
-        (:class:`msens.magnetics.dynamic.FrequencyResponse`).
+        (:class:`msens.magnetics.frequency_response.FrequencyResponse`).
     """
 
     setup: SetupSpec
@@ -398,7 +398,7 @@ def mechanism_share(tr, history, response=None) -> dict:
     fraction of the contact-approach peak, and the part of it from contacts while they are open
     (extrapolated linearly: :func:`msens.magnetics.emf.open_contact_emf`), its peak and
     share of the contact-approach energy. With an eddy-current ``response`` the two mechanisms'
-    EMFs are the frequency-domain ones (:func:`msens.magnetics.dynamic.mechanism_emfs`); the
+    EMFs are the frequency-domain ones (:func:`msens.magnetics.eddy_readout.mechanism_emfs`); the
     rigid-translation and open-contact parts stay magnetostatic estimates."""
     from msens.magnetics.emf import (
         contact_forces_of,
@@ -414,7 +414,7 @@ def mechanism_share(tr, history, response=None) -> dict:
         emfs = {m: emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach, m)
                 for m in ("villari", "approach")}
     else:
-        from msens.magnetics.dynamic import mechanism_emfs
+        from msens.magnetics.eddy_readout import mechanism_emfs
 
         emfs = mechanism_emfs(response, rates)
     energy = {m: float(np.trapezoid(e**2, history.t)) for m, e in emfs.items()}

@@ -234,7 +234,8 @@ def test_hammerstein_with_eddy_currents():
     """With a frequency response, the map acts first (Hammerstein): the mapped transducer
     equals the linear one fed with the equivalent approaches, and at σ = 0 (a flat
     response) its flux is the static map's."""
-    from msens.magnetics.dynamic import FrequencyResponse, dynamic_signals
+    from msens.magnetics.eddy_readout import dynamic_signals
+    from msens.magnetics.frequency_response import FrequencyResponse
 
     tr, table = _wired(True)
     lin, _ = _wired(False)

@@ -20,13 +20,13 @@ from msens.field.sensor_model import coil_resistance
 from msens.magnetics.approach import hertz_stiffness
 from msens.magnetics.dynamic import (
     dynamic_report,
-    dynamic_signals,
     frequency_responses,
     join_reports,
     report_from_json,
     report_to_json,
     sensor_conductivity,
 )
+from msens.magnetics.eddy_readout import dynamic_signals
 from msens.magnetics.mechanisms import adjoint_check, coil_linkage, mechanism_potentials
 from msens.magnetics.mss import MssSensor, mss_signals
 from msens.magnetics.steel_law import law_for_steel

@@ -51,7 +51,7 @@ def test_eddy_currents_screen_the_coil_signal(eddy_runs):
     assert eddy_study.field.eddy_currents
     eddy = result.setups[0].sensors[0]
     # the mechanisms' EMFs with eddy currents add up to the record's EMF
-    from msens.magnetics.dynamic import mechanism_emfs
+    from msens.magnetics.eddy_readout import mechanism_emfs
     from msens.magnetics.emf import contact_rates
 
     setup = result.setups[0]

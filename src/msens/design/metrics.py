@@ -26,8 +26,9 @@ import numpy as np
 import scipy.fft
 
 from msens.field.geometry import Coil
-from msens.magnetics.dynamic import PAD, coil_impedance, emf_spectra
+from msens.magnetics.eddy_readout import PAD, emf_spectra
 from msens.magnetics.emf import ContactRates, emf_from_rates
+from msens.magnetics.frequency_response import coil_impedance
 from msens.magnetics.mss import figure_noise_rms, readout
 from msens.readout.electronics import (
     ElectronicsSpec,
@@ -154,11 +155,11 @@ def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductanc
     """Metrics of coil designs with eddy currents, one dict per design.
 
     The EMF and the DAQ voltage are those of ``msens run`` with eddy currents
-    (:func:`msens.magnetics.dynamic.dynamic_signals`): the contact rates' spectra times the
-    complex sensitivities (:func:`msens.magnetics.dynamic.emf_spectra`), then the read-out
+    (:func:`msens.magnetics.eddy_readout.dynamic_signals`): the contact rates' spectra times the
+    complex sensitivities (:func:`msens.magnetics.eddy_readout.emf_spectra`), then the read-out
     circuit with the coil's series impedance Z(ω) = R + jωL(ω)
     (:func:`msens.readout.electronics.coil_transfer_function`), on the run's FFT length
-    (:data:`msens.magnetics.dynamic.PAD`). Resonance, Q, bandwidth and noise are the static
+    (:data:`msens.magnetics.eddy_readout.PAD`). Resonance, Q, bandwidth and noise are the static
     circuit's (R, bias-point L), as ``summary.json`` reports them.
 
     Parameters

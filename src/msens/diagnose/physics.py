@@ -8,7 +8,7 @@ holds the field models (the study's transducers, and on demand their
 functions ``msens run`` uses, so an undisturbed diagnosis reproduces the run exactly. With
 eddy currents (``[field] eddy_currents = true``) a model also holds each coil's frequency
 response (the run's :func:`msens.magnetics.dynamic.dynamic_report`) and :func:`signals` is
-the frequency-domain read-out of :func:`msens.magnetics.dynamic.dynamic_signals`; the effects
+the frequency-domain read-out of :func:`msens.magnetics.eddy_readout.dynamic_signals`; the effects
 that need field-model variants (coil offset, magnet remanence) are then not searched.
 """
 
@@ -24,7 +24,9 @@ from msens.config.schema import CoilSpec, MssModel
 from msens.diagnose.effects.base import Context, PhysicsMss
 from msens.errors import internal
 from msens.field.geometry import SensorGeometry
-from msens.magnetics.dynamic import FrequencyResponse, dynamic_report, dynamic_signals
+from msens.magnetics.dynamic import dynamic_report
+from msens.magnetics.eddy_readout import dynamic_signals
+from msens.magnetics.frequency_response import FrequencyResponse
 from msens.magnetics.mss import MssRecord, MssSensor, mss_signals, readout
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import Transducer, cache_key, magnetic_precompression
@@ -107,7 +109,7 @@ def signals(spec: PhysicsMss, t: np.ndarray, force: np.ndarray, *,
             static: np.ndarray | None = None) -> MssRecord:
     """The noise-free coil signals of a physics MsS for a chain's contact forces (and
     approaches), as ``msens run`` forms them: :func:`msens.magnetics.mss.mss_signals`, or with
-    eddy currents :func:`msens.magnetics.dynamic.dynamic_signals` (arguments as those)."""
+    eddy currents :func:`msens.magnetics.eddy_readout.dynamic_signals` (arguments as those)."""
     mss = sensor(spec)
     responses = _MODELS[spec.model][2]
     rate = spec.electronics.sample_rate_hz

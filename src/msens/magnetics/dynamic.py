@@ -36,15 +36,12 @@ function with the coil's series impedance Z(ω)
 from __future__ import annotations
 
 import json
-import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
-from scipy.interpolate import PchipInterpolator
 
 from msens.errors import internal, require
 from msens.field.eddy import SIGMA_1018, HarmonicOperator, dissipated_power
@@ -52,15 +49,10 @@ from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import coil_current_density, coil_resistance
 from msens.io._files import atomic_write_bytes
 from msens.io.hashing import content_hash
-from msens.magnetics.emf import ContactRates, contact_forces_of, contact_rates
+from msens.magnetics.frequency_response import FrequencyResponse
 from msens.magnetics.mechanisms import MechanismPotentials
-from msens.magnetics.mss import MssRecord
 from msens.magnetics.potentials import region_linkage
-from msens.magnetics.transducer import Transducer
-from msens.mechanics.hertz import hertz_approach
 from msens.params.units import TWO_PI
-from msens.readout.electronics import ReadoutCircuit, coil_transfer_function
-from msens.readout.noise import NoiseModel, add_readout_noise
 
 #: Frequencies solved by default, Hz: 0 (the static transducer), 12 roughly log-spaced
 #: points over 0.5–200 kHz (1-2-3-5 steps, so the reported 1, 3, 10, 30, 100 kHz are solved)
@@ -114,129 +106,6 @@ def sensor_conductivity(mesh, geometry: SensorGeometry, *, steel: float = SIGMA_
             require(table[grades[name]] >= 0, "magnet conductivity must be >= 0 S/m")
             sigma[el] = table[grades[name]]
     return sigma
-
-
-# ----------------------------------------------------------------------------- record
-
-def _interp(freqs: np.ndarray, values: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """Complex values (n_f, ...) solved at ``freqs`` (freqs[0] = 0) at frequencies ``f``.
-
-    Above the first nonzero frequency f1: PCHIP in log f on the real and imaginary parts
-    (monotone between samples, no overshoot), held at the last value beyond the last
-    frequency. Below f1 the low-frequency form of a response analytic in jω,
-    v(f) = v0 + jωa − ω²b + …: Re v = v0 + (Re v1 − v0)(f/f1)², Im v = Im v1 (f/f1)
-    — continuous at f1 and exact (the static value) at 0.
-    """
-    f = np.abs(np.asarray(f, dtype=float))
-    v0, v1, f1 = values[0].real, values[1], freqs[1]
-    out = np.empty(f.shape + values.shape[1:], dtype=complex)
-    low = f < f1
-    x = (f[low] / f1).reshape((-1,) + (1,) * (values.ndim - 1))
-    out[low] = v0 + (v1.real - v0) * x**2 + 1j * v1.imag * x
-    hi = ~low
-    u = np.log(np.minimum(f[hi], freqs[-1]))
-    lf = np.log(freqs[1:])
-    if freqs.size > 2:
-        out[hi] = (PchipInterpolator(lf, values[1:].real, axis=0)(u)
-                   + 1j * PchipInterpolator(lf, values[1:].imag, axis=0)(u))
-    else:
-        out[hi] = v1
-    return out
-
-
-@dataclass(frozen=True)
-class FrequencyResponse:
-    """Small-signal frequency response of one coil of a physics MsS (eddy currents included).
-
-    Attributes
-    ----------
-    particle : int
-        Particle at the coil's centre.
-    frequencies : ndarray, shape (n_f,)
-        Solved frequencies, Hz, increasing; frequencies[0] = 0 (the static transducer).
-    contacts : ndarray of int, shape (n_c,)
-        1-based contact numbers (as :attr:`Transducer.contacts`).
-    villari : ndarray of complex, shape (n_f, n_c)
-        S_c(ω) = ∂Λ/∂F_c phasor ratio, Wb/N (Λ per force amplitude; lag = negative phase).
-    approach : ndarray of complex, shape (n_f, n_c)
-        D_c(ω) = ∂Λ/∂δ_c, Wb/m.
-    impedance : ndarray of complex, shape (n_f,)
-        Coil impedance Z(ω) = R_dc + jωΛ(ω)/I, Ω (eddy losses in Re Z).
-    resistance_ohm : float
-        R_dc, Ω (copper at 20 °C, as the static transducer).
-    static_inductance_H : float
-        Λ/I at 0 Hz: the incremental inductance at the bias point, H.
-    source : str
-        Model, conductivities and mesh the numbers come from.
-    """
-
-    particle: int
-    frequencies: np.ndarray
-    contacts: np.ndarray
-    villari: np.ndarray
-    approach: np.ndarray
-    impedance: np.ndarray
-    resistance_ohm: float
-    static_inductance_H: float
-    source: str = ""
-
-    def __post_init__(self) -> None:
-        f = np.asarray(self.frequencies, dtype=float)
-        n_f, n_c = f.size, np.asarray(self.contacts).size
-        require(n_f >= 2 and f[0] == 0.0 and bool(np.all(np.diff(f) > 0)),
-                "FrequencyResponse needs increasing frequencies starting at 0 Hz (>= 2)")
-        require(np.shape(self.villari) == (n_f, n_c) and np.shape(self.approach) == (n_f, n_c)
-                and np.shape(self.impedance) == (n_f,),
-                "internal: FrequencyResponse arrays must have shapes (n_f, n_c) and (n_f,)")
-
-    @property
-    def inductance(self) -> np.ndarray:
-        """Complex inductance L(ω) = Λ(ω)/I = (Z − R_dc)/(jω), H, shape (n_f,); L(0) is the
-        static incremental inductance (Z(0) = R_dc carries no inductance)."""
-        w = TWO_PI * np.asarray(self.frequencies, dtype=float)
-        out = np.empty(w.size, dtype=complex)
-        out[0] = self.static_inductance_H
-        out[1:] = (np.asarray(self.impedance[1:]) - self.resistance_ohm) / (1j * w[1:])
-        return out
-
-    def villari_at(self, f: np.ndarray) -> np.ndarray:
-        """S_c at frequencies ``f`` (Hz, |f| used), Wb/N, shape (n, n_c) (see :func:`_interp`)."""
-        return _interp(np.asarray(self.frequencies, float), np.asarray(self.villari), f)
-
-    def approach_at(self, f: np.ndarray) -> np.ndarray:
-        """D_c at frequencies ``f`` (Hz), Wb/m, shape (n, n_c)."""
-        return _interp(np.asarray(self.frequencies, float), np.asarray(self.approach), f)
-
-    def impedance_at(self, f: np.ndarray) -> np.ndarray:
-        """Z at frequencies ``f`` (Hz), Ω, shape (n,) (:func:`coil_impedance`)."""
-        return coil_impedance(self.frequencies, self.inductance, self.resistance_ohm, f)
-
-
-def coil_impedance(frequencies: np.ndarray, inductance: np.ndarray,
-                   resistance: float | np.ndarray, f: np.ndarray) -> np.ndarray:
-    """Z = R_dc + jω L(ω) of one or many coils at frequencies ``f``, with the complex
-    inductance L(ω) interpolated (it is smooth and finite at DC; Z/ω is not).
-
-    Parameters
-    ----------
-    frequencies : ndarray, shape (n_f,)
-        Solved frequencies, Hz, from 0.
-    inductance : ndarray of complex, shape (n_f, ...)
-        L(ω) at them, H.
-    resistance : float or ndarray, shape (...)
-        R_dc, Ω.
-    f : ndarray, shape (n,)
-        Hz.
-
-    Returns
-    -------
-    ndarray of complex, shape (n, ...)
-        Ω.
-    """
-    f = np.asarray(f, dtype=float)
-    ind = _interp(np.asarray(frequencies, float), np.asarray(inductance), f)
-    w = TWO_PI * f.reshape((-1,) + (1,) * (ind.ndim - 1))
-    return resistance + 1j * w * ind
 
 
 @dataclass(frozen=True)
@@ -531,177 +400,13 @@ def join_reports(parts: Sequence[DynamicReport]) -> DynamicReport:
     return DynamicReport(responses, details)
 
 
-# ----------------------------------------------------------------------------- in time
-
-#: FFT length of the frequency-domain read-out in record lengths (zero padding: the circuit's
-#: ring-down after the record must fit in it; run and design use the same).
-PAD = 2.0
-
-
-def emf_spectra(frequencies: np.ndarray, villari: np.ndarray, approach: np.ndarray,
-                f: np.ndarray, force_rate: np.ndarray, approach_rate: np.ndarray) -> np.ndarray:
-    """EMF(ω) = −Σ_c [S_c(ω) Ḟ_c(ω) + D_c(ω) δ̇_c(ω)] of one or many coils.
-
-    Parameters
-    ----------
-    frequencies : ndarray, shape (n_f,)
-        Solved frequencies, Hz, from 0.
-    villari, approach : ndarray of complex, shape (n_f, ..., n_c)
-        S_c (Wb/N) and D_c (Wb/m) at them, interpolated to ``f`` by :func:`_interp`.
-    f : ndarray, shape (n,)
-        Hz.
-    force_rate, approach_rate : ndarray of complex, shape (n, n_c)
-        Spectra of dF_c/dt (N/s per bin) and dδ_c/dt (m/s per bin), the coils' contacts.
-
-    Returns
-    -------
-    ndarray of complex, shape (n, ...)
-    """
-    freqs = np.asarray(frequencies, float)
-    s, d = _interp(freqs, np.asarray(villari), f), _interp(freqs, np.asarray(approach), f)
-    shape = (s.shape[0],) + (1,) * (s.ndim - 2) + (s.shape[-1],)
-    return -(np.sum(s * np.reshape(force_rate, shape), axis=-1)
-             + np.sum(d * np.reshape(approach_rate, shape), axis=-1))
-
-
-def emf_spectrum(response: FrequencyResponse, f: np.ndarray, force_rate: np.ndarray,
-                 approach_rate: np.ndarray) -> np.ndarray:
-    """EMF(ω) of one coil (:func:`emf_spectra`), shape (n,).
-
-    Parameters
-    ----------
-    response : FrequencyResponse
-    f : ndarray, shape (n,)
-        Hz.
-    force_rate, approach_rate : ndarray of complex, shape (n, n_c)
-        Spectra of dF_c/dt (N/s per bin) and dδ_c/dt (m/s per bin), the record's contacts.
-    """
-    return emf_spectra(response.frequencies, response.villari, response.approach, f,
-                       force_rate, approach_rate)
-
-
-def mechanism_emfs(response: FrequencyResponse, rates: ContactRates,
-                   pad: float = PAD) -> dict[str, np.ndarray]:
-    """Each mechanism's open-circuit EMF alone, with eddy currents, V.
-
-    Parameters
-    ----------
-    response : FrequencyResponse
-    rates : ContactRates
-        Rates of ``response.contacts`` on uniform times.
-    pad : float
-        FFT length ≥ ``pad`` × nt, as :func:`dynamic_signals`.
-
-    Returns
-    -------
-    dict
-        ``"villari"`` and ``"approach"``: ndarray, shape (nt,); they add up to the EMF of
-        :func:`dynamic_signals`.
-    """
-    t = np.asarray(rates.t)
-    dt = (t[-1] - t[0]) / (t.size - 1)
-    n = next_fast_len(math.ceil(pad * t.size), real=True)
-    f = rfftfreq(n, dt)
-    force = rfft(rates.force, n, axis=0)
-    approach = rfft(rates.approach, n, axis=0)
-    return {"villari": irfft(emf_spectrum(response, f, force, 0.0 * approach), n)[:t.size],
-            "approach": irfft(emf_spectrum(response, f, 0.0 * force, approach), n)[:t.size]}
-
-
-def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
-                    circuit: ReadoutCircuit, t: np.ndarray, force: np.ndarray,
-                    sample_rate: float, *, approach: np.ndarray | None = None,
-                    columns: np.ndarray | None = None, pad: float = PAD,
-                    noise: NoiseModel | None = None,
-                    rng: np.random.Generator | int | None = None) -> MssRecord:
-    """Coil signals of one physics MsS with eddy currents: the frequency-domain read-out.
-
-    The contact force and approach rates (as :func:`msens.magnetics.mss.mss_signals`) are
-    zero-padded to ``pad`` × their length and Fourier transformed; the EMF spectrum is
-    :func:`emf_spectrum` and the DAQ voltage that times the read-out transfer function with
-    the coil's impedance Z(ω) (:func:`msens.readout.electronics.coil_transfer_function`); inverse
-    FFT. The circuit starts at rest and the EMF is zero before ``t[0]`` (chain histories
-    start static). Noise (optional) is the read-out's, with the coil's Johnson noise from
-    4kT Re Z(f) (:func:`msens.readout.noise.add_readout_noise`). With σ = 0 this is
-    :func:`~msens.magnetics.mss.mss_signals` up to its first-order-hold EMF (agreement to
-    ~(ωΔt)²/12 at the signal frequencies).
-
-    Parameters
-    ----------
-    transducer : Transducer
-        Contacts and Hertz stiffness (and the static sensitivities of ``weighted_force``).
-    response : FrequencyResponse
-        Of the same coil (same contacts).
-    circuit : ReadoutCircuit
-        Winding capacitance, cable and DAQ (its R and L are replaced by Z(ω)).
-    t : ndarray, shape (nt,)
-        Uniform chain output times, s.
-    force : ndarray, shape (nt, m)
-        Contact forces, N.
-    sample_rate : float
-        DAQ rate, Hz: the voltage is linearly interpolated from the chain's grid to the DAQ
-        instants t[0] + k/sample_rate (exact where the DAQ samples at the chain's rate).
-    approach, columns
-        As :func:`~msens.magnetics.mss.mss_signals` (no ``static``: the EMF needs rates only).
-    pad : float
-        FFT length ≥ ``pad`` × nt (> 1: the circuit's ring-down must fit in the padding).
-    noise : NoiseModel, optional
-    rng : numpy.random.Generator or int, optional
-        Seed or generator of the noise (None = seed 0).
-
-    Returns
-    -------
-    MssRecord
-        ``flux`` is −∫ EMF dt (eddy currents included).
-    """
-    from scipy.integrate import cumulative_trapezoid
-
-    contacts = np.asarray(transducer.contacts, dtype=int)
-    require(np.array_equal(contacts, np.asarray(response.contacts)),
-            "transducer and frequency response describe different contacts")
-    require(pad > 1, f"pad must be > 1, got {pad}")
-    t = np.asarray(t, dtype=float)
-    fc = contact_forces_of(force, contacts, columns)
-    stiff = transducer.contact_stiffness
-    delta = (hertz_approach(fc, stiff) if approach is None
-             else contact_forces_of(approach, contacts, columns))
-    rates = contact_rates(t, fc, contacts, stiff, columns=contacts, approach=delta,
-                          equivalent=transducer.equivalent_approach)
-    dt = (t[-1] - t[0]) / (t.size - 1)
-    require(bool(np.allclose(np.diff(t), dt, rtol=1e-6, atol=0.0)),
-            "chain times must be uniformly spaced")
-    n = next_fast_len(math.ceil(pad * t.size), real=True)
-    f = rfftfreq(n, dt)
-    e_hat = emf_spectrum(response, f, rfft(rates.force, n, axis=0),
-                         rfft(rates.approach, n, axis=0))
-    h = coil_transfer_function(circuit, f, response.impedance_at(f))
-    e = irfft(e_hat, n)[:t.size]
-    v = irfft(h * e_hat, n)[:t.size]
-    n_daq = math.floor((t[-1] - t[0]) * sample_rate * (1 + 1e-12)) + 1
-    t_daq = t[0] + np.arange(n_daq) / sample_rate
-    flux = -cumulative_trapezoid(e, t, initial=0.0)
-    total = float(np.sum(transducer.sensitivity("both")))
-    voltage = np.interp(t_daq, t, v)
-    if noise is not None:
-        voltage = add_readout_noise(voltage, circuit, noise, sample_rate, rng=rng,
-                                    coil_impedance=response.impedance_at)
-    return MssRecord(t=t, flux=flux, weighted_force=flux / total if total else flux * np.nan,
-                     emf=e, t_daq=t_daq, voltage=voltage, circuit=circuit)
-
-
 __all__ = [
     "DEFAULT_FREQUENCIES",
     "DYNAMIC_VERSION",
     "MAGNET_CONDUCTIVITY",
-    "PAD",
     "DynamicReport",
-    "FrequencyResponse",
-    "coil_impedance",
     "dynamic_key",
     "dynamic_report",
-    "dynamic_signals",
-    "emf_spectra",
-    "emf_spectrum",
     "frequency_responses",
     "join_reports",
     "report_from_json",

@@ -161,7 +161,7 @@ def add_readout_noise(v: np.ndarray, circuit: ReadoutCircuit, noise: NoiseModel,
         None = seed 0.
     coil_impedance : callable, optional
         f (Hz, shape (k,)) -> Z (Ω, complex, shape (k,)), e.g.
-        :meth:`msens.magnetics.dynamic.FrequencyResponse.impedance_at`.
+        :meth:`msens.magnetics.frequency_response.FrequencyResponse.impedance_at`.
     """
     v = np.asarray(v, dtype=float)
     gen = _as_rng(rng)

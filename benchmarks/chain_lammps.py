@@ -68,8 +68,8 @@ from msens.chain import (
     static_equilibrium,
     striker_velocity,
 )
-from msens.chain.published import BEAD_RADIUS
 from msens.params.materials import BEAD_STEEL
+from msens.params.paper import BEAD_RADIUS
 from msens.readout.sensors import SensorKind, sensor_contacts
 
 T_END = 1e-3

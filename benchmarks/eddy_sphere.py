@@ -4,9 +4,9 @@
 
 Sphere R = 2.38 mm (the paper's bead), σ = 6 MS/m (1018 steel, msens.field.eddy.SIGMA_1018),
 μ_r = 100 and 1000, f = 0, 1, 10, 100 kHz; H0 = 1 A/m imposed as A_φ = μ0 H0 r/2 on a half
-circle of 10 R, truncation removed exactly (msens.field.eddy.truncation_factor). Mesh: a graded
-skin layer (first row 2.5 µm, ×1.3 per row) under the surface, 96 cells on the half circle
-(msens.field.eddy_geometry). Per (μ_r, f): FE and exact moment m (A m²) and volume-mean
+circle of 10 R, truncation removed exactly (msens.field.eddy_sphere.truncation_factor).
+Mesh: a graded skin layer (first row 2.5 µm, ×1.3 per row) under the surface, 96 cells on the
+half circle (msens.field.eddy_geometry). Per (μ_r, f): FE and exact moment m (A m²) and volume-mean
 internal H_z (A/m) as magnitude and phase (degrees, e^{jωt}), relative magnitude and phase
 errors, the loss and −(ωμ0/2) Im(m H0*), dofs, and the factorisation + solve time (best of
 ``REPEATS``; the machine is shared). ``--convergence`` adds the moment under radial
@@ -32,8 +32,8 @@ def _polar(z: complex) -> dict:
 
 
 def table() -> dict:
-    from msens.field.eddy import sphere_check
     from msens.field.eddy_geometry import layered_sphere_mesh, skin_layer
+    from msens.field.eddy_sphere import sphere_check
 
     layer = skin_layer(RADIUS, 2.5e-6, 1.3, 96)
     t0 = time.perf_counter()
@@ -70,8 +70,9 @@ def table() -> dict:
 
 
 def convergence(levels: int = 5) -> dict:
-    from msens.field.eddy import SIGMA_1018, conducting_sphere, sphere_check
+    from msens.field.eddy import SIGMA_1018
     from msens.field.eddy_geometry import SkinLayer, layered_sphere_mesh
+    from msens.field.eddy_sphere import conducting_sphere, sphere_check
 
     exact = conducting_sphere(RADIUS, 1000.0, SIGMA_1018, 1e5)[0]
     out, m = [], []

@@ -17,7 +17,7 @@ import skfem
 from scipy.special import spherical_jn
 
 from msens.errors import InputError
-from msens.field import eddy
+from msens.field import eddy, eddy_sphere
 from msens.field.constitutive import material_fields
 from msens.field.eddy_geometry import SkinLayer, layer_profile, layered_sphere_mesh, skin_layer
 from msens.field.forms import element_mass, flux_density_qp, potential_qp, quadrature_data
@@ -134,7 +134,7 @@ def _exact_mp(mu_r, frequency, sigma=eddy.SIGMA_1018):
 @pytest.mark.parametrize("frequency", [0.3, 30.0, 1e3, 1e5, 1e8])
 def test_closed_form_against_mpmath(mu_r, frequency):
     mpmath.mp.dps = 40
-    m, h = eddy.conducting_sphere(RADIUS, mu_r, eddy.SIGMA_1018, frequency)
+    m, h = eddy_sphere.conducting_sphere(RADIUS, mu_r, eddy.SIGMA_1018, frequency)
     m_ref, h_ref = _exact_mp(mu_r, frequency)
     assert abs(m - m_ref) <= 1e-9 * abs(m_ref) + 1e-12 * RADIUS**3
     assert abs(h - h_ref) <= 1e-9 * abs(h_ref) + 1e-15
@@ -144,20 +144,21 @@ def test_closed_form_limits_and_time_convention():
     """DC and perfect-screening limits; e^{jωt}: a lossy sphere's moment lags (Im m < 0)."""
     r3 = RADIUS**3
     for mu_r in (1.0, 100.0, 1000.0):
-        m, h = eddy.conducting_sphere(RADIUS, mu_r, 6e6, 0.0)
+        m, h = eddy_sphere.conducting_sphere(RADIUS, mu_r, 6e6, 0.0)
         assert m == pytest.approx(4 * math.pi * r3 * (mu_r - 1) / (mu_r + 2), rel=1e-14)
         assert h == pytest.approx(3 / (mu_r + 2), rel=1e-14)
-        m, h = eddy.conducting_sphere(RADIUS, mu_r, 6e6, 1e14)
+        m, h = eddy_sphere.conducting_sphere(RADIUS, mu_r, 6e6, 1e14)
         assert m == pytest.approx(-2 * math.pi * r3, rel=3e-3 * mu_r)
         assert abs(h) < 1e-3
-        m, _ = eddy.conducting_sphere(RADIUS, mu_r, 6e6, 1e4)
+        m, _ = eddy_sphere.conducting_sphere(RADIUS, mu_r, 6e6, 1e4)
         assert m.imag < 0
     # the spherical Bessel functions of scipy (complex argument) give the same P/Q
     x = RADIUS * (1 - 1j) / eddy.skin_depth(1e4, 100.0, 6e6)
     p = spherical_jn(1, x)
     q = x * spherical_jn(0, x) - p
     m_jn = 2 * math.pi * r3 * (200 * p - q) / (100 * p + q)
-    assert eddy.conducting_sphere(RADIUS, 100.0, 6e6, 1e4)[0] == pytest.approx(m_jn, rel=1e-12)
+    m = eddy_sphere.conducting_sphere(RADIUS, 100.0, 6e6, 1e4)[0]
+    assert m == pytest.approx(m_jn, rel=1e-12)
 
 
 def test_skin_depth_value():
@@ -170,7 +171,7 @@ def test_skin_depth_value():
 
 @pytest.mark.parametrize("mu_r", [100.0, 1000.0])
 def test_sphere_against_closed_form(sphere_mesh, mu_r):
-    for c in eddy.sphere_check(sphere_mesh, RADIUS, R_OUT, mu_r, [0.0, 1e4]):
+    for c in eddy_sphere.sphere_check(sphere_mesh, RADIUS, R_OUT, mu_r, [0.0, 1e4]):
         for rel, phase in (c.moment_errors, c.h_mean_errors):
             assert rel < TOL_MAG, c
             assert phase < TOL_PHASE, c
@@ -215,10 +216,10 @@ def test_truncation_correction():
     for k in (5, 10):
         mesh = layered_sphere_mesh(RADIUS, layer, k * RADIUS)
         for corr, store in ((False, raw), (True, corrected)):
-            (c,) = eddy.sphere_check(mesh, RADIUS, k * RADIUS, 1000.0, [1e4],
+            (c,) = eddy_sphere.sphere_check(mesh, RADIUS, k * RADIUS, 1000.0, [1e4],
                                      correct_truncation=corr)
             store[k] = c.moment
-    exact = eddy.conducting_sphere(RADIUS, 1000.0, eddy.SIGMA_1018, 1e4)[0]
+    exact = eddy_sphere.conducting_sphere(RADIUS, 1000.0, eddy.SIGMA_1018, 1e4)[0]
     assert abs(raw[5] / exact - 1) == pytest.approx(2 / 5**3, rel=0.1)
     assert abs(corrected[5] / corrected[10] - 1) < 1e-4
 

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from msens.chain import hertz_sphere_flat, hertz_sphere_sphere, simulate, uniform_chain
-from msens.chain.published import BEAD_MASS, BEAD_RADIUS
 from msens.mechanics.longwave import soliton_speed_precompressed, soliton_speed_uncompressed
 from msens.params.materials import BEAD_STEEL
+from msens.params.paper import BEAD_MASS, BEAD_RADIUS
 
 E, NU = BEAD_STEEL.youngs_modulus, BEAD_STEEL.poisson_ratio
 A = 2.0 * BEAD_RADIUS

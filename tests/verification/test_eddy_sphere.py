@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from msens.field import eddy
+from msens.field import eddy, eddy_sphere
 from msens.field.eddy_geometry import SkinLayer, layered_sphere_mesh, skin_layer
 
 pytestmark = pytest.mark.slow
@@ -34,7 +34,7 @@ def mesh():
 
 @pytest.mark.parametrize("mu_r", [100.0, 1000.0])
 def test_table(mesh, mu_r):
-    checks = eddy.sphere_check(mesh, RADIUS, R_OUT, mu_r, (0.0, *FREQUENCIES))
+    checks = eddy_sphere.sphere_check(mesh, RADIUS, R_OUT, mu_r, (0.0, *FREQUENCIES))
     for c in checks:
         for rel, phase in (c.moment_errors, c.h_mean_errors):
             assert rel < TOL_MAG, c
@@ -53,7 +53,7 @@ def test_table_without_truncation_correction():
     r_out = 20 * RADIUS
     mesh20 = layered_sphere_mesh(RADIUS, skin_layer(RADIUS, 2.5e-6, 1.3, 96), r_out)
     for mu_r in (100.0, 1000.0):
-        for c in eddy.sphere_check(mesh20, RADIUS, r_out, mu_r, FREQUENCIES,
+        for c in eddy_sphere.sphere_check(mesh20, RADIUS, r_out, mu_r, FREQUENCIES,
                                    correct_truncation=False):
             for rel, phase in (c.moment_errors, c.h_mean_errors):
                 assert rel < TOL_MAG and phase < TOL_PHASE, c
@@ -79,10 +79,10 @@ def layer_refinement(levels: int = 4, arc_segments: int = 128, mu_r: float = 100
     for k in range(levels):
         layer = SkinLayer(16e-6 / 2**k, 1.6 ** (1 / 2**k), 3 * 2**k, arc_segments)
         mesh_k = layered_sphere_mesh(RADIUS, layer, R_OUT)
-        (c,) = eddy.sphere_check(mesh_k, RADIUS, R_OUT, mu_r, [frequency])
+        (c,) = eddy_sphere.sphere_check(mesh_k, RADIUS, R_OUT, mu_r, [frequency])
         first.append(layer.first)
         moment.append(c.moment)
-    exact = eddy.conducting_sphere(RADIUS, mu_r, eddy.SIGMA_1018, frequency)[0]
+    exact = eddy_sphere.conducting_sphere(RADIUS, mu_r, eddy.SIGMA_1018, frequency)[0]
     return np.array(first), np.array(moment), np.full(levels, exact)
 
 
@@ -103,7 +103,7 @@ def test_arc_convergence_is_second_order():
     errs = []
     for n in (48, 96, 192):
         mesh_n = layered_sphere_mesh(RADIUS, skin_layer(RADIUS, 2e-6, 1.3, n), R_OUT)
-        (c,) = eddy.sphere_check(mesh_n, RADIUS, R_OUT, 1000.0, [1e5])
+        (c,) = eddy_sphere.sphere_check(mesh_n, RADIUS, R_OUT, 1000.0, [1e5])
         errs.append(abs(c.moment / c.moment_exact - 1))
     order = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
     assert np.all(order > 1.5), (errs, order)

@@ -18,12 +18,9 @@ import numpy as np
 from msens.chain.model import Chain, DampingLaw
 from msens.mechanics.hertz import hertz_sphere_flat, hertz_sphere_sphere
 from msens.params.materials import BEAD_STEEL, PIEZO_ROD, PIEZO_ROD_LENGTH, PIEZO_ROD_MASS
+from msens.params.paper import BEAD_MASS, BEAD_RADIUS
 from msens.params.units import G0
 
-#: Bead radius, m (4.76 mm diameter, paper §2).
-BEAD_RADIUS = 2.38e-3
-#: Bead mass, kg (paper §2).
-BEAD_MASS = 0.45e-3
 #: Particles including the striker (paper §2).
 N_PARTICLES = 30
 #: Striker drop height, m (paper §2).

@@ -11,7 +11,7 @@ import enum
 from dataclasses import dataclass, field
 
 from msens.chain.model import DampingLaw as Damping
-from msens.chain.published import BEAD_MASS, BEAD_RADIUS, N_PARTICLES
+from msens.chain.published import N_PARTICLES
 from msens.params.materials import (
     BEAD_STEEL,
     PIEZO_ROD,
@@ -19,6 +19,7 @@ from msens.params.materials import (
     PIEZO_ROD_MASS,
     BHCurve,
 )
+from msens.params.paper import BEAD_MASS, BEAD_RADIUS
 from msens.params.units import G0
 from msens.readout.sensors import SensorKind
 

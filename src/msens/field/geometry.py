@@ -33,14 +33,11 @@ import numpy as np
 from msens.errors import InputError, require
 from msens.mechanics.hertz import hertz_contact_radius, identical_spheres_modulus
 from msens.params.materials import BEAD_STEEL, MAGNET_GRADES, STEEL_1018_BH, BHCurve
+from msens.params.paper import BEAD_MASS, BEAD_RADIUS, PAPER_MAGNETIC_FORCE
 from msens.params.units import G0
 
-#: Bead diameter of the paper, m (McMaster-Carr 96455K51, paper §2).
-BEAD_DIAMETER = 4.76e-3
-#: Bead mass of the paper, kg (paper §2).
-BEAD_MASS = 0.45e-3
-#: Magnetic static force per sensor contact estimated in the paper (§4.1), N.
-PAPER_MAGNETIC_FORCE = 1.8
+#: Bead diameter of the paper, m (:mod:`msens.params.paper`).
+BEAD_DIAMETER = 2 * BEAD_RADIUS
 
 
 @dataclass(frozen=True)

@@ -16,14 +16,8 @@ import time
 import numpy as np
 
 from msens.field.build import MeshOptions
-from msens.field.geometry import (
-    AirBox,
-    BeadChain,
-    BiasMagnet,
-    Coil,
-    SensorGeometry,
-    SensorUnit,
-)
+from msens.field.geometry import AirBox, BeadChain, SensorGeometry
+from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.magnetics.approach import approach_flux_change
 from msens.magnetics.mechanisms import coil_linkage, mechanism_potentials
 from msens.magnetics.steel_law import law_for_steel

@@ -8,7 +8,7 @@ import pytest
 from msens.design.metrics import Wave, design_rows
 from msens.design.report import pareto_mask, range_edges
 from msens.design.sweep import Design
-from msens.field.geometry import Coil
+from msens.field.parts import Coil
 from msens.magnetics.emf import contact_rates, emf_from_rates
 from msens.magnetics.mss import readout
 from msens.params.units import K_B

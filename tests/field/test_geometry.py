@@ -11,17 +11,9 @@ import pytest
 from msens.errors import InputError
 from msens.field.build import MeshOptions, build_mesh
 from msens.field.cache import cached_mesh, geometry_key
-from msens.field.geometry import (
-    WIRES,
-    AirBox,
-    BeadChain,
-    BiasMagnet,
-    Coil,
-    SensorGeometry,
-    SensorUnit,
-    hertz_flat_radius,
-)
+from msens.field.geometry import AirBox, BeadChain, SensorGeometry, hertz_flat_radius
 from msens.field.mesh import read_gmsh
+from msens.field.parts import WIRES, BiasMagnet, Coil, SensorUnit
 from msens.params.materials import BEAD_STEEL
 
 

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from msens.field import sensor_model as sm
-from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.geometry import AirBox, BeadChain, SensorGeometry
+from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.field.regions import Winding
 from msens.field_outputs import write_field_outputs
 from msens.params.units import MU0, RHO_COPPER

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from msens.field import sensor_model as sm
-from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.geometry import AirBox, BeadChain, SensorGeometry
+from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.field.regions import NonlinearSoft
 from msens.params.materials import STEEL_1018_BH, BHCurve
 

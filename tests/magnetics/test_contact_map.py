@@ -14,7 +14,8 @@ import pytest
 from msens.errors import InputError
 from msens.field.build import MeshOptions
 from msens.field.cache import committed_mesh_dirs, geometry_key
-from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.geometry import AirBox, BeadChain, SensorGeometry
+from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.field.sensor_model import bias_problem, load_mesh
 from msens.field.solve import solve
 from msens.magnetics.approach import hertz_stiffness

@@ -15,7 +15,8 @@ import pytest
 
 from msens.errors import InputError
 from msens.field.build import MeshOptions
-from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.geometry import AirBox, BeadChain, SensorGeometry
+from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.field.sensor_model import coil_resistance
 from msens.magnetics.approach import hertz_stiffness
 from msens.magnetics.dynamic import (

@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from msens.field.geometry import BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.geometry import BeadChain, SensorGeometry
+from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.field.sensor_model import bias_problem, load_mesh
 from msens.field.solve import solve
 from msens.magnetics.mechanisms import coil_linkage, mechanism_potentials

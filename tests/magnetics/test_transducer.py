@@ -9,7 +9,8 @@ import pytest
 
 from msens.errors import InputError
 from msens.field.build import MeshOptions
-from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.geometry import AirBox, BeadChain, SensorGeometry
+from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.magnetics.approach import hertz_approach_rate, hertz_stiffness
 from msens.magnetics.emf import emf
 from msens.magnetics.transducer import Transducer, compute_transducers, magnetic_precompression

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from msens.field.build import MeshOptions
-from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.geometry import AirBox, BeadChain, SensorGeometry
+from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.magnetics.transducer import magnetic_precompression
 from msens.magnetics.transducer_cache import transducers_for
 from msens.magnetics.variants import remanence_family, scaled_geometry

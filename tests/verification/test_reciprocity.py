@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 from msens.field.build import MeshOptions
-from msens.field.geometry import AirBox, BeadChain, BiasMagnet, Coil, SensorGeometry, SensorUnit
+from msens.field.geometry import AirBox, BeadChain, SensorGeometry
+from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.field.regions import Winding
 from msens.field.sensor_model import bias_problem, coil_current_density, group_force, load_mesh
 from msens.field.solve import incremental, solve

@@ -17,16 +17,8 @@ from msens.config.study import Study
 from msens.errors import InputError
 from msens.field.build import MeshOptions
 from msens.field.eddy import SIGMA_1018, SKIN_SIZE
-from msens.field.geometry import (
-    WIRES,
-    AirBox,
-    BeadChain,
-    BiasMagnet,
-    Coil,
-    SensorGeometry,
-    SensorUnit,
-    Wire,
-)
+from msens.field.geometry import AirBox, BeadChain, SensorGeometry
+from msens.field.parts import WIRES, BiasMagnet, Coil, SensorUnit, Wire
 from msens.params.materials import MAGNET_GRADES
 from msens.readout.coil import awg_diameter, heavy_build_diameter
 from msens.readout.sensors import SensorKind

@@ -41,7 +41,8 @@ from msens.design.physics import study_wave
 from msens.design.runner import run_cached
 from msens.design.sweep import Design, design_unit
 from msens.errors import internal
-from msens.field.geometry import SensorGeometry, SensorUnit
+from msens.field.geometry import SensorGeometry
+from msens.field.parts import SensorUnit
 from msens.field.sensor_model import coil_resistance
 from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.emf import ContactRates

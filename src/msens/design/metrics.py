@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
-from msens.field.geometry import Coil
+from msens.field.parts import Coil
 from msens.magnetics.eddy_readout import PAD, emf_spectra
 from msens.magnetics.emf import ContactRates, emf_from_rates
 from msens.magnetics.frequency_response import coil_impedance

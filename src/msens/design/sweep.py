@@ -44,12 +44,8 @@ from msens.config.fieldsetup import geometry_from_study, mss_setup, wire_for
 from msens.config.schema import SensorSpec
 from msens.config.study import Study
 from msens.errors import InputError
-from msens.field.geometry import (
-    BiasMagnet,
-    SensorGeometry,
-    SensorUnit,
-    Tube,
-)
+from msens.field.geometry import SensorGeometry
+from msens.field.parts import BiasMagnet, SensorUnit, Tube
 from msens.io.tomlreader import Table, read_document
 from msens.params.materials import MAGNET_GRADES
 
@@ -63,7 +59,7 @@ COIL_PARAMETERS: dict[str, tuple[str, float, float]] = {
     "wire": ("wire", 30, 40),  # AWG gauges with heavy-build data in msens.readout.coil
     "axial_offset_m": ("float", -0.05, 0.05),
 }
-#: Magnet parameters (see :class:`msens.field.geometry.BiasMagnet`); SI units.
+#: Magnet parameters (see :class:`msens.field.parts.BiasMagnet`); SI units.
 MAGNET_PARAMETERS: dict[str, tuple[str, float, float]] = {
     "grade": ("grade", 0, 0),
     "length_m": ("float", 0.5e-3, 0.1),

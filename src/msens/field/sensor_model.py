@@ -14,7 +14,7 @@ post-processing:
   (B_z and H_r are continuous across such a gap);
 - coil resistance from the wire, air-core and incremental inductance (1 A per coil).
 
-The magnet is an equivalent ring magnet (see :class:`~msens.field.geometry.BiasMagnet`), not the
+The magnet is an equivalent ring magnet (see :class:`~msens.field.parts.BiasMagnet`), not the
 paper's undocumented bridge magnet.
 """
 
@@ -35,8 +35,9 @@ from msens.field.build import MeshOptions
 from msens.field.cache import cached_mesh
 from msens.field.constitutive import energy_density, reluctivities
 from msens.field.forms import flux_density_qp, potential_qp
-from msens.field.geometry import Coil, SensorGeometry
+from msens.field.geometry import SensorGeometry
 from msens.field.mesh import AxiMesh, from_arrays, read_gmsh
+from msens.field.parts import Coil
 from msens.field.regions import Air, NonlinearSoft, PermanentMagnet, Region, Winding
 from msens.field.solve import FieldSolution, MagnetostaticProblem, incremental, solve
 from msens.params.materials import BHCurve

@@ -24,8 +24,9 @@ import skfem
 
 from msens.errors import require
 from msens.field.forms import quadrature_data
-from msens.field.geometry import Coil, SensorGeometry
+from msens.field.geometry import SensorGeometry
 from msens.field.mesh import from_arrays
+from msens.field.parts import Coil
 from msens.field.sensor_model import shell_function
 from msens.field.solve import FieldSolution
 from msens.magnetics.potentials import bias_residual, nonlinear_resolve

@@ -45,7 +45,8 @@ from scipy.interpolate import CubicSpline, PchipInterpolator
 
 from msens.errors import internal, require
 from msens.field.build import MeshOptions
-from msens.field.geometry import Coil, SensorGeometry
+from msens.field.geometry import SensorGeometry
+from msens.field.parts import Coil
 from msens.field.regions import NonlinearSoft
 from msens.field.sensor_model import bias_problem, load_mesh, shell_function
 from msens.field.solve import FieldSolution, MagnetostaticProblem, solve

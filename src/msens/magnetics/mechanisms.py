@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from msens.field.geometry import Coil, SensorGeometry
+from msens.field.geometry import SensorGeometry
+from msens.field.parts import Coil
 from msens.field.solve import FieldSolution
 from msens.magnetics.approach import approach_residuals
 from msens.magnetics.magnetoelastic import JilesAthertonSablik

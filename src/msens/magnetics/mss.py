@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from msens.field.geometry import Coil
+from msens.field.parts import Coil
 from msens.magnetics.emf import contact_forces_of, contact_rates, emf_from_rates
 from msens.magnetics.transducer import Transducer
 from msens.mechanics.hertz import hertz_approach

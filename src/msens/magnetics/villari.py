@@ -34,7 +34,8 @@ import numpy as np
 from matplotlib.tri import Triangulation
 
 from msens.errors import require
-from msens.field.geometry import Coil, SensorGeometry
+from msens.field.geometry import SensorGeometry
+from msens.field.parts import Coil
 from msens.field.regions import Winding
 from msens.field.solve import FieldSolution, incremental, internal_field_strength
 from msens.magnetics.magnetoelastic import (

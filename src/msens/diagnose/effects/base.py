@@ -18,7 +18,7 @@ from scipy.signal import lfilter
 from msens.chain.model import Chain
 from msens.config.schema import SetupSpec
 from msens.config.study import Study
-from msens.field.geometry import Coil
+from msens.field.parts import Coil
 from msens.readout.electronics import ElectronicsSpec
 from msens.readout.sensors import SensorKind
 

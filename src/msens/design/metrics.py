@@ -79,6 +79,20 @@ def _circuit_figures(coil: Coil, resistance: float, inductance: float,
             "decay_s": 1.0 / float(np.min(-poles(circuit).real))}
 
 
+def _circuits(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndarray,
+              electronics: ElectronicsSpec) -> tuple[list[tuple], dict]:
+    """Each design's circuit key, and the circuit figures once per distinct circuit (designs
+    that differ only in their axial offset share one)."""
+    keys = [(round(float(r), 12), round(float(ind), 15), c.turns, c.length, c.inner_radius,
+             c.wire.name, c.packing_factor) for c, r, ind in zip(coils, resistance, inductance,
+                                                                 strict=True)]
+    circuits: dict = {}
+    for k, c, r, ind in zip(keys, coils, resistance, inductance, strict=True):
+        if k not in circuits:
+            circuits[k] = _circuit_figures(c, float(r), float(ind), electronics)
+    return keys, circuits
+
+
 def design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndarray,
                 sensitivity_villari: np.ndarray, dlambda_dapproach: np.ndarray, wave: Wave,
                 electronics: ElectronicsSpec) -> list[dict]:
@@ -99,13 +113,7 @@ def design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.nd
     t = wave.rates.t
     nt = t.size
     dt = float(t[1] - t[0])
-    keys = [(round(float(r), 12), round(float(ind), 15), c.turns, c.length, c.inner_radius,
-             c.wire.name, c.packing_factor) for c, r, ind in zip(coils, resistance, inductance,
-                                                                 strict=True)]
-    circuits: dict = {}
-    for k, c, r, ind in zip(keys, coils, resistance, inductance, strict=True):
-        if k not in circuits:
-            circuits[k] = _circuit_figures(c, float(r), float(ind), electronics)
+    keys, circuits = _circuits(coils, resistance, inductance, electronics)
     decay = max(cf["decay_s"] for cf in circuits.values())
     n_fft = scipy.fft.next_fast_len(nt + math.ceil(DECAY_TIMES * decay / dt), real=True)
     freq = np.fft.rfftfreq(n_fft, dt)
@@ -183,6 +191,7 @@ def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductanc
     f = np.fft.rfftfreq(n, dt)
     force = scipy.fft.rfft(wave.rates.force, n, axis=0)
     app = scipy.fft.rfft(wave.rates.approach, n, axis=0)
+    keys, circuits = _circuits(coils, resistance, inductance, electronics)
     rows: list[dict] = []
     for lo in range(0, len(coils), SPECTRUM_CHUNK):
         sl = slice(lo, min(lo + SPECTRUM_CHUNK, len(coils)))
@@ -190,8 +199,7 @@ def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductanc
                             np.moveaxis(approach[sl], 1, 0), f, force, app)
         z = coil_impedance(frequencies, np.asarray(inductance_w[sl]).T, resistance[sl], f)
         for j, k in enumerate(range(sl.start, sl.stop)):
-            cf = _circuit_figures(coils[k], float(resistance[k]), float(inductance[k]),
-                                  electronics)
+            cf = circuits[keys[k]]
             h = coil_transfer_function(cf["circuit"], f, z[:, j])
             e = scipy.fft.irfft(e_hat[:, j], n)[:nt]
             v = scipy.fft.irfft(h * e_hat[:, j], n)[:nt]

@@ -56,8 +56,10 @@ def test_diagnose_finds_nothing_missing_in_undisturbed_mss_data(data, tmp_path):
     assert first["misfit_before"] < 1.5
 
 
-def test_diagnose_names_a_hidden_cable_on_mss_data(tmp_path):
-    study = load_study(default_study_path())
+def diagnose_hidden_cable(study_path, tmp_path) -> None:
+    """Data of ``study_path`` with a longer cable hidden in them: diagnose names the cable,
+    its capacitance within 10 % (also run on the eddy-current main study)."""
+    study = load_study(study_path)
     ctx = Context(study, study.setups[0])
     base = baseline_state(ctx, *baseline_dissipation(study))
     wf, truth = hidden_case(ctx, base, Predictor(output_times(study)), seed=3,
@@ -65,9 +67,13 @@ def test_diagnose_names_a_hidden_cable_on_mss_data(tmp_path):
                             rig=RigEffects(seed=3, noise=0.01))
     path = tmp_path / "cable.csv"
     write_waveform(wf, path)
-    assert main(["diagnose", str(path), "--study", STUDY, "--out", str(tmp_path / "d")]) == 0
-    report = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
-    first = report["passes"][0] if "passes" in report else report
+    out = tmp_path / "d"
+    assert main(["diagnose", str(path), "--study", str(study_path), "--out", str(out)]) == 0
+    first = json.loads((out / "diagnosis.json").read_text())["passes"][0]
     assert first["effect"] == "cable_capacitance"
     c = truth["cable_capacitance"]["cable_capacitance_f"]
     assert first["parameters"]["cable_capacitance_f"] == pytest.approx(c, rel=0.1)
+
+
+def test_diagnose_names_a_hidden_cable_on_mss_data(tmp_path):
+    diagnose_hidden_cable(default_study_path(), tmp_path)

@@ -8,16 +8,10 @@ from __future__ import annotations
 import json
 
 import pytest
+from tests.test_mss_roundtrip import diagnose_hidden_cable
 
 from msens.cli import main
-from msens.config.study import default_study_path, load_study
-from msens.diagnose.effects import Context
-from msens.diagnose.hidden import hidden_case
-from msens.diagnose.predict import Predictor, baseline_state
-from msens.diagnose.workflow import baseline_dissipation
-from msens.io.read import write_waveform
-from msens.pipeline import output_times
-from msens.synth import RigEffects
+from msens.config.study import default_study_path
 
 pytestmark = pytest.mark.slow
 
@@ -49,17 +43,4 @@ def test_synth_compare_diagnose_on_the_main_study_with_eddy_currents(study_file,
 
 
 def test_diagnose_names_a_hidden_cable_with_eddy_currents(study_file, tmp_path):
-    study = load_study(study_file)
-    ctx = Context(study, study.setups[0])
-    base = baseline_state(ctx, *baseline_dissipation(study))
-    wf, truth = hidden_case(ctx, base, Predictor(output_times(study)), seed=3,
-                            draw_effects=("cable_capacitance",),
-                            rig=RigEffects(seed=3, noise=0.01))
-    path = tmp_path / "cable.csv"
-    write_waveform(wf, path)
-    out = tmp_path / "d"
-    assert main(["diagnose", str(path), "--study", str(study_file), "--out", str(out)]) == 0
-    first = json.loads((out / "diagnosis.json").read_text())["passes"][0]
-    assert first["effect"] == "cable_capacitance"
-    c = truth["cable_capacitance"]["cable_capacitance_f"]
-    assert first["parameters"]["cable_capacitance_f"] == pytest.approx(c, rel=0.1)
+    diagnose_hidden_cable(study_file, tmp_path)

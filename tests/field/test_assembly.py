@@ -8,8 +8,9 @@ import scipy.sparse as sp
 import skfem
 from scipy.sparse.linalg import spsolve
 
-from msens.field.assembly import assemble_matrix, build_pattern, factorize
+from msens.field.assembly import assemble_matrix, build_pattern
 from msens.field.forms import element_stiffness, quadrature_data
+from msens.field.linsolve import factorize
 
 
 def _basis(order: int) -> skfem.CellBasis:

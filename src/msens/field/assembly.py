@@ -1,4 +1,4 @@
-"""Sparse assembly with a cached pattern, Dirichlet condensation and the direct solver.
+"""Sparse assembly with a cached pattern and Dirichlet condensation.
 
 skfem's generic assembler rebuilds the COO → CSR conversion on every call; the Newton loop
 assembles many matrices on one mesh, so the pattern (and its restriction to the free dofs) is
@@ -14,7 +14,6 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 
 @dataclass(frozen=True)
@@ -154,22 +153,3 @@ def assemble_matrix(pat: Pattern, ke: np.ndarray) -> tuple[sp.csr_matrix, sp.csc
 def assemble_vector(element_dofs: np.ndarray, fe: np.ndarray, n: int) -> np.ndarray:
     """Global vector from element vectors ``fe`` (shape (n_elements, n_bfun))."""
     return np.bincount(element_dofs.T.ravel(), weights=fe.ravel(), minlength=n)
-
-
-def factorize(k_ff: sp.csc_matrix):
-    """Sparse LU of a symmetric positive definite matrix (SuperLU, no pivoting).
-
-    The minimum-degree ordering of Aᵀ + A suits symmetric matrices; with the diagonal pivot
-    threshold at 0 SuperLU keeps that ordering (an SPD matrix needs no pivoting). A panel of 4
-    columns instead of SuperLU's default 10 cut the factor time by ~10-20 % on the 103k-dof
-    P2 benchmark (benchmarks/field_speed.py); fill is unchanged (ordering and supernodes
-    are the same), and geometric nested dissection gave ~45 % more fill than MMD there.
-    The supernode relaxation is kept at most the panel size, as in SuperLU's own defaults.
-
-    A supernodal Cholesky (CHOLMOD through the ``cholespy`` 2.2 wheel) was slower here:
-    1.0-1.3 s against 0.65-0.9 s for this LU on the same matrix, because it always runs
-    CHOLMOD's ordering search (AMD, then METIS and nested dissection; ~half its time) and
-    bundles the reference BLAS.
-    """
-    return splu(k_ff, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, panel_size=4,
-                relax=4, options={"SymmetricMode": True})

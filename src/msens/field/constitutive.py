@@ -60,6 +60,18 @@ class Materials:
         """Whether any region is nonlinear."""
         return bool(self.soft)
 
+    def take(self, elements: np.ndarray) -> Materials:
+        """The fields of ``elements`` (int, shape (k,)), renumbered 0..k-1 in that order."""
+        elements = np.asarray(elements)
+        position = np.full(self.nu.size, -1)
+        position[elements] = np.arange(elements.size)
+        soft = []
+        for el, law in self.soft:
+            kept = position[el]
+            soft.append((np.sort(kept[kept >= 0]), law))
+        return Materials(nu=self.nu[elements], hc=self.hc[elements], br=self.br[elements],
+                         j=self.j[elements], soft=tuple(soft), reversibility=self.reversibility)
+
 
 def material_fields(mesh: AxiMesh, regions: Mapping[str, Region]) -> Materials:
     """Reduce the region records to per-element arrays."""

@@ -19,9 +19,9 @@ terms included) and M_σ the conductivity mass matrix of the conducting regions.
 responses lag: a lossy body in a field H0 has Im(m/H0) < 0 and absorbs the time-average power
 P = −(ω μ0/2) Im(m H0*). With the physicists' e^{−iωt} every phasor here is conjugated.
 
-The solver factorises K_t + jω M_σ once per frequency (SuperLU, as the equivalent real
-system of twice the size: see :class:`_HarmonicLU`; :class:`HarmonicOperator` keeps the
-assembled matrices and solves many right-hand sides per factor); K_t and M_σ are assembled
+The solver factorises the complex K_t + jω M_σ once per frequency (SuperLU in the pattern's
+nested-dissection order, :mod:`.linsolve`; :class:`HarmonicOperator` keeps the assembled
+matrices and solves many right-hand sides per factor); K_t and M_σ are assembled
 once on the cached sparsity pattern of :mod:`.assembly` (its ``np.bincount`` assembly is
 real, so the two real matrices are combined on their common pattern).
 scikit-fem could assemble complex forms directly (``BilinearForm(dtype=np.complex128)``) and
@@ -38,10 +38,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 import skfem
-from scipy.sparse.linalg import splu
 
 from msens.errors import require
-from msens.field.assembly import assemble_matrix, assemble_vector, factorize
+from msens.field.assembly import assemble_matrix, assemble_vector
 from msens.field.constitutive import small_signal_tangent
 from msens.field.forms import (
     element_load,
@@ -50,6 +49,7 @@ from msens.field.forms import (
     flux_density_qp,
     potential_qp,
 )
+from msens.field.linsolve import SparseLU, factorize
 from msens.field.mesh import AxiMesh
 from msens.field.regions import Winding
 from msens.field.solve import Discretisation, FieldSolution, MagnetostaticProblem, discretise
@@ -171,58 +171,6 @@ def conductivity_mass(disc: Discretisation, sigma: np.ndarray
     return assemble_matrix(disc.pattern, element_mass(disc.quad, np.asarray(sigma, float)))
 
 
-class _HarmonicLU:
-    """LU of K + jωM as the equivalent real system of twice the size.
-
-    Each complex entry k + jωm becomes the 2×2 block [[k, −ωm], [ωm, k]] acting on the
-    interleaved (Re, Im) pairs, so the real matrix has the block version of K's sparsity
-    pattern and the symmetric minimum-degree ordering of :func:`.assembly.factorize` still
-    applies. Its symmetric part is diag(K, K), positive definite, so diagonal pivots are
-    fine; a small threshold (0.01) still lets SuperLU pivot off a diagonal 100× smaller than
-    its column, a safeguard against growth when ωM ≫ K.
-
-    Why not SuperLU's complex LU of the n×n matrix: it calls the vendor BLAS (zgemv, ztrsv)
-    on small blocks, and with OpenBLAS's threads on a loaded machine its factor time jumped
-    at random between 0.03 s and 5.8 s on the same 7k-dof matrix (cf. scipy issue 13999;
-    OPENBLAS_NUM_THREADS=1 cures it, which a library cannot set after import). The real
-    form took 0.07-0.17 s every time: ~3× the best complex time and robust.
-    """
-
-    def __init__(self, k_ff: sp.csc_matrix, m_ff: sp.csc_matrix, omega: float):
-        # K and M are symmetric on one pattern: their CSC arrays are also CSR arrays
-        blocks = np.empty((k_ff.data.size, 2, 2))
-        blocks[:, 0, 0] = blocks[:, 1, 1] = k_ff.data
-        blocks[:, 0, 1] = -omega * m_ff.data
-        blocks[:, 1, 0] = omega * m_ff.data
-        n = k_ff.shape[0]
-        self.matrix = sp.bsr_matrix((blocks, k_ff.indices, k_ff.indptr),
-                                    shape=(2 * n, 2 * n)).tocsc()
-        self._lu = splu(self.matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.01,
-                        panel_size=4, relax=4, options={"SymmetricMode": True})
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        """x with (K + jωM) x = b, shapes (n,) or (n, k) complex (k right-hand sides)."""
-        b = np.asarray(b)
-        n = b.shape[0]
-        inter = np.empty((2 * n, *b.shape[1:]))
-        inter[0::2], inter[1::2] = b.real, b.imag
-        x = self._lu.solve(inter)
-        return x[0::2] + 1j * x[1::2]
-
-
-class _StaticLU:
-    """LU of K alone (ω = 0), factorised exactly as the magnetostatic solver does."""
-
-    def __init__(self, k_ff: sp.csc_matrix):
-        self._lu = factorize(k_ff)
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        """x with K x = b (real and imaginary parts separately), shapes (n,) or (n, k)."""
-        b = np.asarray(b)
-        return self._lu.solve(np.ascontiguousarray(b.real)) + 1j * self._lu.solve(
-            np.ascontiguousarray(b.imag))
-
-
 class HarmonicOperator:
     """K_t and M_σ of a model assembled once; K_t + jωM_σ factorised per frequency.
 
@@ -255,11 +203,13 @@ class HarmonicOperator:
         self.k_full, self.k_ff = assemble_matrix(d.pattern, element_stiffness(d.quad, nu))
         self.m_full, self.m_ff = conductivity_mass(d, sigma)
 
-    def factor(self, frequency: float) -> _HarmonicLU | _StaticLU:
-        """Factor of K_t + jωM_σ (free dofs) at ``frequency`` (Hz, >= 0)."""
+    def factor(self, frequency: float) -> SparseLU:
+        """Factor of K_t + jωM_σ (free dofs) at ``frequency`` (Hz, >= 0); at 0 Hz the real
+        K_t alone, factorised as the magnetostatic solver does."""
         require(frequency >= 0, f"frequency must be >= 0 Hz, got {frequency}")
-        w = TWO_PI * float(frequency)
-        return _StaticLU(self.k_ff) if w == 0.0 else _HarmonicLU(self.k_ff, self.m_ff, w)
+        if frequency == 0.0:
+            return factorize(self.k_ff)
+        return factorize(self.matrix(frequency))
 
     def matrix(self, frequency: float) -> sp.csc_matrix:
         """K_t + jωM_σ on the free dofs, complex."""
@@ -276,7 +226,7 @@ class HarmonicOperator:
         j[mesh.subdomains[region]] = current_density
         return assemble_vector(q.dofs, element_load(q, j, np.zeros_like(j)), self.disc.basis.N)
 
-    def solve(self, factor: _HarmonicLU | _StaticLU, loads: np.ndarray) -> np.ndarray:
+    def solve(self, factor: SparseLU, loads: np.ndarray) -> np.ndarray:
         """Potentials of load vectors with A = 0 on the Dirichlet boundary.
 
         Parameters

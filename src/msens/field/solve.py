@@ -6,7 +6,7 @@ A_φ = B_0 r/2 on the ``outer`` boundaries (B_0 = ``background_field``, 0 by def
 truncated open domain; :mod:`.verify` shows the truncation error).
 Nonlinear regions: Newton's method on the residual ∫ H(B)·B(v) r − ∫ J v r with the exact
 tangent ν I + (ν_d − ν) b̂b̂ᵀ and a backtracking line search on the residual norm.
-Linear systems: SuperLU with a minimum-degree ordering (:func:`.assembly.factorize`).
+Linear systems: SuperLU in a nested-dissection ordering (:func:`.linsolve.factorize`).
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ from msens.field.assembly import (
     assemble_matrix,
     assemble_vector,
     build_pattern,
-    factorize,
 )
 from msens.field.constitutive import (
     Materials,
@@ -41,6 +40,7 @@ from msens.field.forms import (
     flux_density_qp,
     quadrature_data,
 )
+from msens.field.linsolve import factorize
 from msens.field.mesh import AxiMesh, axis_facets
 from msens.field.regions import PermanentMagnet, Region, Winding
 

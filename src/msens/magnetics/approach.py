@@ -18,11 +18,12 @@ rejected: the mesh-to-mesh noise of the coil's bias flux linkage (~1e-4 relative
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 
 import numpy as np
 import skfem
 
-from msens.errors import require
+from msens.errors import internal, require
 from msens.field.forms import quadrature_data
 from msens.field.geometry import SensorGeometry
 from msens.field.mesh import from_arrays
@@ -44,6 +45,20 @@ def _morphed_quadrature(sol: FieldSolution, points: np.ndarray):
     return quadrature_data(basis)
 
 
+def _element_quadrature(sol: FieldSolution, points: np.ndarray, elements: np.ndarray):
+    """Quadrature data of ``elements`` on vertex coordinates ``points`` (shape (2, n)), with
+    the model's global dofs: a small mesh of those elements only, so a morph that stretches
+    a few elements costs a few elements."""
+    t = sol.problem.mesh.mesh.t[:, elements]
+    vertices, local = np.unique(t, return_inverse=True)
+    # skfem keeps each triangle's vertex order (sort_t is off), so the local basis functions
+    # and their dofs are those of the model's elements (checked in approach_residuals)
+    sub = skfem.MeshTri(np.ascontiguousarray(points[:, vertices]),
+                        np.ascontiguousarray(local.reshape(t.shape)))
+    q = quadrature_data(skfem.CellBasis(sub, sol.basis.elem, intorder=2 * sol.problem.order))
+    return replace(q, dofs=sol.basis.element_dofs[:, elements])
+
+
 def approach_residuals(sol: FieldSolution, geometry: SensorGeometry,
                        contacts: Sequence[int], step: float = 1e-10) -> dict[int, np.ndarray]:
     """∂R/∂δ_c of the bias residual for the approach δ_c at each contact (central difference).
@@ -52,6 +67,9 @@ def approach_residuals(sol: FieldSolution, geometry: SensorGeometry,
     toward the wall by δ_c; the coil, magnets and the beads below stay. On the fixed mesh
     topology the beads' vertices (including the shared flat of contact c) move and the
     adjacent elements stretch, so the residual is differentiated without re-meshing noise.
+    Only the stretched elements (vertices both moved and fixed) are evaluated: an element
+    that moves whole is translated along the axis, which leaves its part of the axisymmetric
+    residual unchanged.
 
     Returns
     -------
@@ -61,15 +79,21 @@ def approach_residuals(sol: FieldSolution, geometry: SensorGeometry,
     require(step > 0, f"step must be > 0 m, got {step}")
     b = geometry.beads
     p0 = sol.problem.mesh.mesh.p
+    t = sol.problem.mesh.mesh.t
     out = {}
     for c in contacts:
         require(b.first <= c <= b.last, f"contact {c} is not below a modelled bead")
         phi = shell_function(sol, [f"bead_{p}" for p in range(b.first, c + 1)], layers=0)
+        stretched = np.flatnonzero(np.ptp(phi[t], axis=0) > 0)
+        here = _element_quadrature(sol, p0, stretched)
+        internal(bool(np.allclose(here.g, sol.disc.quad.g[stretched], rtol=1e-9, atol=0.0)),
+                 "internal: the sub-mesh's basis functions differ from the model's")
         res = []
         for s in (step, -step):
             p = p0.copy()
             p[1] -= s * phi
-            res.append(bias_residual(sol, _morphed_quadrature(sol, p), sol.a))
+            res.append(bias_residual(sol, _element_quadrature(sol, p, stretched), sol.a,
+                                     elements=stretched))
         out[int(c)] = (res[0] - res[1]) / (2 * step)
     return out
 

@@ -27,9 +27,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from msens.errors import internal, require
-from msens.field.assembly import assemble_matrix, assemble_vector, factorize
+from msens.field.assembly import assemble_matrix, assemble_vector
 from msens.field.constitutive import reluctivities, small_signal_tangent, tangent
 from msens.field.forms import element_stiffness, flux_density_qp
+from msens.field.linsolve import factorize
 from msens.field.solve import FieldSolution
 from msens.params.units import TWO_PI
 
@@ -95,8 +96,8 @@ class TangentOperator:
         return self.solve(self.magnetisation_rhs(elements, mu0_dm))[0]
 
 
-def bias_residual(sol: FieldSolution, q, a: np.ndarray, shift: np.ndarray | None = None
-                  ) -> np.ndarray:
+def bias_residual(sol: FieldSolution, q, a: np.ndarray, shift: np.ndarray | None = None, *,
+                  elements: np.ndarray | None = None) -> np.ndarray:
     """Residual ∫ (H(B − shift) − H_c e_z)·B(v) r (per radian) of the bias problem.
 
     Parameters
@@ -104,16 +105,19 @@ def bias_residual(sol: FieldSolution, q, a: np.ndarray, shift: np.ndarray | None
     sol : FieldSolution
         Gives the materials, the dof count.
     q : QuadratureData
-        Quadrature of the mesh (the bias mesh, or a morphed copy of it).
+        Quadrature of the mesh (the bias mesh, or a morphed copy of it), or of the
+        ``elements`` only.
     a : ndarray, shape (n_dofs,)
     shift : ndarray, shape (n_el, n_qp, 2), optional
         An added magnetisation μ0 ΔM at the quadrature points, T (H = H_law(B − μ0 ΔM)).
+    elements : ndarray of int, optional
+        The elements ``q`` covers (default: all): their part of the residual.
 
     Returns
     -------
     ndarray, shape (n_dofs,)
     """
-    mat = sol.disc.materials
+    mat = sol.disc.materials if elements is None else sol.disc.materials.take(elements)
     b = flux_density_qp(q, a) if shift is None else flux_density_qp(q, a) - shift
     nu, _ = reluctivities(mat, b)
     h = nu[..., None] * b

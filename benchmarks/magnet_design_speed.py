@@ -1,0 +1,110 @@
+"""Magnet designs with the full physics: time per design on the main study with eddy currents.
+
+A magnet design cannot reuse the study's field model (the magnet sets the bias), so each one
+meshes, solves the nonlinear bias, builds both mechanisms' sources and solves the
+eddy-current model at the run's 17 frequencies (:mod:`msens.design.magnet_sweep`). Printed
+as JSON:
+
+- ``single_design_s``: one design (magnet moved 1 mm, so no mesh is cached) in this process,
+  with the eddy-current model's stage timings;
+- ``sweep``: ``--designs`` designs through ``msens design`` with two local workers (what a
+  user runs), wall time per design;
+- ``lu``: one factorisation of that design's K_t + jωM_σ at 30 kHz with msens' sparse LU
+  (:mod:`msens.field.linsolve`) against scipy's ``splu`` with its defaults (what a user would
+  pick), as a ratio.
+
+Run: ``python benchmarks/magnet_design_speed.py [--designs 4]`` (about 3 min on 2 cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def eddy_study():
+    from msens import api
+    from msens.config.study import default_study_path
+
+    return api.load(default_study_path()).replace({"field.eddy_currents": True})
+
+
+def single_design(study, offset: float, mesh_dir: Path) -> dict:
+    from msens.config.fieldsetup import geometry_from_study
+    from msens.design.magnet_sweep import MagnetTask, evaluate_design
+    from msens.design.sweep import design_geometry, parse_sweep
+
+    spec = parse_sweep(f'schema = "msens.sweep/1"\nname = "one"\nsensor = 13\n[magnet]\n'
+                       f'axial_offset_m = [{offset!r}]\n')
+    geometry = design_geometry(geometry_from_study(study), 13, spec.designs()[0])
+    t0 = time.perf_counter()
+    row = evaluate_design(MagnetTask(study, geometry, 13, str(mesh_dir)))
+    seconds = time.perf_counter() - t0
+    name = next(mesh_dir.glob("dynamic-*.json"))
+    timings = json.loads(name.read_text())["details"]["timings_s"]
+    return {"seconds": round(seconds, 2), "peak_voltage_V": row["peak_voltage_V"],
+            "eddy_model_stages_s": {k: round(v, 2) for k, v in timings.items()}}, geometry
+
+
+def sweep(study, designs: int, folder: Path) -> dict:
+    from msens import api
+
+    offsets = ", ".join(repr(float(x)) for x in np.linspace(-1.5e-3, 1.5e-3, designs))
+    spec = folder / "sweep.toml"
+    spec.write_text(f'schema = "msens.sweep/1"\nname = "speed"\nsensor = 13\n[magnet]\n'
+                    f"axial_offset_m = [{offsets}]\n")
+    t0 = time.perf_counter()
+    api.design(study, spec, folder / "out", workers=2, progress=False)
+    wall = time.perf_counter() - t0
+    return {"designs": designs, "workers": 2, "wall_s": round(wall, 1),
+            "per_design_s": round(wall / designs, 2)}
+
+
+def lu_comparison(study, geometry, mesh_dir: Path) -> dict:
+    from scipy.sparse.linalg import splu
+
+    from msens.config.fieldsetup import eddy_settings
+    from msens.field.eddy import HarmonicOperator
+    from msens.field.linsolve import factorize
+    from msens.magnetics.dynamic import sensor_conductivity
+    from msens.magnetics.transducer import bias_solution
+
+    eddy = eddy_settings(study)
+    sol, _ = bias_solution(geometry, options=eddy.options, mesh_dir=mesh_dir)
+    op = HarmonicOperator(sol, sensor_conductivity(sol.problem.mesh, geometry,
+                                                   steel=eddy.steel))
+    a = op.matrix(30e3)
+    b = np.random.default_rng(0).standard_normal(a.shape[0]).astype(complex)
+    factorize(op.k_ff)  # the pattern's ordering, once per model (as in a design)
+    t0 = time.perf_counter()
+    x = factorize(a).solve(b)
+    t_msens = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    ref = splu(a).solve(b)
+    t_scipy = time.perf_counter() - t0
+    return {"dofs": int(a.shape[0]), "msens_s": round(t_msens, 3),
+            "scipy_splu_default_s": round(t_scipy, 3), "ratio": round(t_msens / t_scipy, 3),
+            "max_rel_difference": float(np.max(np.abs(x - ref)) / np.max(np.abs(ref)))}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--designs", type=int, default=4)
+    args = parser.parse_args()
+    study = eddy_study()
+    with tempfile.TemporaryDirectory() as tmp:
+        one, geometry = single_design(study, 1e-3, Path(tmp) / "one")
+        lu = lu_comparison(study, geometry, Path(tmp) / "one")
+        many = sweep(study, args.designs, Path(tmp))
+    print(json.dumps({"study": "paper-mss with [field] eddy_currents = true",
+                      "single_design": one, "sweep": many, "lu": lu,
+                      "target_per_design_s": 20.0}, indent=1))
+
+
+if __name__ == "__main__":
+    main()

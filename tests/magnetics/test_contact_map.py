@@ -260,6 +260,61 @@ def test_hammerstein_with_eddy_currents():
     assert np.max(np.abs(rec.flux - expect)) < 1e-3 * np.ptp(expect)
 
 
+def test_moved_coil_reads_the_maps_equivalent_approaches():
+    """A moved coil (:meth:`Transducer.shifted`) keeps the contact maps as a Hammerstein
+    model: the equivalent approaches are those of the coil the maps were solved for, so the
+    mapped contact's static flux scales with the moved coil's sensitivity; no offset gives
+    the transducer back, and shifting twice does not compound."""
+    from dataclasses import replace
+
+    tr, table = _wired(True)
+    tr = replace(tr, offsets=np.array([-1e-3, 0.0, 1e-3]),
+                 villari_by_offset=np.tile(tr.sensitivity_villari, (3, 1)),
+                 approach_by_offset=np.array([[0.5, 3.0], [0.7, 3.7], [0.9, 4.4]]))
+    _, _, approach = _history()
+    delta = approach[:, 9:11]
+    np.testing.assert_array_equal(tr.shifted(0.0).equivalent_approach(delta),
+                                  tr.equivalent_approach(delta))
+    moved = tr.shifted(1e-3)
+    np.testing.assert_allclose(moved.dlambda_dapproach, [0.9, 4.4], rtol=1e-12)
+    np.testing.assert_allclose(moved.equivalent_approach(delta),
+                               tr.equivalent_approach(delta), rtol=1e-14)
+    flux = moved.dlambda_dapproach[0] * (moved.equivalent_approach(delta)[:, 0]
+                                         - table.delta_static)
+    np.testing.assert_allclose(flux, 0.9 / 0.7 * table(delta[:, 0]), rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(moved.shifted(-1e-3).equivalent_approach(delta),
+                                  tr.shifted(-1e-3).equivalent_approach(delta))
+
+
+def _tiny_with_maps(tmp_path):
+    from pathlib import Path
+
+    from msens import api
+
+    tiny = (Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text()
+    path = tmp_path / "tiny.toml"
+    path.write_text(tiny + "\n[field]\ncontact_map = true\n")
+    return api.load(path)
+
+
+def test_contact_maps_in_diagnose_and_design(tmp_path):
+    """With ``contact_map = true``: diagnose does not search the magnet remanence (other
+    remanences have no maps) but still moves the coil (the maps carry over); a magnet sweep
+    is refused before any work, naming the key."""
+    from msens import api
+    from msens.diagnose.effects import Context, registry
+
+    study = _tiny_with_maps(tmp_path)
+    ctx = Context(study, study.setups[0])
+    searched = {name for name, e in registry().items() if e.applies(ctx)}
+    assert "coil_position" in searched and "magnet_remanence" not in searched
+    sweep = tmp_path / "magnet.toml"
+    sweep.write_text('schema = "msens.sweep/1"\nname = "m"\n[magnet]\ngrade = ["N42"]\n')
+    with pytest.raises(InputError, match="contact_map = true cannot be used with a magnet"):
+        api.design(study, sweep, tmp_path / "out", progress=False)
+    assert not (tmp_path / "out" / "designs.csv").exists()
+
+
 @pytest.mark.slow
 def test_transducers_with_contact_maps(tmp_path):
     """``transducer_report(contact_maps=True)``: maps of the contacts around the coil, their

@@ -226,6 +226,30 @@ def test_frequency_chunks_join_to_the_whole(model, report):
     assert len(joined.details["coils"]["13"]["power_balance_rel_error"]) == len(FREQS)
 
 
+def test_offset_profiles_join_and_round_trip(model, report):
+    """Coil-offset profiles: at no offset they read the coil as reciprocity does (to the
+    table's quadrature, 1e-4); chunks join to the whole; the JSON form reads back equal."""
+    from msens.magnetics.dynamic import report_from_json, report_to_json
+
+    g, m = model
+    offs = (-1e-3, 0.0, 1e-3)
+    whole = frequency_responses(m, g, FREQS, offsets=offs)
+    r = whole.responses[13]
+    assert r.villari_by_offset.shape == (3, len(FREQS), r.contacts.size)
+    for name in ("villari", "approach"):
+        at0, exact = getattr(r, f"{name}_by_offset")[1], getattr(report.responses[13], name)
+        assert np.max(np.abs(at0 - exact)) <= 1e-4 * np.max(np.abs(exact))
+    parts = [frequency_responses(m, g, (0.0, *chunk), offsets=offs)
+             for chunk in ((1e3, 1e4), (3e4, 1e5))]
+    joined = join_reports(parts).responses[13]
+    back = report_from_json(report_to_json(whole)).responses[13]
+    for other in (joined, back):
+        np.testing.assert_array_equal(other.offsets, r.offsets)
+        for name in ("villari_by_offset", "approach_by_offset"):
+            x, y = getattr(other, name), getattr(r, name)
+            np.testing.assert_allclose(x, y, rtol=0, atol=1e-12 * np.max(np.abs(y)))
+
+
 @pytest.mark.slow
 def test_frequency_solves_on_a_dask_cluster(tmp_path):
     """dynamic_report with a scheduler: the tasks run on the cluster and give the local report

@@ -30,6 +30,7 @@ from msens.design.sweep import (
     sweep_sensor,
     validate_designs,
 )
+from msens.errors import InputError
 from msens.io.output import OutputDir, to_json
 
 
@@ -87,6 +88,13 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
     target = OutputDir(out)
     target.check(list(files(fig_format)))  # before any work: never overwrite a user's file
     sensor = sweep_sensor(study, spec)
+    if spec.kind == "magnet" and study.field.contact_map:
+        raise InputError(
+            f"{study.source}: [field] contact_map = true cannot be used with a magnet sweep "
+            f"({spec.source}): the contact maps are solved in the study magnet's bias field, "
+            "and each magnet design would need its own (about a minute per contact near the "
+            "coil). Sweep with contact_map = false, then check the chosen magnet with "
+            "'msens run' and contact_map = true")
     designs = spec.designs()
     # paths handed to workers are absolute: a Dask worker has its own working folder
     cache = ResultCache((Path(cache_dir) if cache_dir else target.path / "cache").resolve())

@@ -114,7 +114,9 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
                   designs: Sequence[Design]) -> CoilContext:
     """The one field model of a coil sweep (the run's) and everything derived from it."""
     unit = next(u for u in geometry.sensors if u.coil.particle == particle)
-    transducers = transducers_for(geometry)
+    # with contact maps the wave carries the study coil's equivalent approaches, which every
+    # designed coil reads (the Hammerstein assumption of Transducer.shifted)
+    transducers = transducers_for(geometry, contact_maps=study.field.contact_map)
     tr = transducers[particle]
     wave = study_wave(study, transducers, particle)
     r_rng, z_rng = _coil_box(unit, designs, geometry)

@@ -41,17 +41,23 @@ _MODELS: dict[str, tuple[SensorGeometry, dict[int, Transducer],
 _FAMILIES: dict[str, RemanenceFamily] = {}
 
 
-def register(geometry: SensorGeometry, eddy: EddySettings | None = None) -> str:
-    """Solve (or read from the cache) a geometry's transducers, and with ``eddy`` its coils'
-    frequency responses (as ``msens run``); return its model key."""
+def register(geometry: SensorGeometry, eddy: EddySettings | None = None, *,
+             contact_maps: bool = False) -> str:
+    """Solve (or read from the cache) a geometry's transducers (with ``contact_maps`` their
+    nonlinear contact maps), and with ``eddy`` its coils' frequency responses (as
+    ``msens run``); return its model key."""
     key = cache_key(geometry, stress_force=geometry.beads.contact_load,
                     law=law_for_steel(geometry.steel), material=BEAD_STEEL, approach=True)
     if eddy is not None:
         key += f"+eddy:{eddy.options!r}:{eddy.steel!r}"
+    if contact_maps:
+        key += "+contact-maps"
     if key not in _MODELS:
+        # with the coils' offset profiles: the coil_position effect moves them
         responses = None if eddy is None else dynamic_report(
-            geometry, options=eddy.options, steel=eddy.steel).responses
-        _MODELS[key] = (geometry, transducers_for(geometry), responses)
+            geometry, options=eddy.options, steel=eddy.steel, offsets=True).responses
+        _MODELS[key] = (geometry, transducers_for(geometry, contact_maps=contact_maps),
+                        responses)
     return key
 
 
@@ -73,7 +79,8 @@ def setup_physics(ctx: Context) -> tuple[PhysicsMss | None, ...]:
     if not any(s.model is MssModel.PHYSICS for s in sensors):
         return ()
     eddy = eddy_settings(ctx.study) if ctx.study.field.eddy_currents else None
-    model = register(geometry_from_study(ctx.study, ctx.setup), eddy)
+    model = register(geometry_from_study(ctx.study, ctx.setup), eddy,
+                     contact_maps=ctx.study.field.contact_map)
     return tuple(
         PhysicsMss(model=model, particle=s.particle,
                    coil=coil_geometry(s.coil or CoilSpec(), s.particle),
@@ -116,10 +123,13 @@ def signals(spec: PhysicsMss, t: np.ndarray, force: np.ndarray, *,
     if responses is None:
         return mss_signals(mss, t, force, rate, approach=approach, columns=columns,
                            static=static)
-    internal(spec.offset_m == 0.0 and spec.remanence_factor == 1.0,
-             "internal: no eddy-current variants for coil offsets or magnet remanence")
-    return dynamic_signals(mss.transducer, responses[spec.particle], mss.circuit, t, force,
-                           rate, approach=approach, columns=columns)
+    internal(spec.remanence_factor == 1.0,
+             "internal: no eddy-current variants for magnet remanence")
+    response = responses[spec.particle]
+    if spec.offset_m != 0.0:
+        response = response.shifted(spec.offset_m)
+    return dynamic_signals(mss.transducer, response, mss.circuit, t, force, rate,
+                           approach=approach, columns=columns)
 
 
 def eddy_currents(model: str) -> bool:

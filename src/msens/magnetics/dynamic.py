@@ -50,7 +50,7 @@ from msens.field.sensor_model import coil_current_density, coil_resistance
 from msens.io._files import atomic_write_bytes
 from msens.io.hashing import content_hash
 from msens.magnetics.frequency_response import FrequencyResponse
-from msens.magnetics.mechanisms import MechanismPotentials
+from msens.magnetics.mechanisms import MechanismPotentials, offset_grid, offset_linkage
 from msens.magnetics.potentials import region_linkage
 from msens.params.units import TWO_PI
 
@@ -62,6 +62,12 @@ from msens.params.units import TWO_PI
 DEFAULT_FREQUENCIES: tuple[float, ...] = (0.0, 10.0, 30.0, 100.0, 300.0, 500.0, 1e3, 2e3,
                                           3e3, 5e3, 10e3, 20e3, 30e3, 50e3, 100e3, 150e3,
                                           200e3)
+
+#: Step of the coil-offset profiles of :func:`dynamic_report` ``(offsets=True)``, m: ±3 mm
+#: (``OFFSET_SPAN``) in 0.25 mm steps, 25 offsets; the sensitivities change over the coil's
+#: length and the bead diameter (several mm), so cubic interpolation between the steps is
+#: accurate (tested against a moved coil's own model).
+RESPONSE_OFFSET_STEP = 0.25e-3
 
 #: Electrical conductivity of the magnet grades of
 #: :data:`msens.params.materials.MAGNET_GRADES`, S/m.
@@ -130,7 +136,8 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
                         frequencies: Sequence[float] = DEFAULT_FREQUENCIES, *,
                         sigma: np.ndarray | None = None, steel: float = SIGMA_1018,
                         magnets: Mapping[str, float] | None = None,
-                        direct: bool = False) -> DynamicReport:
+                        direct: bool = False, offsets: Sequence[float] | None = None
+                        ) -> DynamicReport:
     """Solve (K_t + jωM_σ) a_s = f_s for every source and coil at each frequency.
 
     Parameters
@@ -154,6 +161,10 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
         by reciprocity only, Λ_s = 2π a_1ᵀ f_s with the coil's own field a_1 — one solve per
         coil and frequency instead of one per source (on the main study's 52k dofs the ~40
         source back-substitutions took 13 s per frequency, the factorisation 2 s).
+    offsets : sequence of float, optional
+        Axial coil offsets, m (within ±``OFFSET_SPAN``): also solve every source and read it
+        with each coil moved by each offset (:func:`msens.magnetics.mechanisms.offset_linkage`),
+        the profiles of :meth:`FrequencyResponse.shifted`.
 
     Returns
     -------
@@ -181,19 +192,24 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
     lam_self = np.zeros((len(coils), n_f), dtype=complex)
     checks = {str(c.particle): {"reciprocity_rel_error": [], "power_balance_rel_error": []}
               for c in coils}
+    offs = None if offsets is None else np.asarray([float(o) for o in offsets])
+    moved = (None if offs is None
+             else np.zeros((len(coils), n_f, offs.size, n_s), dtype=complex))
     timings["factor"] = timings["solve"] = timings["post"] = 0.0
     for k, f in enumerate(freqs):
         t0 = time.perf_counter()
         fac = op.factor(f)
         t1 = time.perf_counter()
         own = op.solve(fac, coil_loads)
-        pots = op.solve(fac, model.rhs) if direct else None
+        pots = op.solve(fac, model.rhs) if direct or offs is not None else None
         t2 = time.perf_counter()
         for i, (c, r) in enumerate(zip(coils, regions, strict=True)):
             lam_self[i, k] = region_linkage(sol, own[i:i + 1], r, c.turns, c.area)[0]
             # reciprocity: K_t + jωM_σ is complex symmetric, Λ_s = 2π a_1ᵀ f_s (no conjugate)
             link[i, k] = TWO_PI * (model.rhs @ own[i])
             chk = checks[str(c.particle)]
+            if moved is not None:
+                moved[i, k] = offset_linkage(sol, pots, geometry, c, offs)
             if direct:
                 dir_link = region_linkage(sol, pots, r, c.turns, c.area)
                 scale = float(np.max(np.abs(dir_link))) or 1.0
@@ -218,11 +234,18 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
         contacts, vr, ar = model.contact_profiles(link[i].real)
         _, vi, ai = model.contact_profiles(link[i].imag)
         w = TWO_PI * freqs
+        profiles = {}
+        if moved is not None:
+            by_offset = np.moveaxis(moved[i], 1, 0)  # (n_o, n_f, n_s)
+            _, mvr, mar = model.contact_profiles(by_offset.real)
+            _, mvi, mai = model.contact_profiles(by_offset.imag)
+            profiles = {"offsets": offs, "villari_by_offset": mvr + 1j * mvi,
+                        "approach_by_offset": mar + 1j * mai}
         out[c.particle] = FrequencyResponse(
             particle=c.particle, frequencies=freqs, contacts=contacts, villari=vr + 1j * vi,
             approach=ar + 1j * ai, impedance=coil_resistance(c) + 1j * w * lam_self[i],
             resistance_ohm=coil_resistance(c), static_inductance_H=float(lam_self[i, 0].real),
-            source=src)
+            source=src, **profiles)
     details = {"dofs": sol.dofs, "elements": mesh.n_elements, "frequencies_Hz": freqs.tolist(),
                "sigma_max_S_per_m": float(np.max(sigma)),
                "conducting_elements": int(np.count_nonzero(sigma)),
@@ -237,12 +260,16 @@ DYNAMIC_VERSION = "dynamic/1"
 
 
 def dynamic_key(transducer_key: str, frequencies: Sequence[float], steel: float,
-                magnets: Mapping[str, float] | None) -> str:
-    """Content hash (16 hex digits): the static transducer's key plus frequencies and σ."""
+                magnets: Mapping[str, float] | None,
+                offsets: Sequence[float] | None = None) -> str:
+    """Content hash (16 hex digits): the static transducer's key plus frequencies and σ (and
+    the coil offsets of the profiles, if any)."""
     payload = {"version": DYNAMIC_VERSION, "transducer": transducer_key,
                "frequencies": [repr(float(f)) for f in frequencies], "steel": repr(float(steel)),
                "magnets": {k: repr(float(v)) for k, v in
                            sorted({**MAGNET_CONDUCTIVITY, **(magnets or {})}.items())}}
+    if offsets is not None:
+        payload["offsets"] = [repr(float(o)) for o in offsets]
     return content_hash(payload, 16)
 
 
@@ -261,7 +288,11 @@ def report_to_json(report: DynamicReport) -> dict:
                    "contacts": np.asarray(r.contacts).tolist(),
                    "villari_Wb_per_N": _cplx(r.villari), "approach_Wb_per_m": _cplx(r.approach),
                    "impedance_ohm": _cplx(r.impedance), "resistance_ohm": r.resistance_ohm,
-                   "static_inductance_H": r.static_inductance_H, "source": r.source}
+                   "static_inductance_H": r.static_inductance_H, "source": r.source,
+                   **({} if r.offsets is None else {
+                       "offsets_m": np.asarray(r.offsets).tolist(),
+                       "villari_by_offset_Wb_per_N": _cplx(r.villari_by_offset),
+                       "approach_by_offset_Wb_per_m": _cplx(r.approach_by_offset)})}
           for p, r in report.responses.items()}
     return {"schema": "msens.dynamic/1", "responses": rs, "details": report.details}
 
@@ -277,7 +308,11 @@ def report_from_json(data: dict) -> DynamicReport:
             contacts=np.asarray(v["contacts"], dtype=int), villari=_uncplx(v["villari_Wb_per_N"]),
             approach=_uncplx(v["approach_Wb_per_m"]), impedance=_uncplx(v["impedance_ohm"]),
             resistance_ohm=float(v["resistance_ohm"]),
-            static_inductance_H=float(v["static_inductance_H"]), source=str(v["source"]))
+            static_inductance_H=float(v["static_inductance_H"]), source=str(v["source"]),
+            **({} if "offsets_m" not in v else {
+                "offsets": np.asarray(v["offsets_m"], dtype=float),
+                "villari_by_offset": _uncplx(v["villari_by_offset_Wb_per_N"]),
+                "approach_by_offset": _uncplx(v["approach_by_offset_Wb_per_m"])}))
     return DynamicReport(out, data.get("details", {}))
 
 
@@ -285,7 +320,8 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, cache_dir: str | P
                    mesh_dir: str | Path | None = None,
                    frequencies: Sequence[float] = DEFAULT_FREQUENCIES,
                    steel: float = SIGMA_1018, magnets: Mapping[str, float] | None = None,
-                   refresh: bool = False, scheduler: str | None = None) -> DynamicReport:
+                   refresh: bool = False, scheduler: str | None = None,
+                   offsets: bool = False) -> DynamicReport:
     """Cached :func:`frequency_responses` of a geometry (``dynamic-<key>.json``).
 
     The sources are those of the default static transducer (:func:`transducer_report`'s
@@ -296,6 +332,10 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, cache_dir: str | P
     one chunk per worker; each task meshes (through the shared mesh cache ``mesh_dir``),
     solves the bias and the sources and then its frequencies, and the chunks are joined
     (:func:`join_reports`). The result equals the local one to round-off.
+
+    With ``offsets`` each response also holds its coil's profiles over ±3 mm of axial offset
+    (:data:`RESPONSE_OFFSET_STEP`; every source is then solved at every frequency), for
+    :meth:`FrequencyResponse.shifted`; a separate cache file.
     """
     from msens.field.cache import committed_mesh_dirs, default_mesh_dir
     from msens.magnetics.steel_law import law_for_steel
@@ -304,7 +344,8 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, cache_dir: str | P
 
     tkey = cache_key(geometry, options, stress_force=geometry.beads.contact_load,
                      law=law_for_steel(geometry.steel), material=BEAD_STEEL, approach=True)
-    name = f"dynamic-{dynamic_key(tkey, frequencies, steel, magnets)}.json"
+    grid = offset_grid(RESPONSE_OFFSET_STEP).tolist() if offsets else None
+    name = f"dynamic-{dynamic_key(tkey, frequencies, steel, magnets, grid)}.json"
     if cache_dir is not None:
         directory, search = Path(cache_dir), [Path(cache_dir)]
     else:
@@ -316,14 +357,14 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, cache_dir: str | P
                 return report_from_json(json.loads((d / name).read_text()))
     freqs = [float(f) for f in frequencies]
     if scheduler is None:
-        rep = _report_task((geometry, options, mesh_dir, freqs, steel, magnets))
+        rep = _report_task((geometry, options, mesh_dir, freqs, steel, magnets, grid))
     else:
         from msens.parallel import run_tasks
 
         meshes = str(Path(mesh_dir or default_mesh_dir()).resolve())
         chunks = [c for c in np.array_split(np.asarray(freqs[1:]), _workers(scheduler))
                   if c.size]
-        tasks = [(geometry, options, meshes, [0.0, *c.tolist()], steel, magnets)
+        tasks = [(geometry, options, meshes, [0.0, *c.tolist()], steel, magnets, grid)
                  for c in chunks]
         parts = dict(run_tasks(_report_task, tasks, scheduler=scheduler))
         rep = join_reports([parts[i] for i in range(len(tasks))])
@@ -348,13 +389,14 @@ def _report_task(args: tuple) -> DynamicReport:
     from msens.magnetics.steel_law import law_for_steel
     from msens.magnetics.transducer import bias_solution
 
-    geometry, options, mesh_dir, freqs, steel, magnets = args
+    geometry, options, mesh_dir, freqs, steel, magnets, offsets = args
     t0 = time.perf_counter()
     sol, _ = bias_solution(geometry, options=options, mesh_dir=mesh_dir)
     timings: dict[str, float] = {"mesh_and_bias_solve": time.perf_counter() - t0}
     model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
                                  law=law_for_steel(geometry.steel), timings=timings)
-    rep = frequency_responses(model, geometry, freqs, steel=steel, magnets=magnets)
+    rep = frequency_responses(model, geometry, freqs, steel=steel, magnets=magnets,
+                              offsets=offsets)
     rep.details["timings_s"] = {**timings, **rep.details["timings_s"]}
     return rep
 
@@ -376,6 +418,14 @@ def join_reports(parts: Sequence[DynamicReport]) -> DynamicReport:
                                    zip(rows, keep, strict=True)])
 
         freqs = cat("frequencies")
+        profiles = {}
+        if r0.offsets is not None:
+            def cat_o(field, rows=rows, keep=keep):
+                return np.concatenate([np.asarray(getattr(r, field))[:, k] for r, k in
+                                       zip(rows, keep, strict=True)], axis=1)
+
+            profiles = {"offsets": r0.offsets, "villari_by_offset": cat_o("villari_by_offset"),
+                        "approach_by_offset": cat_o("approach_by_offset")}
         internal(bool(np.all(np.diff(freqs) > 0)),
                  "internal: join_reports: frequencies must increase")
         responses[p] = FrequencyResponse(
@@ -383,7 +433,7 @@ def join_reports(parts: Sequence[DynamicReport]) -> DynamicReport:
             villari=cat("villari"), approach=cat("approach"), impedance=cat("impedance"),
             resistance_ohm=r0.resistance_ohm, static_inductance_H=r0.static_inductance_H,
             source=r0.source.replace(f"at {np.asarray(r0.frequencies).size} frequencies",
-                                     f"at {freqs.size} frequencies"))
+                                     f"at {freqs.size} frequencies"), **profiles)
     details = dict(first.details)
     details["frequencies_Hz"] = responses[next(iter(responses))].frequencies.tolist()
     timings: dict[str, float] = {}
@@ -404,6 +454,7 @@ __all__ = [
     "DEFAULT_FREQUENCIES",
     "DYNAMIC_VERSION",
     "MAGNET_CONDUCTIVITY",
+    "RESPONSE_OFFSET_STEP",
     "DynamicReport",
     "dynamic_key",
     "dynamic_report",

@@ -8,7 +8,7 @@ gives Z = R + jωL(ω) of one or many coils.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
@@ -67,6 +67,11 @@ class FrequencyResponse:
         Λ/I at 0 Hz: the incremental inductance at the bias point, H.
     source : str
         Model, conductivities and mesh the numbers come from.
+    offsets : ndarray, shape (n_o,), optional
+        Axial coil offsets from its position, m (increasing, through 0).
+    villari_by_offset, approach_by_offset : ndarray of complex, shape (n_o, n_f, n_c), optional
+        ``villari`` and ``approach`` of the same coil moved by each offset (magnets and beads
+        fixed), from the same harmonic source potentials; :meth:`shifted` interpolates them.
     """
 
     particle: int
@@ -78,6 +83,9 @@ class FrequencyResponse:
     resistance_ohm: float
     static_inductance_H: float
     source: str = ""
+    offsets: np.ndarray | None = None
+    villari_by_offset: np.ndarray | None = None
+    approach_by_offset: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         f = np.asarray(self.frequencies, dtype=float)
@@ -87,6 +95,12 @@ class FrequencyResponse:
         require(np.shape(self.villari) == (n_f, n_c) and np.shape(self.approach) == (n_f, n_c)
                 and np.shape(self.impedance) == (n_f,),
                 "internal: FrequencyResponse arrays must have shapes (n_f, n_c) and (n_f,)")
+        if self.offsets is not None:
+            n_o = np.asarray(self.offsets).size
+            require(np.shape(self.villari_by_offset) == (n_o, n_f, n_c)
+                    and np.shape(self.approach_by_offset) == (n_o, n_f, n_c),
+                    "internal: FrequencyResponse offset profiles must have shape "
+                    "(n_o, n_f, n_c)")
 
     @property
     def inductance(self) -> np.ndarray:
@@ -97,6 +111,27 @@ class FrequencyResponse:
         out[0] = self.static_inductance_H
         out[1:] = (np.asarray(self.impedance[1:]) - self.resistance_ohm) / (1j * w[1:])
         return out
+
+    def shifted(self, offset: float) -> FrequencyResponse:
+        """The same coil moved axially by ``offset`` (m, + toward the striker), magnets and
+        beads fixed: S_c(ω), D_c(ω) by cubic interpolation of the offset profiles (real and
+        imaginary parts). Z(ω) is kept, as :meth:`msens.magnetics.transducer.Transducer.shifted`
+        keeps R and L (the coil's inductance changes little over a few mm)."""
+        from scipy.interpolate import CubicSpline
+
+        require(self.offsets is not None,
+                "this frequency response has no offset profiles (dynamic_report(offsets=True))")
+        lo, hi = float(self.offsets[0]), float(self.offsets[-1])
+        require(lo <= offset <= hi,
+                f"coil offset {offset} m outside the tabulated {lo:g}..{hi:g} m")
+
+        def at(table):
+            t = np.asarray(table)
+            return (CubicSpline(self.offsets, t.real, axis=0)(offset)
+                    + 1j * CubicSpline(self.offsets, t.imag, axis=0)(offset))
+
+        return replace(self, villari=at(self.villari_by_offset),
+                       approach=at(self.approach_by_offset))
 
     def villari_at(self, f: np.ndarray) -> np.ndarray:
         """S_c at frequencies ``f`` (Hz, |f| used), Wb/N, shape (n, n_c) (see :func:`interp`)."""

@@ -187,19 +187,47 @@ def offset_profiles(model: MechanismPotentials, geometry: SensorGeometry, coil: 
     villari, approach : ndarray, shape (n_o, n_c)
         ∂Λ/∂F_c (Wb/N) and ∂Λ/∂δ_c (Wb/m) at each offset.
     """
+    offsets = offset_grid(OFFSET_STEP)
+    link = offset_linkage(model.solution, model.potentials, geometry, coil, offsets)
+    _, vil, app = model.contact_profiles(link)
+    return offsets, vil, app
+
+
+def offset_grid(step: float) -> np.ndarray:
+    """Coil offsets over ±OFFSET_SPAN in steps of ``step`` (m, dividing the span), shape (n_o,)."""
+    n = round(OFFSET_SPAN / step)
+    return np.arange(-n, n + 1) * step
+
+
+def offset_linkage(sol: FieldSolution, potentials: np.ndarray, geometry: SensorGeometry,
+                   coil: Coil, offsets: np.ndarray) -> np.ndarray:
+    """Flux linkage of every source potential with a coil moved axially by each offset.
+
+    A summed-area table of the potentials over the coil's radial span (spacing
+    OFFSET_STEP / 2), integrated over each moved winding.
+
+    Parameters
+    ----------
+    potentials : ndarray, shape (n_s, n_dofs)
+        Real (static) or complex (harmonic) A_φ dofs per unit source.
+    offsets : ndarray, shape (n_o,)
+        m, within ±OFFSET_SPAN.
+
+    Returns
+    -------
+    ndarray, shape (n_o, n_s)
+        Wb per unit source (complex if the potentials are).
+    """
     rect = geometry.coil_rect(next(u for u in geometry.sensors
                                    if u.coil.particle == coil.particle))
-    n = round(OFFSET_SPAN / OFFSET_STEP)
-    offsets = np.arange(-n, n + 1) * OFFSET_STEP
+    offsets = np.asarray(offsets, dtype=float)
     pad = 2 * OFFSET_STEP
-    table = linkage_table(model.solution, model.potentials, (rect.r0, rect.r1),
+    table = linkage_table(sol, potentials, (rect.r0, rect.r1),
                           (rect.z0 - OFFSET_SPAN - pad, rect.z1 + OFFSET_SPAN + pad),
                           spacing=OFFSET_STEP / 2)
     ones = np.ones(offsets.size)
-    link = coil.turns / coil.area * rect_integral(table, rect.r0 * ones, rect.r1 * ones,
+    return coil.turns / coil.area * rect_integral(table, rect.r0 * ones, rect.r1 * ones,
                                                   rect.z0 + offsets, rect.z1 + offsets)
-    _, vil, app = model.contact_profiles(link)
-    return offsets, vil, app
 
 
 def adjoint_check(model: MechanismPotentials, coil: Coil, linkage: np.ndarray

@@ -115,6 +115,9 @@ class Transducer:
         Nonlinear contact maps Λ_c(δ) of some contacts
         (:mod:`msens.magnetics.contact_map`): their approaches are read through
         :meth:`equivalent_approach`. None: the linear sources alone.
+    map_dlambda : ndarray, shape (n_c,), optional
+        ∂Λ/∂δ_c of the coil the contact maps were solved for, Wb/m, when this transducer is
+        another coil (:meth:`shifted`); None: this transducer is that coil.
     """
 
     particle: int
@@ -132,6 +135,7 @@ class Transducer:
     villari_by_offset: np.ndarray | None = None
     approach_by_offset: np.ndarray | None = None
     approach_map: ApproachMap | None = None
+    map_dlambda: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.contacts).shape
@@ -149,7 +153,14 @@ class Transducer:
     def shifted(self, offset: float) -> Transducer:
         """The same coil moved axially by ``offset`` (m, + toward the striker), magnets and
         beads fixed: sensitivities by cubic interpolation of the offset profiles. R and L are
-        kept (the coil's inductance changes little over a few mm)."""
+        kept (the coil's inductance changes little over a few mm).
+
+        Contact maps carry over as the static part of a Hammerstein model: a mapped contact's
+        equivalent approach is the one of the coil the maps were solved for, read through the
+        moved coil's sensitivities. This ASSUMES the shape of Λ_c(δ) does not depend on where
+        the coil sits; on the main study, coil 18 reads contacts 10–14 (around coil 13, five
+        beads away) with the shape of coil 13's maps to 0.4–2.7 % of their range.
+        """
         internal(self.offsets is not None, "internal: transducer has no offset profiles")
         require(self.offsets[0] <= offset <= self.offsets[-1],
                 f"coil offset {offset} m outside the tabulated "
@@ -158,9 +169,10 @@ class Transducer:
 
         vil = CubicSpline(self.offsets, self.villari_by_offset, axis=0)(offset)
         app = CubicSpline(self.offsets, self.approach_by_offset, axis=0)(offset)
-        # the contact maps belong to the coil where they were solved
+        own = self.dlambda_dapproach if self.map_dlambda is None else self.map_dlambda
         return replace(self, sensitivity_villari=np.asarray(vil),
-                       dlambda_dapproach=np.asarray(app), approach_map=None)
+                       dlambda_dapproach=np.asarray(app),
+                       map_dlambda=None if self.approach_map is None else np.asarray(own))
 
     def equivalent_approach(self, delta: np.ndarray) -> np.ndarray:
         """The approaches the linear sources read, m, shape of ``delta`` (..., n_c): the
@@ -168,8 +180,9 @@ class Transducer:
         contacts, ``delta`` itself otherwise."""
         if self.approach_map is None:
             return np.asarray(delta, dtype=float)
+        slope = self.dlambda_dapproach if self.map_dlambda is None else self.map_dlambda
         return self.approach_map.equivalent(delta, np.asarray(self.contacts),
-                                            np.asarray(self.dlambda_dapproach))
+                                            np.asarray(slope))
 
     def sensitivity(self, mechanism: Mechanism = "both") -> np.ndarray:
         """∂Λ/∂F_c of the chosen mechanism(s) at the reference load, Wb/N, shape (n_c,)."""

@@ -4,7 +4,9 @@ Parameters ``coil_offset_m_<position>`` (``_top``, ``_bottom``; ``_single`` for 
 the axial offset of each physics MsS coil from where the study puts it, m (+ toward the
 striker); magnets and beads stay. The coil is air, so the moved coil's sensitivities come
 from the same field solution (the transducer's offset profiles,
-:meth:`msens.magnetics.transducer.Transducer.shifted`); no new simulation is needed. A coil
+:meth:`msens.magnetics.transducer.Transducer.shifted`; with eddy currents also the frequency
+response's, :meth:`msens.magnetics.frequency_response.FrequencyResponse.shifted`); no new
+simulation is needed. A coil
 moved toward the striker sees the pulse earlier and weights the contacts above it more.
 Bounds ±2.5 mm (the transducer tabulates ±3 mm; the default pole pieces leave ±6 mm).
 """
@@ -30,9 +32,7 @@ def names(ctx: Context) -> list[str]:
 
 
 def _applies(ctx: Context) -> bool:
-    # with eddy currents there are no frequency responses of moved coils yet
-    return (any(s.model is MssModel.PHYSICS for s in ctx.setup.sensors)
-            and not ctx.study.field.eddy_currents)
+    return any(s.model is MssModel.PHYSICS for s in ctx.setup.sensors)
 
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:

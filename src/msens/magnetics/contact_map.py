@@ -193,10 +193,19 @@ def state_fluxes(model: LayerModel, state: State, delta: float, coils: Sequence[
                  max_iter: int = 30) -> np.ndarray:
     """Flux linkage Λ of each coil in a contact state by one full nonlinear re-solve, Wb,
     shape (n_coils,)."""
+    sol, a = state_potential(model, state, delta, others, tol=tol, max_iter=max_iter)
+    return np.array([coil_flux_linkage(sol, a, c) for c in coils])
+
+
+def state_potential(model: LayerModel, state: State, delta: float,
+                    others: Mapping[int, float] | None = None, *, tol: float = 1e-12,
+                    max_iter: int = 30) -> tuple[FieldSolution, np.ndarray]:
+    """The bias potential of a contact state by one full nonlinear re-solve: the layer
+    model's solution of ``state`` and the dofs A_φ (T m, shape (n_dofs,)) on its morphed
+    mesh (coils, magnets and the air around them are not morphed)."""
     sol = model.solution(state)
     q = _morphed_quadrature(sol, state_points(model, state, delta, others))
-    a = nonlinear_resolve(sol, q, tol=tol, max_iter=max_iter)
-    return np.array([coil_flux_linkage(sol, a, c) for c in coils])
+    return sol, nonlinear_resolve(sol, q, tol=tol, max_iter=max_iter)
 
 
 def state_flux(model: LayerModel, state: State, delta: float, coil: Coil,
@@ -447,4 +456,5 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
 __all__ = ["AIR_GAPS", "CLOSED_THICKNESS", "LAYER_FRACTION", "MAP_VERSION", "STEEL_NODES",
            "ApproachMap", "ContactMap", "LayerModel", "approach_maps", "bridge_share",
            "contact_flux", "contact_map", "contact_maps", "layer_geometry", "layer_model",
-           "mapped_contacts", "state_flux", "state_fluxes", "state_points", "static_approach"]
+           "mapped_contacts", "state_flux", "state_fluxes", "state_points", "state_potential",
+           "static_approach"]

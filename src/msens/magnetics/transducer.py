@@ -158,8 +158,10 @@ class Transducer:
         Contact maps carry over as the static part of a Hammerstein model: a mapped contact's
         equivalent approach is the one of the coil the maps were solved for, read through the
         moved coil's sensitivities. This ASSUMES the shape of Λ_c(δ) does not depend on where
-        the coil sits; on the main study, coil 18 reads contacts 10–14 (around coil 13, five
-        beads away) with the shape of coil 13's maps to 0.4–2.7 % of their range.
+        the coil sits. On the main study (``python benchmarks/contact_map_transfer.py
+        --moved``) the maps of contacts 12, 13, 17 and 18 read by their coil moved ±2.5 mm
+        keep their shape to 0.5 % of their range (±1 mm: 0.18 %); five beads away it fails
+        (coil 13 reads contacts 15–20 with a shape 4–100 % off coil 18's).
         """
         internal(self.offsets is not None, "internal: transducer has no offset profiles")
         require(self.offsets[0] <= offset <= self.offsets[-1],

@@ -1,0 +1,106 @@
+"""How much a contact map's shape depends on the coil that reads it (prints JSON).
+
+:meth:`msens.magnetics.transducer.Transducer.shifted` and the coil sweep read a moved or
+redesigned coil's contacts through the study coil's contact maps (a Hammerstein model: the
+map's shape is assumed to be the contact's, whatever coil reads it). The main study's
+committed maps are tabulated for both of its coils (13 and 18, five beads apart), which is a
+far larger move than any coil design or ``coil_position`` fit makes. For each mapped contact
+this compares the two coils' maps Λ_c(δ) − Λ_c(δ_s) over δ from −12 µm (open) to 2.5 µm:
+the best scale factor between them and the largest misfit after scaling, relative to the
+reading coil's range.
+
+``--moved`` also measures the moves a design or a ``coil_position`` fit makes: for a few
+contacts (default 12, 13 at coil 13 and 17, 18 at coil 18) every table state of the contact
+map is solved again (:func:`msens.magnetics.contact_map.state_potential`) and read by the
+nearest coil and by that coil moved by ±1 and ±2.5 mm (a summed-area table of the state's
+potential, :func:`msens.magnetics.potentials.linkage_table`, the same quadrature for all).
+
+Run: ``python benchmarks/contact_map_transfer.py [--moved]`` (seconds: the maps are
+committed; ``--moved`` about a minute per contact).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+from msens.config.fieldsetup import geometry_from_study
+from msens.config.study import default_study_path, load_study
+from msens.magnetics.transducer_cache import transducers_for
+
+
+def shape_misfit(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """Best scale s of ``y`` onto ``x`` and max |x − s y| / max |x|."""
+    scale = float(np.dot(x, y) / np.dot(y, y))
+    return scale, float(np.max(np.abs(x - scale * y)) / np.max(np.abs(x)))
+
+
+def moved_coils(geometry, contacts, offsets) -> dict:
+    """Each contact's map states read by its nearest coil and by that coil moved."""
+    from msens.magnetics.contact_map import (
+        AIR_GAPS,
+        CLOSED_THICKNESS,
+        STEEL_NODES,
+        layer_model,
+        state_potential,
+        static_approach,
+    )
+    from msens.magnetics.potentials import linkage_table, rect_integral
+
+    ds = static_approach(geometry)
+    states = ([("steel", ds)] + [("steel", d) for d in STEEL_NODES]
+              + [("air", ds - g) for g in (CLOSED_THICKNESS, *AIR_GAPS[1:])])
+    offsets = np.asarray([0.0, *offsets])
+    span = float(np.max(np.abs(offsets)))
+    out = {}
+    for c in contacts:
+        model = layer_model(geometry, c)
+        unit = min(model.geometry.sensors, key=lambda u: abs(u.coil.particle - c - 0.5))
+        rect, coil = model.geometry.coil_rect(unit), unit.coil
+        ones = np.ones(offsets.size)
+        flux = []
+        for state, delta in states:
+            sol, a = state_potential(model, state, delta)
+            table = linkage_table(sol, a[None], (rect.r0, rect.r1),
+                                  (rect.z0 - span - 1e-4, rect.z1 + span + 1e-4), 0.05e-3)
+            flux.append(coil.turns / coil.area * rect_integral(
+                table, rect.r0 * ones, rect.r1 * ones, rect.z0 + offsets,
+                rect.z1 + offsets)[:, 0])
+        change = np.array(flux[1:]) - flux[0]  # (n_states, n_offsets)
+        out[str(c)] = {"coil": coil.particle, **{
+            f"moved_{o * 1e3:+.1f}_mm": dict(zip(("scale", "shape_misfit"),
+                                                shape_misfit(change[:, 0], change[:, k]),
+                                                strict=True))
+            for k, o in enumerate(offsets) if k}}
+    return out
+
+
+def main() -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--moved", action="store_true")
+    parser.add_argument("--contacts", default="12,13,17,18")
+    args = parser.parse_args()
+    geometry = geometry_from_study(load_study(default_study_path()))
+    maps = {p: {m.contact: m for m in tr.approach_map.maps}
+            for p, tr in transducers_for(geometry, contact_maps=True).items()}
+    delta = np.linspace(-12e-6, 2.5e-6, 600)
+    (a, b) = sorted(maps)
+    out = {}
+    for c in sorted(set(maps[a]) & set(maps[b])):
+        row = {}
+        for own, other in ((a, b), (b, a)):
+            scale, misfit = shape_misfit(maps[own][c](delta), maps[other][c](delta))
+            row[f"coil_{own}_read_by_{other}"] = {"scale": scale, "shape_misfit": misfit}
+        out[str(c)] = row
+    result = {"study": "paper-mss", "coils": [a, b], "delta_range_m": [-12e-6, 2.5e-6],
+              "contacts": out}
+    if args.moved:
+        contacts = [int(c) for c in args.contacts.split(",")]
+        result["moved"] = moved_coils(geometry, contacts, (-2.5e-3, -1e-3, 1e-3, 2.5e-3))
+    return result
+
+
+if __name__ == "__main__":
+    print(json.dumps(main(), indent=1))

@@ -15,8 +15,13 @@ map is solved again (:func:`msens.magnetics.contact_map.state_potential`) and re
 nearest coil and by that coil moved by ±1 and ±2.5 mm (a summed-area table of the state's
 potential, :func:`msens.magnetics.potentials.linkage_table`, the same quadrature for all).
 
-Run: ``python benchmarks/contact_map_transfer.py [--moved]`` (seconds: the maps are
-committed; ``--moved`` about a minute per contact).
+``--remanence`` asks the same of the magnets: the maps of those contacts solved again with
+all magnets' remanence scaled by 0.7 and 1.3 (:func:`msens.magnetics.variants.scaled_geometry`,
+the ``magnet_remanence`` effect's variants), read by the same coil, against the study's maps
+at the same table nodes.
+
+Run: ``python benchmarks/contact_map_transfer.py [--moved] [--remanence]`` (seconds: the
+maps are committed; each option about a minute per contact and case).
 """
 
 from __future__ import annotations
@@ -77,14 +82,36 @@ def moved_coils(geometry, contacts, offsets) -> dict:
     return out
 
 
+def remanence_scaled(geometry, transducers, contacts, factors) -> dict:
+    """Each contact's map with the magnets' remanence scaled, against the study's map."""
+    from msens.magnetics.contact_map import contact_maps, layer_model
+    from msens.magnetics.variants import scaled_geometry
+
+    out = {}
+    for c in contacts:
+        p = min(transducers, key=lambda q: abs(q - c - 0.5))
+        nominal = next(m for m in transducers[p].approach_map.maps if m.contact == c)
+        x = np.concatenate([nominal.steel_flux, nominal.air_flux])
+        row: dict = {"coil": p}
+        for f in factors:
+            g = scaled_geometry(geometry, f)
+            coil = next(u.coil for u in g.sensors if u.coil.particle == p)
+            m = contact_maps(layer_model(g, c), [coil])[0]
+            scale, misfit = shape_misfit(x, np.concatenate([m.steel_flux, m.air_flux]))
+            row[f"remanence_x{f}"] = {"scale": scale, "shape_misfit": misfit}
+        out[str(c)] = row
+    return out
+
+
 def main() -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--moved", action="store_true")
+    parser.add_argument("--remanence", action="store_true")
     parser.add_argument("--contacts", default="12,13,17,18")
     args = parser.parse_args()
     geometry = geometry_from_study(load_study(default_study_path()))
-    maps = {p: {m.contact: m for m in tr.approach_map.maps}
-            for p, tr in transducers_for(geometry, contact_maps=True).items()}
+    transducers = transducers_for(geometry, contact_maps=True)
+    maps = {p: {m.contact: m for m in tr.approach_map.maps} for p, tr in transducers.items()}
     delta = np.linspace(-12e-6, 2.5e-6, 600)
     (a, b) = sorted(maps)
     out = {}
@@ -99,6 +126,9 @@ def main() -> dict:
     if args.moved:
         contacts = [int(c) for c in args.contacts.split(",")]
         result["moved"] = moved_coils(geometry, contacts, (-2.5e-3, -1e-3, 1e-3, 2.5e-3))
+    if args.remanence:
+        contacts = [int(c) for c in args.contacts.split(",")]
+        result["remanence"] = remanence_scaled(geometry, transducers, contacts, (0.7, 1.3))
     return result
 
 

@@ -284,6 +284,12 @@ def test_moved_coil_reads_the_maps_equivalent_approaches():
     np.testing.assert_allclose(flux, 0.9 / 0.7 * table(delta[:, 0]), rtol=1e-12, atol=0)
     np.testing.assert_array_equal(moved.shifted(-1e-3).equivalent_approach(delta),
                                   tr.shifted(-1e-3).equivalent_approach(delta))
+    # a variant of the coil (another remanence) reads the maps the same way
+    variant = replace(_wired(False)[0], dlambda_dapproach=np.array([0.8, 3.9]))
+    carried = variant.reading_maps_of(tr)
+    np.testing.assert_array_equal(carried.equivalent_approach(delta),
+                                  tr.equivalent_approach(delta))
+    assert variant.reading_maps_of(_wired(False)[0]) is variant
 
 
 def _tiny_with_maps(tmp_path):
@@ -298,16 +304,15 @@ def _tiny_with_maps(tmp_path):
 
 
 def test_contact_maps_in_diagnose_and_design(tmp_path):
-    """With ``contact_map = true``: diagnose does not search the magnet remanence (other
-    remanences have no maps) but still moves the coil (the maps carry over); a magnet sweep
-    is refused before any work, naming the key."""
+    """With ``contact_map = true``: diagnose still moves the coil and scales the magnets (the
+    maps carry over to both); a magnet sweep is refused before any work, naming the key."""
     from msens import api
     from msens.diagnose.effects import Context, registry
 
     study = _tiny_with_maps(tmp_path)
     ctx = Context(study, study.setups[0])
     searched = {name for name, e in registry().items() if e.applies(ctx)}
-    assert "coil_position" in searched and "magnet_remanence" not in searched
+    assert {"coil_position", "magnet_remanence"} <= searched
     sweep = tmp_path / "magnet.toml"
     sweep.write_text('schema = "msens.sweep/1"\nname = "m"\n[magnet]\ngrade = ["N42"]\n')
     with pytest.raises(InputError, match="contact_map = true cannot be used with a magnet"):

@@ -68,3 +68,28 @@ def test_diagnose_baseline_with_contact_maps_is_the_run(runs):
         np.testing.assert_allclose(p.mss.voltage, r.mss.voltage, rtol=0,
                                    atol=1e-9 * np.max(np.abs(r.mss.voltage)))
         assert np.max(np.abs(r.mss.voltage - lin.mss.voltage)) > 0.005
+
+
+def test_remanence_variants_read_the_contact_maps(runs):
+    """magnet_remanence with contact maps: a variant next to the study's magnets reads the
+    maps (Transducer.reading_maps_of), so its record joins the baseline continuously; read
+    linearly it would differ by the maps' effect (> 0.5 % of the peak)."""
+    import dataclasses
+
+    from msens.diagnose.effects import Context
+    from msens.diagnose.physics import with_physics
+    from msens.diagnose.predict import Predictor, baseline_state, setup_result
+    from msens.diagnose.workflow import baseline_dissipation
+    from msens.pipeline import output_times
+
+    study = runs[1]
+    ctx = Context(study, study.setups[0])
+    base = baseline_state(ctx, *baseline_dissipation(study))
+    near = dataclasses.replace(base, physics=with_physics(base.physics,
+                                                          remanence_factor=1.0 + 1e-9))
+    predictor = Predictor(output_times(study))
+    for a, b in zip(setup_result(ctx, near, predictor).sensors,
+                    setup_result(ctx, base, predictor).sensors, strict=True):
+        if b.mss is not None:
+            peak = np.max(np.abs(b.mss.voltage))
+            assert np.max(np.abs(a.mss.voltage - b.mss.voltage)) < 1e-6 * peak

@@ -101,10 +101,11 @@ def magnetic_force(physics: tuple[PhysicsMss | None, ...]) -> np.ndarray | None:
 @lru_cache(maxsize=4096)
 def sensor(spec: PhysicsMss) -> MssSensor:
     """The transducer and read-out circuit of a physics MsS as ``spec`` says."""
-    if spec.remanence_factor == 1.0:
-        tr = transducers(spec.model)[spec.particle]
-    else:
-        tr = family(spec.model).transducer(spec.particle, spec.remanence_factor)
+    tr = transducers(spec.model)[spec.particle]
+    if spec.remanence_factor != 1.0:
+        # the variants are solved without contact maps: they read the study's (if any)
+        tr = family(spec.model).transducer(spec.particle,
+                                           spec.remanence_factor).reading_maps_of(tr)
     if spec.offset_m != 0.0:
         tr = tr.shifted(spec.offset_m)
     return MssSensor(tr, readout(spec.coil, tr.resistance_ohm, tr.inductance_H,

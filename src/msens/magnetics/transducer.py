@@ -176,6 +176,20 @@ class Transducer:
                        dlambda_dapproach=np.asarray(app),
                        map_dlambda=None if self.approach_map is None else np.asarray(own))
 
+    def reading_maps_of(self, source: Transducer) -> Transducer:
+        """This coil reading the contact maps of ``source`` (the same coil in the study's
+        field model) through its own sensitivities, as :meth:`shifted` carries them; itself
+        if ``source`` has no maps. For the remanence variants of ``magnet_remanence``: on the
+        main study the maps of contacts 13 and 18 solved with all remanences × 0.7 and × 1.3
+        keep the study's shape to 0.78 % of their range
+        (``python benchmarks/contact_map_transfer.py --remanence --contacts 13,18``)."""
+        if source.approach_map is None:
+            return self
+        internal(np.array_equal(source.contacts, self.contacts),
+                 "internal: contact maps carried between transducers of other contacts")
+        own = source.dlambda_dapproach if source.map_dlambda is None else source.map_dlambda
+        return replace(self, approach_map=source.approach_map, map_dlambda=np.asarray(own))
+
     def equivalent_approach(self, delta: np.ndarray) -> np.ndarray:
         """The approaches the linear sources read, m, shape of ``delta`` (..., n_c): the
         contact maps' equivalent approaches (:meth:`ApproachMap.equivalent`) for mapped

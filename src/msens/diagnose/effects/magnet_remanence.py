@@ -22,10 +22,10 @@ PARAM = "remanence_factor"
 
 
 def _applies(ctx: Context) -> bool:
-    # other remanences have field models of their own: no eddy-current responses of them yet,
-    # and the contact maps (solved in the study's bias field) do not carry over
+    # other remanences have field models of their own: no eddy-current responses of them yet
+    # (contact maps carry over: Transducer.reading_maps_of)
     return (any(s.model is MssModel.PHYSICS for s in ctx.setup.sensors)
-            and not ctx.study.field.eddy_currents and not ctx.study.field.contact_map)
+            and not ctx.study.field.eddy_currents)
 
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:

@@ -50,7 +50,12 @@ from msens.field.sensor_model import coil_current_density, coil_resistance
 from msens.io._files import atomic_write_bytes
 from msens.io.hashing import content_hash
 from msens.magnetics.frequency_response import FrequencyResponse
-from msens.magnetics.mechanisms import MechanismPotentials, offset_grid, offset_linkage
+from msens.magnetics.mechanisms import (
+    MechanismPotentials,
+    offset_grid,
+    offset_linkage,
+    offset_table_grid,
+)
 from msens.magnetics.potentials import region_linkage
 from msens.params.units import TWO_PI
 
@@ -195,6 +200,8 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
     offs = None if offsets is None else np.asarray([float(o) for o in offsets])
     moved = (None if offs is None
              else np.zeros((len(coils), n_f, offs.size, n_s), dtype=complex))
+    grids = ([] if offs is None
+             else [offset_table_grid(sol, geometry, c) for c in coils])  # once per model
     timings["factor"] = timings["solve"] = timings["post"] = 0.0
     for k, f in enumerate(freqs):
         t0 = time.perf_counter()
@@ -209,7 +216,7 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
             link[i, k] = TWO_PI * (model.rhs @ own[i])
             chk = checks[str(c.particle)]
             if moved is not None:
-                moved[i, k] = offset_linkage(sol, pots, geometry, c, offs)
+                moved[i, k] = offset_linkage(sol, pots, geometry, c, offs, grid=grids[i])
             if direct:
                 dir_link = region_linkage(sol, pots, r, c.turns, c.area)
                 scale = float(np.max(np.abs(dir_link))) or 1.0

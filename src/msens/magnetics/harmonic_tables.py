@@ -23,7 +23,7 @@ from msens.field.eddy import SIGMA_1018, HarmonicOperator
 from msens.field.geometry import SensorGeometry
 from msens.magnetics.dynamic import sensor_conductivity
 from msens.magnetics.mechanisms import MechanismPotentials
-from msens.magnetics.potentials import LinkageTable, linkage_table, rect_integral
+from msens.magnetics.potentials import LinkageTable, rect_integral, table_grid, tabulate
 
 
 @dataclass(frozen=True)
@@ -94,10 +94,11 @@ def harmonic_tables(model: MechanismPotentials, geometry: SensorGeometry,
     sol = model.solution
     op = HarmonicOperator(sol, sensor_conductivity(sol.problem.mesh, geometry, steel=steel,
                                                    magnets=magnets))
+    grid = table_grid(sol, r_range, z_range, spacing)  # one probe matrix for all frequencies
     tables = []
     for f in freqs:
         pots = op.solve(op.factor(f), model.rhs)
-        tables.append(linkage_table(sol, pots, r_range, z_range, spacing))
+        tables.append(tabulate(grid, pots))
     return HarmonicTables(frequencies=freqs, r=tables[0].r, z=tables[0].z,
                           cumulative=np.stack([t.cumulative for t in tables]))
 

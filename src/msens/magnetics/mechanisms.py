@@ -22,11 +22,13 @@ from msens.field.solve import FieldSolution
 from msens.magnetics.approach import approach_residuals
 from msens.magnetics.magnetoelastic import JilesAthertonSablik
 from msens.magnetics.potentials import (
+    TableGrid,
     TangentOperator,
     adjoint_linkage,
-    linkage_table,
     rect_integral,
     region_linkage,
+    table_grid,
+    tabulate,
 )
 from msens.magnetics.villari import (
     StressSampler,
@@ -199,12 +201,24 @@ def offset_grid(step: float) -> np.ndarray:
     return np.arange(-n, n + 1) * step
 
 
+def offset_table_grid(sol: FieldSolution, geometry: SensorGeometry, coil: Coil) -> TableGrid:
+    """The table grid of :func:`offset_linkage`: the coil's radial span, its axial span
+    ±OFFSET_SPAN, spacing OFFSET_STEP / 2."""
+    rect = geometry.coil_rect(next(u for u in geometry.sensors
+                                   if u.coil.particle == coil.particle))
+    pad = 2 * OFFSET_STEP
+    return table_grid(sol, (rect.r0, rect.r1),
+                      (rect.z0 - OFFSET_SPAN - pad, rect.z1 + OFFSET_SPAN + pad),
+                      spacing=OFFSET_STEP / 2)
+
+
 def offset_linkage(sol: FieldSolution, potentials: np.ndarray, geometry: SensorGeometry,
-                   coil: Coil, offsets: np.ndarray) -> np.ndarray:
+                   coil: Coil, offsets: np.ndarray, *, grid: TableGrid | None = None
+                   ) -> np.ndarray:
     """Flux linkage of every source potential with a coil moved axially by each offset.
 
-    A summed-area table of the potentials over the coil's radial span (spacing
-    OFFSET_STEP / 2), integrated over each moved winding.
+    A summed-area table of the potentials over the coil's radial span
+    (:func:`offset_table_grid`), integrated over each moved winding.
 
     Parameters
     ----------
@@ -212,6 +226,8 @@ def offset_linkage(sol: FieldSolution, potentials: np.ndarray, geometry: SensorG
         Real (static) or complex (harmonic) A_φ dofs per unit source.
     offsets : ndarray, shape (n_o,)
         m, within ±OFFSET_SPAN.
+    grid : TableGrid, optional
+        :func:`offset_table_grid` of this model and coil, when it serves many calls.
 
     Returns
     -------
@@ -221,10 +237,7 @@ def offset_linkage(sol: FieldSolution, potentials: np.ndarray, geometry: SensorG
     rect = geometry.coil_rect(next(u for u in geometry.sensors
                                    if u.coil.particle == coil.particle))
     offsets = np.asarray(offsets, dtype=float)
-    pad = 2 * OFFSET_STEP
-    table = linkage_table(sol, potentials, (rect.r0, rect.r1),
-                          (rect.z0 - OFFSET_SPAN - pad, rect.z1 + OFFSET_SPAN + pad),
-                          spacing=OFFSET_STEP / 2)
+    table = tabulate(grid or offset_table_grid(sol, geometry, coil), potentials)
     ones = np.ones(offsets.size)
     return coil.turns / coil.area * rect_integral(table, rect.r0 * ones, rect.r1 * ones,
                                                   rect.z0 + offsets, rect.z1 + offsets)

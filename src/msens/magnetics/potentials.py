@@ -241,6 +241,47 @@ def p2_probes(basis, r: np.ndarray, z: np.ndarray) -> sp.csr_matrix:
                          shape=(r.size, basis.N))
 
 
+@dataclass(frozen=True)
+class TableGrid:
+    """The nodes of a linkage table and a field model's P2 evaluation matrix at them (built
+    once when many potentials of one model are tabulated on one grid).
+
+    Attributes
+    ----------
+    r, z : ndarray, shapes (nr,), (nz,)
+        Grid lines, m.
+    probe : scipy.sparse.csr_matrix, shape (nr * nz, n_dofs)
+        A_φ at the nodes (r-major) from the dofs.
+    """
+
+    r: np.ndarray
+    z: np.ndarray
+    probe: sp.csr_matrix
+
+
+def table_grid(sol: FieldSolution, r_range: tuple[float, float], z_range: tuple[float, float],
+               spacing: float = 0.1e-3) -> TableGrid:
+    """The grid of :func:`linkage_table` over a rectangle and its probe matrix."""
+    (r0, r1), (z0, z1) = r_range, z_range
+    internal(0 <= r0 < r1 and z0 < z1, f"internal: bad table ranges r {r_range}, z {z_range}")
+    nr = max(2, int(np.ceil((r1 - r0) / spacing)) + 1)
+    nz = max(2, int(np.ceil((z1 - z0) / spacing)) + 1)
+    r = np.linspace(r0, r1, nr)
+    z = np.linspace(z0, z1, nz)
+    rr, zz = np.meshgrid(r, z, indexing="ij")
+    return TableGrid(r=r, z=z, probe=p2_probes(sol.basis, rr.ravel(), zz.ravel()))
+
+
+def tabulate(grid: TableGrid, potentials: np.ndarray) -> LinkageTable:
+    """The summed-area table of ``potentials`` (shape (n_sources, n_dofs), real or complex)
+    on ``grid``."""
+    r, z = grid.r, grid.z
+    a = (grid.probe @ potentials.T).T.reshape(len(potentials), r.size, z.size)
+    f = TWO_PI * r[None, :, None] * a
+    cum = _cumtrapz(_cumtrapz(f, r[1] - r[0], 1), z[1] - z[0], 2)
+    return LinkageTable(r=r, z=z, cumulative=cum)
+
+
 def linkage_table(sol: FieldSolution, potentials: np.ndarray, r_range: tuple[float, float],
                   z_range: tuple[float, float], spacing: float = 0.1e-3) -> LinkageTable:
     """Tabulate the potentials' flux per unit area over a rectangle of the (r, z) plane.
@@ -255,18 +296,7 @@ def linkage_table(sol: FieldSolution, potentials: np.ndarray, r_range: tuple[flo
     spacing : float
         Grid spacing, m (the rectangle integrals converge as spacing²).
     """
-    (r0, r1), (z0, z1) = r_range, z_range
-    internal(0 <= r0 < r1 and z0 < z1, f"internal: bad table ranges r {r_range}, z {z_range}")
-    nr = max(2, int(np.ceil((r1 - r0) / spacing)) + 1)
-    nz = max(2, int(np.ceil((z1 - z0) / spacing)) + 1)
-    r = np.linspace(r0, r1, nr)
-    z = np.linspace(z0, z1, nz)
-    rr, zz = np.meshgrid(r, z, indexing="ij")
-    probe = p2_probes(sol.basis, rr.ravel(), zz.ravel())
-    a = (probe @ potentials.T).T.reshape(len(potentials), nr, nz)
-    f = TWO_PI * rr[None] * a
-    cum = _cumtrapz(_cumtrapz(f, r[1] - r[0], 1), z[1] - z[0], 2)
-    return LinkageTable(r=r, z=z, cumulative=cum)
+    return tabulate(table_grid(sol, r_range, z_range, spacing), potentials)
 
 
 def _interp_weights(grid: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -295,6 +325,17 @@ def rect_integral(table: LinkageTable, r0: np.ndarray, r1: np.ndarray, z0: np.nd
     return corner(r1, z1) - corner(r0, z1) - corner(r1, z0) + corner(r0, z0)
 
 
-__all__ = ["LinkageTable", "TangentOperator", "adjoint_linkage", "bias_residual",
-           "linkage_table", "nonlinear_resolve", "p2_probes", "rect_integral",
-           "region_linkage"]
+__all__ = [
+    "LinkageTable",
+    "TableGrid",
+    "TangentOperator",
+    "adjoint_linkage",
+    "bias_residual",
+    "linkage_table",
+    "nonlinear_resolve",
+    "p2_probes",
+    "rect_integral",
+    "region_linkage",
+    "table_grid",
+    "tabulate",
+]

@@ -119,18 +119,22 @@ def signals(spec: PhysicsMss, t: np.ndarray, force: np.ndarray, *,
     approaches), as ``msens run`` forms them: :func:`msens.magnetics.mss.mss_signals`, or with
     eddy currents :func:`msens.magnetics.eddy_readout.dynamic_signals` (arguments as those)."""
     mss = sensor(spec)
-    responses = _MODELS[spec.model][2]
     rate = spec.electronics.sample_rate_hz
-    if responses is None:
+    if not eddy_currents(spec.model):
         return mss_signals(mss, t, force, rate, approach=approach, columns=columns,
                            static=static)
+    return dynamic_signals(mss.transducer, response(spec), mss.circuit, t, force, rate,
+                           approach=approach, columns=columns)
+
+
+@lru_cache(maxsize=4096)
+def response(spec: PhysicsMss) -> FrequencyResponse:
+    """The eddy-current frequency response of a physics MsS as ``spec`` says (its coil moved
+    by ``offset_m``), of a model registered with eddy currents."""
     internal(spec.remanence_factor == 1.0,
              "internal: no eddy-current variants for magnet remanence")
-    response = responses[spec.particle]
-    if spec.offset_m != 0.0:
-        response = response.shifted(spec.offset_m)
-    return dynamic_signals(mss.transducer, response, mss.circuit, t, force, rate,
-                           approach=approach, columns=columns)
+    nominal = _MODELS[spec.model][2][spec.particle]
+    return nominal if spec.offset_m == 0.0 else nominal.shifted(spec.offset_m)
 
 
 def eddy_currents(model: str) -> bool:
@@ -144,5 +148,5 @@ def with_physics(physics: tuple[PhysicsMss | None, ...], **changes) -> tuple:
     return tuple(None if p is None else dataclasses.replace(p, **changes) for p in physics)
 
 
-__all__ = ["eddy_currents", "family", "magnetic_force", "register", "sensor", "setup_physics",
-           "signals", "transducers", "with_physics"]
+__all__ = ["eddy_currents", "family", "magnetic_force", "register", "response", "sensor",
+           "setup_physics", "signals", "transducers", "with_physics"]

@@ -171,10 +171,8 @@ class Transducer:
 
         vil = CubicSpline(self.offsets, self.villari_by_offset, axis=0)(offset)
         app = CubicSpline(self.offsets, self.approach_by_offset, axis=0)(offset)
-        own = self.dlambda_dapproach if self.map_dlambda is None else self.map_dlambda
         return replace(self, sensitivity_villari=np.asarray(vil),
-                       dlambda_dapproach=np.asarray(app),
-                       map_dlambda=None if self.approach_map is None else np.asarray(own))
+                       dlambda_dapproach=np.asarray(app)).reading_maps_of(self)
 
     def reading_maps_of(self, source: Transducer) -> Transducer:
         """This coil reading the contact maps of ``source`` (the same coil in the study's
@@ -187,8 +185,15 @@ class Transducer:
             return self
         internal(np.array_equal(source.contacts, self.contacts),
                  "internal: contact maps carried between transducers of other contacts")
-        own = source.dlambda_dapproach if source.map_dlambda is None else source.map_dlambda
-        return replace(self, approach_map=source.approach_map, map_dlambda=np.asarray(own))
+        return replace(self, approach_map=source.approach_map,
+                       map_dlambda=np.asarray(source.map_slope))
+
+    @property
+    def map_slope(self) -> np.ndarray:
+        """∂Λ/∂δ_c (Wb/m, shape (n_c,)) of the coil the contact maps were solved for: the
+        slope that turns a map's flux change into the equivalent approach."""
+        return np.asarray(self.dlambda_dapproach if self.map_dlambda is None
+                          else self.map_dlambda)
 
     def equivalent_approach(self, delta: np.ndarray) -> np.ndarray:
         """The approaches the linear sources read, m, shape of ``delta`` (..., n_c): the
@@ -196,9 +201,7 @@ class Transducer:
         contacts, ``delta`` itself otherwise."""
         if self.approach_map is None:
             return np.asarray(delta, dtype=float)
-        slope = self.dlambda_dapproach if self.map_dlambda is None else self.map_dlambda
-        return self.approach_map.equivalent(delta, np.asarray(self.contacts),
-                                            np.asarray(slope))
+        return self.approach_map.equivalent(delta, np.asarray(self.contacts), self.map_slope)
 
     def sensitivity(self, mechanism: Mechanism = "both") -> np.ndarray:
         """∂Λ/∂F_c of the chosen mechanism(s) at the reference load, Wb/N, shape (n_c,)."""

@@ -161,7 +161,7 @@ class Transducer:
         the coil sits. On the main study (``python benchmarks/contact_map_transfer.py
         --moved``) the maps of contacts 12, 13, 17 and 18 read by their coil moved ±2.5 mm
         keep their shape to 0.5 % of their range (±1 mm: 0.18 %); five beads away it fails
-        (coil 13 reads contacts 15–20 with a shape 4–100 % off coil 18's).
+        (coil 13 reads contacts 15–20 with a shape 3.8–105 % off coil 18's).
         """
         internal(self.offsets is not None, "internal: transducer has no offset profiles")
         require(self.offsets[0] <= offset <= self.offsets[-1],

@@ -20,8 +20,16 @@ all magnets' remanence scaled by 0.7 and 1.3 (:func:`msens.magnetics.variants.sc
 the ``magnet_remanence`` effect's variants), read by the same coil, against the study's maps
 at the same table nodes.
 
-Run: ``python benchmarks/contact_map_transfer.py [--moved] [--remanence]`` (seconds: the
-maps are committed; each option about a minute per contact and case).
+``--magnet`` asks it of a magnet sweep: for the corner designs of
+``studies/sweep-magnet.toml`` (its strongest and weakest magnets at coil 13) the maps of coil
+13's mapped contacts are solved in the design's own bias field, and the design's coil 13 is
+read three ways on the study's wave with that design's pull: linear sources, the study's maps
+carried over (:meth:`msens.magnetics.transducer.Transducer.reading_maps_of`, what a magnet
+sweep with ``contact_map = true`` does) and the design's own maps. The figures are the peak
+EMF and the peak DAQ voltage.
+
+Run: ``python benchmarks/contact_map_transfer.py [--moved] [--remanence] [--magnet]``
+(seconds: the maps are committed; each option about half a minute per contact and case).
 """
 
 from __future__ import annotations
@@ -103,13 +111,65 @@ def remanence_scaled(geometry, transducers, contacts, factors) -> dict:
     return out
 
 
+#: Corner designs of ``studies/sweep-magnet.toml``: (grade, length, radial gap, axial offset).
+MAGNET_CORNERS = (("N38", 16e-3, 0.15e-3, 0.0), ("N38", 12e-3, 2.0e-3, 2e-3),
+                  ("ceramic8", 12e-3, 2.0e-3, 2e-3), ("ceramic8", 16e-3, 0.15e-3, 0.0))
+
+
+def magnet_designs(study, geometry, transducers, particle: int = 13) -> dict:
+    """Coil ``particle`` of each corner design read linearly, with the study's maps carried
+    over and with the design's own maps: peak EMF and DAQ voltage."""
+    from dataclasses import replace
+
+    from msens.design.metrics import design_rows
+    from msens.design.physics import study_wave
+    from msens.design.sweep import Design, design_geometry
+    from msens.magnetics.contact_map import ApproachMap, contact_maps, layer_model
+    from msens.magnetics.transducer import compute_transducers
+
+    keys = ("magnet.grade", "magnet.length_m", "magnet.radial_gap_m", "magnet.axial_offset_m")
+    own_contacts = [m.contact for m in transducers[particle].approach_map.maps
+                    if particle - 3 <= m.contact < particle + 3]
+    out = {}
+    for k, values in enumerate(MAGNET_CORNERS):
+        design = Design(k, tuple(zip(keys, values, strict=True)))
+        g = design_geometry(geometry, particle, design)
+        report = compute_transducers(g)
+        linear = dict(report.transducers)
+        tr = linear[particle]
+        coil = next(u.coil for u in g.sensors if u.coil.particle == particle)
+        maps = tuple(contact_maps(layer_model(g, c), [coil])[0] for c in own_contacts)
+        variants = {"linear": tr, "carried_over": tr.reading_maps_of(transducers[particle]),
+                    "own_maps": replace(tr, approach_map=ApproachMap(maps))}
+        row: dict = {"design": dict(zip(keys, values, strict=True))}
+        for name, t in variants.items():
+            wave = study_wave(study, {**linear, particle: t}, particle)
+            r = design_rows([coil], np.array([t.resistance_ohm]), np.array([t.inductance_H]),
+                            t.sensitivity_villari[None], t.dlambda_dapproach[None], wave,
+                            study.electronics)[0]
+            row[name] = {"peak_emf_V": r["peak_emf_V"], "peak_voltage_V": r["peak_voltage_V"]}
+        own = row["own_maps"]
+        for name in ("linear", "carried_over"):
+            row[name]["error_vs_own_maps"] = {
+                q: row[name][q] / own[q] - 1.0 for q in ("peak_emf_V", "peak_voltage_V")}
+        nominal = {m.contact: m for m in transducers[particle].approach_map.maps}
+        row["shape_misfit"] = {str(m.contact): shape_misfit(
+            np.concatenate([m.steel_flux, m.air_flux]),
+            np.concatenate([nominal[m.contact].steel_flux, nominal[m.contact].air_flux]))[1]
+            for m in maps}
+        out[str(k)] = row
+    return out
+
+
 def main() -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--moved", action="store_true")
     parser.add_argument("--remanence", action="store_true")
+    parser.add_argument("--magnet", action="store_true")
     parser.add_argument("--contacts", default="12,13,17,18")
     args = parser.parse_args()
-    geometry = geometry_from_study(load_study(default_study_path()))
+    study = load_study(default_study_path())
+    geometry = geometry_from_study(study)
     transducers = transducers_for(geometry, contact_maps=True)
     maps = {p: {m.contact: m for m in tr.approach_map.maps} for p, tr in transducers.items()}
     delta = np.linspace(-12e-6, 2.5e-6, 600)
@@ -129,6 +189,8 @@ def main() -> dict:
     if args.remanence:
         contacts = [int(c) for c in args.contacts.split(",")]
         result["remanence"] = remanence_scaled(geometry, transducers, contacts, (0.7, 1.3))
+    if args.magnet:
+        result["magnet"] = magnet_designs(study, geometry, transducers)
     return result
 
 

@@ -1,25 +1,31 @@
 """Magnet designs with the full physics: time per design on the main study with eddy currents.
 
 A magnet design cannot reuse the study's field model (the magnet sets the bias), so each one
-meshes, solves the nonlinear bias, builds both mechanisms' sources and solves the
-eddy-current model at the run's 17 frequencies (:mod:`msens.design.magnet_sweep`). Printed
-as JSON:
+meshes, solves the nonlinear bias, builds both mechanisms' sources, solves the
+eddy-current model at the run's 17 frequencies and (the main study has ``[field]
+contact_map = true``) tabulates the nonlinear contact maps of the six contacts around the
+swept coil in its own bias field (:mod:`msens.design.magnet_sweep`). Printed as JSON:
 
-- ``single_design_s``: one design (magnet moved 1 mm, so no mesh is cached) in this process,
+- ``single_design_s``: one design (magnet moved 1 mm, so nothing is cached) in this process,
   with the eddy-current model's stage timings;
 - ``sweep``: ``--designs`` designs through ``msens design`` with two local workers (what a
   user runs), wall time per design;
+- ``screening``: the same sweep with ``[model] contact_map = false`` (the linear contact
+  sources: no maps per design);
 - ``lu``: one factorisation of that design's K_t + jωM_σ at 30 kHz with msens' sparse LU
   (:mod:`msens.field.linsolve`) against scipy's ``splu`` with its defaults (what a user would
   pick), as a ratio.
 
-Run: ``python benchmarks/magnet_design_speed.py [--designs 4]`` (about 3 min on 2 cores).
+Every cache goes to a temporary folder (``MSENS_MESH_DIR``), so each run starts cold.
+
+Run: ``python benchmarks/magnet_design_speed.py [--designs 4]`` (about 15 min on 2 cores).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import tempfile
 import time
 from pathlib import Path
@@ -51,13 +57,14 @@ def single_design(study, offset: float, mesh_dir: Path) -> dict:
             "eddy_model_stages_s": {k: round(v, 2) for k, v in timings.items()}}, geometry
 
 
-def sweep(study, designs: int, folder: Path) -> dict:
+def sweep(study, designs: int, folder: Path, model: str = "") -> dict:
     from msens import api
 
     offsets = ", ".join(repr(float(x)) for x in np.linspace(-1.5e-3, 1.5e-3, designs))
+    folder.mkdir(parents=True, exist_ok=True)
     spec = folder / "sweep.toml"
     spec.write_text(f'schema = "msens.sweep/1"\nname = "speed"\nsensor = 13\n[magnet]\n'
-                    f"axial_offset_m = [{offsets}]\n")
+                    f"axial_offset_m = [{offsets}]\n{model}")
     t0 = time.perf_counter()
     api.design(study, spec, folder / "out", workers=2, progress=False)
     wall = time.perf_counter() - t0
@@ -98,11 +105,15 @@ def main() -> None:
     args = parser.parse_args()
     study = eddy_study()
     with tempfile.TemporaryDirectory() as tmp:
+        os.environ["MSENS_MESH_DIR"] = str(Path(tmp) / "cache")  # workers inherit it
         one, geometry = single_design(study, 1e-3, Path(tmp) / "one")
         lu = lu_comparison(study, geometry, Path(tmp) / "one")
-        many = sweep(study, args.designs, Path(tmp))
+        many = sweep(study, args.designs, Path(tmp) / "maps")
+        screening = sweep(study, args.designs, Path(tmp) / "screening",
+                          "[model]\ncontact_map = false\n")
     print(json.dumps({"study": "paper-mss with [field] eddy_currents = true",
-                      "single_design": one, "sweep": many, "lu": lu,
+                      "contact_map": study.field.contact_map,
+                      "single_design": one, "sweep": many, "screening": screening, "lu": lu,
                       "target_per_design_s": 20.0}, indent=1))
 
 

@@ -27,7 +27,7 @@ def test_mechanism_shares_add_up_and_the_mechanisms_add_to_the_emf(result):
         tr = setup.transducers[sensor.sensor.particle]
         h = setup.history
         rates = contact_rates(h.t, h.force, tr.contacts, tr.contact_stiffness,
-                              approach=h.approach)
+                              approach=h.approach, equivalent=tr.equivalent_approach)
         parts = [emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach, m)
                  for m in ("villari", "approach")]
         np.testing.assert_allclose(parts[0] + parts[1], sensor.mss.emf, rtol=0,

@@ -23,7 +23,8 @@ TABLE_1018 = ", ".join(f"[{float(b)!r}, {float(h)!r}]"
 
 def study_with(tmp_path, steel_bh: str):
     path = tmp_path / "s.toml"
-    path.write_text(MSS + f"\n[field]\nsteel_bh = {steel_bh}\n")
+    # into the main study's own [field] table
+    path.write_text(MSS.replace("[field]", f"[field]\nsteel_bh = {steel_bh}", 1))
     return path
 
 

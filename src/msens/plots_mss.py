@@ -39,6 +39,8 @@ def mss_voltages(result: StudyResult, t_max_s: float = 600e-6) -> Figure:
     model = "eddy currents" if f.eddy_currents else "magnetostatic"
     if f.small_signal_permeability != "differential":
         model += f", {f.small_signal_permeability} permeability"
+    if f.contact_map:
+        model += ", nonlinear contact maps"
     fig.suptitle("Predicted MsS voltage: contact approach + Villari, chain, read-out\n"
                  f"(field model: {model})", fontsize=10)
     fig.tight_layout()

@@ -36,6 +36,17 @@ def test_coil_only_is_a_coil_sweep():
     assert parse_sweep(HEAD + "[coil]\nturns = [1, 2]\n").kind == "coil"
 
 
+def test_model_contact_map_overrides_the_study():
+    """``[model] contact_map``: absent follows the study; a boolean overrides it; anything
+    else is named."""
+    body = "[magnet]\ngrade = ['N38']\n"
+    assert parse_sweep(HEAD + body).contact_map is None
+    assert parse_sweep(HEAD + body + "[model]\ncontact_map = false\n").contact_map is False
+    assert parse_sweep(HEAD + body + "[model]\ncontact_map = true\n").contact_map is True
+    with pytest.raises(InputError, match="contact_map"):
+        parse_sweep(HEAD + body + "[model]\ncontact_map = 'no'\n")
+
+
 @pytest.mark.parametrize("body, words", [
     ("[coil]\nturns = []\n", ["coil.turns", "empty range"]),
     ("[coil]\nlength_m = { start = 5e-3, stop = 4e-3, step = 1e-3 }\n",

@@ -169,6 +169,12 @@ def test_map_is_continuous_and_blends():
     assert float(m(1.5e-6)) == pytest.approx(float(m.steel(1.5e-6)), rel=1e-12)
     assert float(m(0.25e-6)) == pytest.approx(
         0.5 * float(m.air(0.25e-6)) + 0.5 * float(m.steel(0.25e-6)), rel=1e-12)
+    # the equivalent approach is the map's shape: unit slope at δ_s from the closed side
+    from msens.magnetics.contact_map import ApproachMap
+
+    eq = ApproachMap((m,)).equivalent(np.array([[0.5e-6], [0.5e-6 + 1e-10]]), np.array([5]))
+    assert float(eq[0, 0]) == pytest.approx(0.5e-6, abs=1e-18)
+    assert float(eq[1, 0] - eq[0, 0]) == pytest.approx(1e-10, rel=1e-4)
 
 
 # ----------------------------------------------------------------------------- wiring
@@ -213,8 +219,9 @@ def _circuit():
 
 
 def test_mapped_contact_flux_is_the_map():
-    """With a map, the record's flux is Λ_c(δ_c(t)) − Λ_c(δ_c(0)) for the mapped contact and
-    the linear source for the others (to round-off); the EMF is −dΛ/dt of the same."""
+    """With a map, the record's flux is (∂Λ/∂δ_c / Λ_c'(δ_s)) (Λ_c(δ_c(t)) − Λ_c(δ_c(0))) for
+    the mapped contact and the linear source for the others (to round-off); the EMF is
+    −dΛ/dt of the same."""
     from msens.magnetics.mss import MssSensor, mss_signals
 
     tr, table = _wired(True)
@@ -222,7 +229,9 @@ def test_mapped_contact_flux_is_the_map():
     rec = mss_signals(MssSensor(tr, _circuit()), t, force, 10e6, approach=approach)
     d10, d11 = approach[:, 9], approach[:, 10]
     villari = (force[:, 9:11] - force[0, 9:11]) @ tr.sensitivity_villari
-    expect = villari + table(d10) - table(d10[0]) + 3.7 * (d11 - d11[0])
+    scale = 0.7 / table.static_slope  # the map's shape, scaled by the coil's sensitivity
+    assert 0.9 < scale < 1.1
+    expect = villari + scale * (table(d10) - table(d10[0])) + 3.7 * (d11 - d11[0])
     assert np.max(np.abs(rec.flux - expect)) < 1e-9 * np.max(np.abs(expect))
     assert np.max(np.abs(rec.emf + np.gradient(expect, t))) < 1e-6 * np.max(np.abs(rec.emf))
     # the linear reading of the same history differs by the map's nonlinearity
@@ -255,7 +264,8 @@ def test_hammerstein_with_eddy_currents():
     assert np.array_equal(rec.emf, ref.emf)
     d10 = approach[:, 9]
     villari = (force[:, 9:11] - force[0, 9:11]) @ tr.sensitivity_villari
-    expect = villari + table(d10) - table(d10[0]) + 3.7 * (approach[:, 10] - approach[0, 10])
+    expect = (villari + 0.7 / table.static_slope * (table(d10) - table(d10[0]))
+              + 3.7 * (approach[:, 10] - approach[0, 10]))
     # trapezoidal integral of the FFT-differentiated EMF: agreement to 1e-3 of the range
     assert np.max(np.abs(rec.flux - expect)) < 1e-3 * np.ptp(expect)
 
@@ -281,7 +291,8 @@ def test_moved_coil_reads_the_maps_equivalent_approaches():
                                tr.equivalent_approach(delta), rtol=1e-14)
     flux = moved.dlambda_dapproach[0] * (moved.equivalent_approach(delta)[:, 0]
                                          - table.delta_static)
-    np.testing.assert_allclose(flux, 0.9 / 0.7 * table(delta[:, 0]), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(flux, 0.9 / table.static_slope * table(delta[:, 0]),
+                               rtol=1e-12, atol=0)
     np.testing.assert_array_equal(moved.shifted(-1e-3).equivalent_approach(delta),
                                   tr.shifted(-1e-3).equivalent_approach(delta))
     # a variant of the coil (another remanence) reads the maps the same way
@@ -303,27 +314,41 @@ def _tiny_with_maps(tmp_path):
     return api.load(path)
 
 
-def test_contact_maps_in_diagnose_and_design(tmp_path):
-    """With ``contact_map = true``: diagnose still moves the coil and scales the magnets (the
-    maps carry over to both); a magnet sweep is refused before any work, naming the key."""
-    from msens import api
+def test_contact_maps_in_diagnose(tmp_path):
+    """With ``contact_map = true`` diagnose still moves the coil and scales the magnets (the
+    maps carry over to both)."""
     from msens.diagnose.effects import Context, registry
 
     study = _tiny_with_maps(tmp_path)
     ctx = Context(study, study.setups[0])
     searched = {name for name, e in registry().items() if e.applies(ctx)}
     assert {"coil_position", "magnet_remanence"} <= searched
-    sweep = tmp_path / "magnet.toml"
-    sweep.write_text('schema = "msens.sweep/1"\nname = "m"\n[magnet]\ngrade = ["N42"]\n')
-    with pytest.raises(InputError, match="contact_map = true cannot be used with a magnet"):
-        api.design(study, sweep, tmp_path / "out", progress=False)
-    assert not (tmp_path / "out" / "designs.csv").exists()
+
+
+def test_maps_carried_to_a_model_of_other_contacts():
+    """A magnet design on a truncated bead column (``bead_padding``) has other contacts than
+    the study's coil: the mapped ones are matched by number, the rest pass through."""
+    from dataclasses import replace
+
+    tr, table = _wired(True)
+    design = replace(_wired(False)[0], contacts=np.array([9, 10, 11, 12]),
+                     sensitivity_villari=np.zeros(4),
+                     dlambda_dapproach=np.array([0.1, 0.9, 4.0, 0.2]))
+    carried = design.reading_maps_of(tr)
+    delta = np.array([[0.3e-6, -5e-6, 0.8e-6, 0.4e-6]])
+    eq = carried.equivalent_approach(delta)
+    np.testing.assert_array_equal(eq[:, [0, 2, 3]], delta[:, [0, 2, 3]])
+    assert float(eq[0, 1]) == pytest.approx(
+        table.delta_static + table(-5e-6) / table.static_slope, rel=1e-14)
+    with pytest.raises(Exception, match="without the mapped contacts"):
+        replace(design, contacts=np.array([11, 12, 13, 14])).reading_maps_of(tr)
 
 
 @pytest.mark.slow
 def test_transducers_with_contact_maps(tmp_path):
     """``transducer_report(contact_maps=True)``: maps of the contacts around the coil, their
-    static slopes the linear sources' (2 %: two meshes), and the cache read back equal."""
+    static slopes the linear sources' (2 %: two meshes), the cache read back equal, and the
+    tables of two worker processes equal to one process's."""
     from msens.magnetics.transducer_cache import transducer_report
 
     g = SensorGeometry(beads=BeadChain(first=11, last=15),
@@ -338,6 +363,15 @@ def test_transducers_with_contact_maps(tmp_path):
                                                                rel=2e-2)
     again = transducer_report(g, contact_maps=True, **kw).transducers[13]
     for a, b in zip(tr.approach_map.maps, again.approach_map.maps, strict=True):
+        assert np.array_equal(a.air_flux, b.air_flux)
+        assert np.array_equal(a.steel_flux, b.steel_flux)
+    # the contacts were solved by two worker processes; one process gives the same tables
+    from msens.magnetics.contact_map import approach_maps
+
+    (tmp_path / "serial").mkdir()
+    serial = approach_maps(g, "serial", options=COARSE, mesh_dir=tmp_path,
+                           cache_dir=tmp_path / "serial", workers=1)[13]
+    for a, b in zip(tr.approach_map.maps, serial.maps, strict=True):
         assert np.array_equal(a.air_flux, b.air_flux)
         assert np.array_equal(a.steel_flux, b.steel_flux)
 

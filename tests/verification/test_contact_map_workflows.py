@@ -1,8 +1,10 @@
-"""The main study with ``[field] contact_map = true`` through run, design and diagnose (slow:
-the main study's contact maps are committed in ``meshes/``; the chain runs a few times).
+"""The main study's contact maps (``[field] contact_map = true``) through run, design and
+diagnose (slow: the main study's contact maps are committed in ``meshes/``; the chain runs a
+few times).
 
-One transducer core: the study's own coil designed in a coil sweep reads the run's EMF, and
-diagnose's baseline record is the run's DAQ voltage, both through the nonlinear maps.
+One transducer core: the study's own coil and magnet designed in a coil and a magnet sweep
+read the run's EMF, and diagnose's baseline record is the run's DAQ voltage, all through the
+nonlinear maps.
 """
 
 from __future__ import annotations
@@ -20,14 +22,12 @@ pytestmark = pytest.mark.slow
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    """The main study with contact maps: its file, the study and its run; and the run
-    without maps."""
-    text = default_study_path().read_text()
-    at = text.index("[electronics]")
-    path = tmp_path_factory.mktemp("maps") / "paper-maps.toml"
-    path.write_text(text[:at] + "[field]\ncontact_map = true\n\n" + text[at:])
+    """The main study (its contact maps on): its file, the study and its run; and the run
+    with the maps off (the linear approach sources)."""
+    path = default_study_path()
     study = api.load(path)
-    return path, study, api.run(study), api.run(api.load(default_study_path()))
+    assert study.field.contact_map
+    return path, study, api.run(study), api.run(study.replace({"field.contact_map": False}))
 
 
 def _coil(result, particle=13) -> dict:
@@ -49,6 +49,23 @@ def test_design_of_the_papers_coil_with_contact_maps_equals_msens_run(runs, tmp_
     assert abs(run["peak_voltage_V"] / _coil(linear)["peak_voltage_V"] - 1) > 0.01
     assert float(rows[0]["peak_voltage_V"]) == pytest.approx(run["peak_voltage_V"], rel=1e-2)
     assert float(rows[1]["peak_emf_V"]) != pytest.approx(run["peak_emf_V"], rel=1e-3)
+
+
+def test_design_of_the_papers_magnet_with_contact_maps_equals_msens_run(runs, tmp_path):
+    """A magnet sweep reads the study magnet's maps through each design's sensitivities: the
+    study's own magnet designed equals the run (its own field model: 1e-4 for two meshes)."""
+    _, study, mapped, linear = runs
+    spec = tmp_path / "sweep.toml"
+    spec.write_text('schema = "msens.sweep/1"\nname = "paper-magnet"\nsensor = 13\n'
+                    '[magnet]\ngrade = ["ceramic8"]\n')
+    api.design(study, spec, tmp_path / "out", progress=False)
+    with (tmp_path / "out" / "designs.csv").open() as fh:
+        (row,) = list(csv.DictReader(fh))
+    assert row["status"] == "ok"
+    run = _coil(mapped)
+    assert float(row["peak_emf_V"]) == pytest.approx(run["peak_emf_V"], rel=1e-4)
+    assert float(row["peak_voltage_V"]) == pytest.approx(run["peak_voltage_V"], rel=1e-4)
+    assert abs(float(row["peak_voltage_V"]) / _coil(linear)["peak_voltage_V"] - 1) > 0.01
 
 
 def test_diagnose_baseline_with_contact_maps_is_the_run(runs):
@@ -93,3 +110,20 @@ def test_remanence_variants_read_the_contact_maps(runs):
         if b.mss is not None:
             peak = np.max(np.abs(b.mss.voltage))
             assert np.max(np.abs(a.mss.voltage - b.mss.voltage)) < 1e-6 * peak
+
+
+def test_reversible_permeability_reads_the_same_maps(runs):
+    """The maps are full nonlinear solves, which the small-signal permeability does not
+    enter: the reversible choice reads the committed tables through its own (smaller)
+    sensitivities."""
+    from msens.config.fieldsetup import geometry_from_study
+    from msens.magnetics.transducer_cache import transducers_for
+
+    _, study, _, _ = runs
+    rev = study.replace({"field.small_signal_permeability": "reversible"})
+    a = transducers_for(geometry_from_study(study), contact_maps=True)[13]
+    b = transducers_for(geometry_from_study(rev), contact_maps=True)[13]
+    assert all(
+        np.array_equal(x.steel_flux, y.steel_flux) and np.array_equal(x.air_flux, y.air_flux)
+        for x, y in zip(a.approach_map.maps, b.approach_map.maps, strict=True))
+    assert np.max(np.abs(b.dlambda_dapproach)) < 0.8 * np.max(np.abs(a.dlambda_dapproach))

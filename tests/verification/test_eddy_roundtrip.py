@@ -19,9 +19,8 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def study_file(tmp_path_factory):
     text = default_study_path().read_text()
-    at = text.index("[electronics]")
     path = tmp_path_factory.mktemp("eddy") / "paper-eddy.toml"
-    path.write_text(text[:at] + "[field]\neddy_currents = true\n\n" + text[at:])
+    path.write_text(text.replace("[field]", "[field]\neddy_currents = true", 1))
     return path
 
 

@@ -5,7 +5,10 @@ core on the design's geometry (:func:`msens.magnetics.transducer.compute_transdu
 cached by content hash, nonlinear bias solve, both mechanisms, the coil's incremental
 inductance, the magnets' pull on the beads), the study's wave with that pull
 (:func:`msens.design.physics.study_wave`) and the figures of merit of
-:mod:`msens.design.metrics` — the same chain of functions as ``msens run``. With eddy
+:mod:`msens.design.metrics` — the same chain of functions as ``msens run``.
+With contact maps (``[field] contact_map``) each design solves the maps of the swept coil's
+contacts in its own bias field (:func:`msens.magnetics.contact_map.approach_maps`, about
+30 s per contact, cached as ``msens run`` caches them): a magnet changes their shape. With eddy
 currents each design also gets its own eddy-current model
 (:func:`msens.magnetics.dynamic.dynamic_report` with the run's mesh options and conductivity,
 cached beside the meshes) and its row is the frequency-domain read-out of
@@ -32,6 +35,7 @@ from msens.design.physics import study_wave
 from msens.field.geometry import SensorGeometry
 from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.transducer import compute_transducers
+from msens.magnetics.transducer_cache import transducer_report
 
 
 @dataclass(frozen=True)
@@ -57,15 +61,21 @@ class MagnetTask:
 
 def evaluate_design(task: MagnetTask) -> dict:
     """Metrics of one magnet (and coil) design; raises on failure (the runner records it)."""
-    report = compute_transducers(task.geometry,
-                                 mesh_dir=Path(task.mesh_dir) if task.mesh_dir else None)
+    mesh_dir = Path(task.mesh_dir) if task.mesh_dir else None
+    if task.study.field.contact_map:
+        # the design's own maps: the study magnet's do not carry over to another magnet
+        # (benchmarks/contact_map_transfer.py --magnet)
+        # (cached as msens run caches them: the study's own magnet reads its committed maps)
+        report = transducer_report(task.geometry, mesh_dir=mesh_dir, contact_maps=True,
+                                   map_particles=(task.particle,))
+    else:
+        report = compute_transducers(task.geometry, mesh_dir=mesh_dir)
     tr = report.transducers[task.particle]
     coil = next(u.coil for u in task.geometry.sensors if u.coil.particle == task.particle)
     wave = study_wave(task.study, report.transducers, task.particle)
     resistance, inductance = np.array([tr.resistance_ohm]), np.array([tr.inductance_H])
     if task.study.field.eddy_currents:
         eddy = eddy_settings(task.study)
-        mesh_dir = Path(task.mesh_dir) if task.mesh_dir else None
         rsp = dynamic_report(task.geometry, options=eddy.options, steel=eddy.steel,
                              mesh_dir=mesh_dir, cache_dir=mesh_dir).responses[task.particle]
         row = dynamic_design_rows([coil], resistance, inductance, rsp.frequencies,

@@ -16,8 +16,9 @@ one varying fastest)::
     [magnet]                     # any [magnet] entry makes it a magnet sweep
     grade = ["ceramic8", "N38"]
     radial_gap_m = [0.15e-3, 1e-3]
-    [model]                      # magnet sweeps: optional, a smaller per-design field model
-    bead_padding = 4
+    [model]                      # optional
+    bead_padding = 4             # magnet sweeps: a smaller per-design field model
+    contact_map = false          # overrides the study's [field] contact_map (screening)
     [recommend]
     objective = "snr"            # or "peak_emf_V"
     min_bandwidth_Hz = 50e3
@@ -117,6 +118,10 @@ class SweepSpec:
         None (default): the study's whole field model, as ``msens run``. A padded model is
         faster but its end beads carry the field's ends: with strong magnets their pull can
         put an end contact in tension that the whole chain does not have.
+    contact_map : bool or None
+        ``[model] contact_map``: the nonlinear contact maps on or off for this sweep; None
+        (default): the study's ``[field] contact_map``. Off, a magnet design is a few times
+        faster (no maps to solve in its bias field), for screening.
     recommend : Recommend
     """
 
@@ -125,6 +130,7 @@ class SweepSpec:
     sensor: int
     axes: tuple[tuple[str, tuple[Any, ...]], ...]
     bead_padding: int | None = None
+    contact_map: bool | None = None
     recommend: Recommend = Recommend()
 
     @property
@@ -184,14 +190,17 @@ def parse_sweep(text: str, *, source: str = "<memory>") -> SweepSpec:
         raise InputError(f"{source}: the sweep has {count} designs, more than {MAX_DESIGNS}")
     model = root.table("model")
     padding = None
+    contact_map = None
     if model is not None:
         if model.raw("bead_padding") is not None:
             padding = model.integer("bead_padding", low=1, high=30)
+        if model.raw("contact_map") is not None:
+            contact_map = model.boolean("contact_map", False)
         model.finish()
     rec = _recommend(root.table("recommend"))
     root.finish()
     return SweepSpec(name=name, source=source, sensor=sensor, axes=tuple(axes),
-                     bead_padding=padding, recommend=rec)
+                     bead_padding=padding, contact_map=contact_map, recommend=rec)
 
 
 def _values(t: Table, key: str, raw: Any, kind: str, low: float, high: float) -> tuple:

@@ -127,13 +127,16 @@ def bias_residual(sol: FieldSolution, q, a: np.ndarray, shift: np.ndarray | None
 
 
 def nonlinear_resolve(sol: FieldSolution, q, shift: np.ndarray | None = None, *,
-                      tol: float = 1e-12, max_iter: int = 20) -> np.ndarray:
-    """Newton re-solve of the bias problem from its solution, on quadrature ``q`` and with
-    the magnetisation ``shift`` (see :func:`bias_residual`): the independent check of the
-    linearised sources. Returns the dofs, shape (n_dofs,)."""
+                      tol: float = 1e-12, max_iter: int = 20,
+                      start: np.ndarray | None = None) -> np.ndarray:
+    """Newton re-solve of the bias problem on quadrature ``q`` and with the magnetisation
+    ``shift`` (see :func:`bias_residual`): the independent check of the linearised sources.
+    Starts from the bias solution, or from ``start`` (dofs of a nearby state on the same
+    mesh, shape (n_dofs,); its fixed dofs must be the bias solution's). Returns the dofs,
+    shape (n_dofs,)."""
     d = sol.disc
     free = d.pattern.free
-    a = sol.a.copy()
+    a = (sol.a if start is None else np.asarray(start, dtype=float)).copy()
     for _ in range(max_iter):
         b = flux_density_qp(q, a) if shift is None else flux_density_qp(q, a) - shift
         nu, nu_d = reluctivities(d.materials, b)

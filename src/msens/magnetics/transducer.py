@@ -115,9 +115,6 @@ class Transducer:
         Nonlinear contact maps Λ_c(δ) of some contacts
         (:mod:`msens.magnetics.contact_map`): their approaches are read through
         :meth:`equivalent_approach`. None: the linear sources alone.
-    map_dlambda : ndarray, shape (n_c,), optional
-        ∂Λ/∂δ_c of the coil the contact maps were solved for, Wb/m, when this transducer is
-        another coil (:meth:`shifted`); None: this transducer is that coil.
     """
 
     particle: int
@@ -135,7 +132,6 @@ class Transducer:
     villari_by_offset: np.ndarray | None = None
     approach_by_offset: np.ndarray | None = None
     approach_map: ApproachMap | None = None
-    map_dlambda: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.asarray(self.contacts).shape
@@ -156,8 +152,8 @@ class Transducer:
         kept (the coil's inductance changes little over a few mm).
 
         Contact maps carry over as the static part of a Hammerstein model: a mapped contact's
-        equivalent approach is the one of the coil the maps were solved for, read through the
-        moved coil's sensitivities. This ASSUMES the shape of Λ_c(δ) does not depend on where
+        equivalent approach (the map's shape, :meth:`ApproachMap.equivalent`) is read through
+        the moved coil's sensitivities. This ASSUMES the shape of Λ_c(δ) does not depend on where
         the coil sits. On the main study (``python benchmarks/contact_map_transfer.py
         --moved``) the maps of contacts 12, 13, 17 and 18 read by their coil moved ±2.5 mm
         keep their shape to 0.5 % of their range (±1 mm: 0.18 %); five beads away it fails
@@ -172,28 +168,25 @@ class Transducer:
         vil = CubicSpline(self.offsets, self.villari_by_offset, axis=0)(offset)
         app = CubicSpline(self.offsets, self.approach_by_offset, axis=0)(offset)
         return replace(self, sensitivity_villari=np.asarray(vil),
-                       dlambda_dapproach=np.asarray(app)).reading_maps_of(self)
+                       dlambda_dapproach=np.asarray(app))
 
     def reading_maps_of(self, source: Transducer) -> Transducer:
         """This coil reading the contact maps of ``source`` (the same coil in the study's
-        field model) through its own sensitivities, as :meth:`shifted` carries them; itself
-        if ``source`` has no maps. For the remanence variants of ``magnet_remanence``: on the
-        main study the maps of contacts 13 and 18 solved with all remanences × 0.7 and × 1.3
-        keep the study's shape to 0.78 % of their range
-        (``python benchmarks/contact_map_transfer.py --remanence --contacts 13,18``)."""
+        field model, or the coil they were solved for) through its own sensitivities, as
+        :meth:`shifted` carries them; itself if ``source`` has no maps.
+
+        The maps are shapes with unit slope at the static contact
+        (:meth:`ApproachMap.equivalent`), so carrying them over ASSUMES the shape of
+        Λ_c(δ) does not depend on the coil or magnet that reads it. Measured on the main
+        study: the maps of contacts 13 and 18 solved with all remanences × 0.7 and × 1.3
+        (the ``magnet_remanence`` variants) keep the study's shape to 0.78 % of their range
+        (``python benchmarks/contact_map_transfer.py --remanence --contacts 13,18``); for the
+        magnet sweep's corner designs see ``--magnet``."""
         if source.approach_map is None:
             return self
-        internal(np.array_equal(source.contacts, self.contacts),
-                 "internal: contact maps carried between transducers of other contacts")
-        return replace(self, approach_map=source.approach_map,
-                       map_dlambda=np.asarray(source.map_slope))
-
-    @property
-    def map_slope(self) -> np.ndarray:
-        """∂Λ/∂δ_c (Wb/m, shape (n_c,)) of the coil the contact maps were solved for: the
-        slope that turns a map's flux change into the equivalent approach."""
-        return np.asarray(self.dlambda_dapproach if self.map_dlambda is None
-                          else self.map_dlambda)
+        internal(set(source.approach_map.contacts) <= {int(c) for c in self.contacts},
+                 "internal: contact maps carried to a transducer without the mapped contacts")
+        return replace(self, approach_map=source.approach_map)
 
     def equivalent_approach(self, delta: np.ndarray) -> np.ndarray:
         """The approaches the linear sources read, m, shape of ``delta`` (..., n_c): the
@@ -201,7 +194,7 @@ class Transducer:
         contacts, ``delta`` itself otherwise."""
         if self.approach_map is None:
             return np.asarray(delta, dtype=float)
-        return self.approach_map.equivalent(delta, np.asarray(self.contacts), self.map_slope)
+        return self.approach_map.equivalent(delta, np.asarray(self.contacts))
 
     def sensitivity(self, mechanism: Mechanism = "both") -> np.ndarray:
         """∂Λ/∂F_c of the chosen mechanism(s) at the reference load, Wb/N, shape (n_c,)."""

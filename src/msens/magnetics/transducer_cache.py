@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import logging
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -84,12 +85,14 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
                       stress_force: float | None = None,
                       law: JilesAthertonSablik | None = None,
                       material: ElasticMaterial = BEAD_STEEL, approach: bool = True,
-                      refresh: bool = False, contact_maps: bool = False) -> TransducerReport:
+                      refresh: bool = False, contact_maps: bool = False,
+                      map_particles: Sequence[int] | None = None) -> TransducerReport:
     """Cached :func:`compute_transducers` (``transducer-<key>.json``).
 
     With ``contact_maps`` every transducer also gets the nonlinear contact maps of its
     contacts near the coils (:func:`msens.magnetics.contact_map.approach_maps`, cached
-    beside it as ``contact-map-<key>.json``).
+    beside it as ``contact-map-<key>.json``); ``map_particles``: only the coils at those
+    particles (the others keep the linear sources).
 
     Lookup follows the mesh cache (:mod:`msens.field.cache`): with ``cache_dir`` only that
     folder; otherwise the committed folders (:func:`msens.field.cache.committed_mesh_dirs`,
@@ -114,9 +117,13 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
         report = transducer_report(geometry, options=options, cache_dir=cache_dir,
                                    mesh_dir=mesh_dir, stress_force=force, law=law,
                                    material=material, approach=approach, refresh=refresh)
-        maps = approach_maps(geometry, key, options=options, mesh_dir=mesh_dir,
-                             cache_dir=cache_dir)
-        return TransducerReport({p: replace(tr, approach_map=maps[p])
+        # the maps are full nonlinear solves: the small-signal permeability (the
+        # reversibility) does not enter them, so every choice shares one table
+        map_key = cache_key(replace(geometry, reversibility=1.0), options, stress_force=force,
+                            law=law, material=material, approach=approach)
+        maps = approach_maps(geometry, map_key, options=options, mesh_dir=mesh_dir,
+                             cache_dir=cache_dir, particles=map_particles)
+        return TransducerReport({p: replace(tr, approach_map=maps.get(p))
                                  for p, tr in report.transducers.items()}, report.details)
     if not refresh:
         for d in search:

@@ -391,3 +391,25 @@ def test_contact_map_key(tmp_path):
     path.write_text(tiny + "\n[field]\ncontact_map = 1\n")
     with pytest.raises(InputError, match="contact_map"):
         api.load(path)
+
+
+def test_maps_of_one_coil_come_from_the_committed_maps_of_all():
+    """``map_particles``: the maps of one coil only (a magnet design's: its six contacts when
+    solved); on the main study they are read from the committed maps of both coils (all
+    contacts 10-20), not solved again, so the study's own magnet designed reads the run's."""
+    from msens.config.fieldsetup import geometry_from_study
+    from msens.config.study import default_study_path, load_study
+    from msens.magnetics.contact_map import mapped_contacts
+    from msens.magnetics.transducer_cache import transducer_report
+
+    g = geometry_from_study(load_study(default_study_path()))
+    assert mapped_contacts(g, (13,)) == (10, 11, 12, 13, 14, 15)
+    both = transducer_report(g, contact_maps=True).transducers
+    one = transducer_report(g, contact_maps=True, map_particles=(13,)).transducers
+    assert one[18].approach_map is None
+    assert one[13].approach_map.contacts == both[13].approach_map.contacts == tuple(
+        range(10, 21))
+    full = {m.contact: m for m in both[13].approach_map.maps}
+    for m in one[13].approach_map.maps:
+        np.testing.assert_array_equal(m.air_flux, full[m.contact].air_flux)
+        np.testing.assert_array_equal(m.steel_flux, full[m.contact].steel_flux)

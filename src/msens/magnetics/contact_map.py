@@ -452,7 +452,9 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     one layer mesh and 18 nonlinear solves per contact of :func:`mapped_contacts` (about
     30 s each on the default geometry), the contacts spread over ``workers`` local processes
     (default: one per CPU, :func:`msens.parallel.run_tasks`; one inside a worker process,
-    e.g. a magnet design). ``particles``: the maps of those coils only.
+    e.g. a magnet design). ``particles``: the maps of those coils only, of their own
+    contacts when solved; a cached table of every coil serves them too (then with all its
+    contacts, as ``msens run`` reads them).
 
     Returns
     -------

@@ -21,12 +21,13 @@ the ``magnet_remanence`` effect's variants), read by the same coil, against the 
 at the same table nodes.
 
 ``--magnet`` asks it of a magnet sweep: for the corner designs of
-``studies/sweep-magnet.toml`` (its strongest and weakest magnets at coil 13) the maps of coil
-13's mapped contacts are solved in the design's own bias field, and the design's coil 13 is
-read three ways on the study's wave with that design's pull: linear sources, the study's maps
-carried over (:meth:`msens.magnetics.transducer.Transducer.reading_maps_of`, what a magnet
-sweep with ``contact_map = true`` does) and the design's own maps. The figures are the peak
-EMF and the peak DAQ voltage.
+``studies/sweep-magnet.toml`` (:data:`MAGNET_CORNERS`, the last one the study's own magnet)
+the maps of coil 13's mapped contacts are solved in the design's own bias field, and the
+design's coil 13 is read three ways on the study's wave with that design's pull: linear
+sources, the study's maps carried over
+(:meth:`msens.magnetics.transducer.Transducer.reading_maps_of`) and the design's own maps
+(what a magnet sweep with ``contact_map = true`` does). The figures are the peak EMF and the
+peak DAQ voltage, and each map's shape misfit against the study's.
 
 Run: ``python benchmarks/contact_map_transfer.py [--moved] [--remanence] [--magnet]``
 (seconds: the maps are committed; each option about half a minute per contact and case).

@@ -38,6 +38,7 @@ import multiprocessing
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
+from functools import cached_property
 from pathlib import Path
 from typing import Literal
 
@@ -281,10 +282,19 @@ class ContactMap:
         """(most negative, largest) approach the tables cover, m."""
         return (self.delta_static - float(self.air_gap[-1]), float(self.steel_delta[-1]))
 
+    @cached_property
+    def _steel_spline(self) -> CubicSpline:
+        return CubicSpline(np.asarray(self.steel_delta), np.asarray(self.steel_flux),
+                           bc_type="natural")
+
+    @cached_property
+    def _air_pchip(self) -> PchipInterpolator:
+        return PchipInterpolator(np.asarray(self.air_gap), np.asarray(self.air_flux))
+
     def steel(self, delta: np.ndarray) -> np.ndarray:
         """Closed branch, Wb (cubic spline; linear extrapolation beyond the table)."""
         x = np.asarray(self.steel_delta)
-        f = CubicSpline(x, np.asarray(self.steel_flux), bc_type="natural")
+        f = self._steel_spline
         d = np.asarray(delta, dtype=float)
         lo, hi = x[0], x[-1]
         out = f(np.clip(d, lo, hi))
@@ -295,7 +305,7 @@ class ContactMap:
         """Open branch, Wb (PCHIP in the gap, exact for linear data; linear extrapolation
         beyond the largest gap, the first node's value below the smallest)."""
         x = np.asarray(self.air_gap)
-        f = PchipInterpolator(x, np.asarray(self.air_flux))
+        f = self._air_pchip
         gap = np.maximum(self.delta_static - np.asarray(delta, dtype=float), float(x[0]))
         out = f(np.minimum(gap, x[-1]))
         return np.where(gap > x[-1], out + f(x[-1], 1) * (gap - x[-1]), out)
@@ -303,7 +313,8 @@ class ContactMap:
     def __call__(self, delta: np.ndarray) -> np.ndarray:
         """Λ(δ) − Λ(δ_s), Wb, same shape as ``delta`` (m)."""
         s = bridge_share(delta, self.delta_static)
-        return self.air(delta) + s * (self.steel(delta) - self.air(delta))
+        air = self.air(delta)
+        return air + s * (self.steel(delta) - air)
 
     def slope(self, delta: np.ndarray) -> np.ndarray:
         """dΛ/dδ by a central difference of :meth:`__call__` (1 nm), Wb/m."""
@@ -311,13 +322,11 @@ class ContactMap:
         h = 1e-9
         return (self(d + h) - self(d - h)) / (2 * h)
 
-    @property
+    @cached_property
     def static_slope(self) -> float:
         """dΛ_steel/dδ at δ_s, Wb/m: the closed branch's slope at the static contact (the
         map's linearisation, which the plain mesh's approach source also gives)."""
-        f = CubicSpline(np.asarray(self.steel_delta), np.asarray(self.steel_flux),
-                        bc_type="natural")
-        return float(f(self.delta_static, 1))
+        return float(self._steel_spline(self.delta_static, 1))
 
 
 @dataclass(frozen=True)

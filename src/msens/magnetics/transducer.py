@@ -180,8 +180,9 @@ class Transducer:
         Λ_c(δ) does not depend on the coil or magnet that reads it. Measured on the main
         study: the maps of contacts 13 and 18 solved with all remanences × 0.7 and × 1.3
         (the ``magnet_remanence`` variants) keep the study's shape to 0.78 % of their range
-        (``python benchmarks/contact_map_transfer.py --remanence --contacts 13,18``); for the
-        magnet sweep's corner designs see ``--magnet``."""
+        (``python benchmarks/contact_map_transfer.py --remanence --contacts 13,18``). Another
+        magnet DESIGN changes the shape (contact 10 by 8–15 % of its range at the magnet
+        sweep's corners, ``--magnet``): a magnet sweep solves each design's own maps."""
         if source.approach_map is None:
             return self
         internal(set(source.approach_map.contacts) <= {int(c) for c in self.contacts},

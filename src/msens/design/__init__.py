@@ -88,7 +88,7 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
     target = OutputDir(out)
     target.check(list(files(fig_format)))  # before any work: never overwrite a user's file
     sensor = sweep_sensor(study, spec)
-    if spec.contact_map is not None:
+    if spec.contact_map is not None and spec.contact_map != study.field.contact_map:
         study = study.replace({"field.contact_map": spec.contact_map})
     designs = spec.designs()
     # paths handed to workers are absolute: a Dask worker has its own working folder

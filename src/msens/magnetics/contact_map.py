@@ -482,6 +482,8 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
              "steel_nodes": list(STEEL_NODES), "air_gaps": list(AIR_GAPS),
              "layer": LAYER_FRACTION, "closed": CLOSED_THICKNESS}, 16) + ".json"
 
+    if particles is not None and {u.coil.particle for u in geometry.sensors} <= set(particles):
+        particles = None  # every coil: the same table as without a selection
     coils = [u.coil for u in geometry.iter_units()
              if particles is None or u.coil.particle in particles]
     contacts = mapped_contacts(geometry, particles)

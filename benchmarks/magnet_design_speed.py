@@ -7,7 +7,8 @@ contact_map = true``) tabulates the nonlinear contact maps of the six contacts a
 swept coil in its own bias field (:mod:`msens.design.magnet_sweep`). Printed as JSON:
 
 - ``single_design_s``: one design (magnet moved 1 mm, so nothing is cached) in this process,
-  with the eddy-current model's stage timings;
+  its contact maps on the local cores as ``msens design`` tabulates them for a one-design
+  sweep, with the eddy-current model's stage timings;
 - ``sweep``: ``--designs`` designs through ``msens design`` with two local workers (what a
   user runs), wall time per design;
 - ``screening``: the same sweep with ``[model] contact_map = false`` (the linear contact
@@ -48,8 +49,11 @@ def single_design(study, offset: float, mesh_dir: Path) -> dict:
     spec = parse_sweep(f'schema = "msens.sweep/1"\nname = "one"\nsensor = 13\n[magnet]\n'
                        f'axial_offset_m = [{offset!r}]\n')
     geometry = design_geometry(geometry_from_study(study), 13, spec.designs()[0])
+    from msens.parallel import allow_pools
+
     t0 = time.perf_counter()
-    row = evaluate_design(MagnetTask(study, geometry, 13, str(mesh_dir)))
+    with allow_pools():  # as `msens design` runs a one-design sweep: maps on the local cores
+        row = evaluate_design(MagnetTask(study, geometry, 13, str(mesh_dir)))
     seconds = time.perf_counter() - t0
     name = next(mesh_dir.glob("dynamic-*.json"))
     timings = json.loads(name.read_text())["details"]["timings_s"]

@@ -279,7 +279,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             return 0
         logging_state = _configure_logging(args.quiet)
-        return _COMMANDS[args.command](args)
+        from msens.parallel import allow_pools
+
+        # the console command may start local pools; a script calling main() may lack the
+        # __main__ guard their workers need
+        with allow_pools(argv is None):
+            return _COMMANDS[args.command](args)
     except InputError as exc:
         print(f"msens: error: {exc}", file=sys.stderr)
         return EXIT_INPUT

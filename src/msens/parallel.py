@@ -21,9 +21,35 @@ import multiprocessing
 import os
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from typing import Any
 
 from msens.errors import InputError
+
+#: Whether a library call may start its own local process pool (see :func:`pools_allowed`).
+_POOLS_ALLOWED = [False]
+
+
+@contextmanager
+def allow_pools(allowed: bool = True) -> Iterator[None]:
+    """Let library calls inside the block start local process pools (the ``msens`` console
+    command does; restored after)."""
+    before = _POOLS_ALLOWED[0]
+    _POOLS_ALLOWED[0] = bool(allowed)
+    try:
+        yield
+    finally:
+        _POOLS_ALLOWED[0] = before
+
+
+def pools_allowed() -> bool:
+    """True inside :func:`allow_pools` and outside any worker process.
+
+    A library function that would parallelise on its own (the cold contact maps) asks this
+    first: a pool's workers import the caller's main script, so a user's script without an
+    ``if __name__ == "__main__":`` guard would run again in every worker and fail.
+    """
+    return _POOLS_ALLOWED[0] and multiprocessing.parent_process() is None
 
 
 def default_workers() -> int:
@@ -103,4 +129,4 @@ def _run_dask(fn: Callable[[Any], Any], args: Sequence[Any],
         client.close()
 
 
-__all__ = ["default_workers", "run_tasks"]
+__all__ = ["allow_pools", "default_workers", "pools_allowed", "run_tasks"]

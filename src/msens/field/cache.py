@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import sys
 from pathlib import Path
 
 from msens.field.build import MeshOptions, build_mesh
@@ -49,14 +50,16 @@ def geometry_key(geometry: SensorGeometry, options: MeshOptions | None = None) -
 
 def committed_mesh_dirs() -> list[Path]:
     """Folders searched for an existing mesh before one is built: ``$MSENS_MESH_DIR``,
-    ``./meshes`` and the source checkout's ``meshes/`` (the project commits the meshes of its
-    default studies there, so a fresh clone needs no meshing)."""
+    ``./meshes``, the source checkout's ``meshes/`` (the project commits the meshes of its
+    default studies there, so a fresh clone needs no meshing) and their installed copy
+    (``<prefix>/share/msens/meshes``, so an installed msens finds them from any folder)."""
     dirs = []
     env = os.environ.get("MSENS_MESH_DIR")
     if env:
         dirs.append(Path(env))
     dirs.append(Path.cwd() / "meshes")
     dirs.append(Path(__file__).resolve().parents[3] / "meshes")
+    dirs.append(Path(sys.prefix) / "share" / "msens" / "meshes")
     return dirs
 
 

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import json
 import logging
-import multiprocessing
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -55,7 +54,7 @@ from msens.field.solve import FieldSolution, MagnetostaticProblem, solve
 from msens.magnetics.approach import _morphed_quadrature
 from msens.magnetics.potentials import nonlinear_resolve
 from msens.magnetics.villari import coil_flux_linkage
-from msens.parallel import default_workers, run_tasks
+from msens.parallel import default_workers, pools_allowed, run_tasks
 
 _log = logging.getLogger(__name__)
 
@@ -460,10 +459,10 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     otherwise the committed folders, then the user cache, where new maps are written. Cold:
     one layer mesh and 18 nonlinear solves per contact of :func:`mapped_contacts` (about
     30 s each on the default geometry), the contacts spread over ``workers`` local processes
-    (default: one per CPU, :func:`msens.parallel.run_tasks`; one inside a worker process,
-    e.g. a magnet design). ``particles``: the maps of those coils only, of their own
-    contacts when solved; a cached table of every coil serves them too (then with all its
-    contacts, as ``msens run`` reads them).
+    (:func:`msens.parallel.run_tasks`; default: one per CPU under the ``msens`` command,
+    else one, :func:`msens.parallel.pools_allowed`). ``particles``: the maps of those coils
+    only, of their own contacts when solved; a cached table of every coil serves them too
+    (then with all its contacts, as ``msens run`` reads them).
 
     Returns
     -------
@@ -500,8 +499,9 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
                 return {int(p): ApproachMap(tuple(_map_from_json(m) for m in maps))
                         for p, maps in data["coils"].items()
                         if particles is None or int(p) in particles}
-    if workers is None and multiprocessing.parent_process() is not None:
-        workers = 1  # a worker's own pool would only oversubscribe the CPUs
+    if workers is None:
+        # only where a pool is safe: the msens command, not a worker or a user's script
+        workers = default_workers() if pools_allowed() else 1
     _log.info("contact maps %s (cached: no): %d contacts, a layer mesh and 18 nonlinear "
               "solves each, %d at a time", key, len(contacts),
               min(default_workers() if workers is None else workers, len(contacts)))

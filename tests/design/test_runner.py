@@ -97,3 +97,28 @@ def test_dask_local_cluster_gives_identical_results(tmp_path):
                                   dashboard_address=":0") as cluster:
         remote = dict(run_tasks(standin.square, args, scheduler=cluster.scheduler_address))
     assert remote == local
+
+
+def test_library_pools_only_under_the_msens_command():
+    """A library call may start its own pool only inside ``allow_pools`` (the console
+    command), and never in a worker: a user's script without a __main__ guard would be run
+    again by every worker."""
+    from msens.parallel import allow_pools, pools_allowed
+
+    assert not pools_allowed()
+    with allow_pools():
+        assert pools_allowed()
+        with allow_pools(False):
+            assert not pools_allowed()
+        assert pools_allowed()
+    assert not pools_allowed()
+    # run_tasks' workers see no permission
+    with allow_pools():
+        assert [r for _, r in run_tasks(_worker_pools_allowed, [0, 1], workers=2)] \
+            == [False, False]
+
+
+def _worker_pools_allowed(_):
+    from msens.parallel import pools_allowed
+
+    return pools_allowed()

@@ -7,7 +7,8 @@ committed maps are tabulated for both of its coils (13 and 18, five beads apart)
 far larger move than any coil design or ``coil_position`` fit makes. For each mapped contact
 this compares the two coils' maps Λ_c(δ) − Λ_c(δ_s) over δ from −12 µm (open) to 2.5 µm:
 the best scale factor between them and the largest misfit after scaling, relative to the
-reading coil's range.
+reading coil's range; and each map's static slope against the linear source's ∂Λ/∂δ_c of
+the same coil (the two slopes the maps' shape reading joins).
 
 ``--moved`` also measures the moves a design or a ``coil_position`` fit makes: for a few
 contacts (default 12, 13 at coil 13 and 17, 18 at coil 18) every table state of the contact
@@ -37,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import time
 
 import numpy as np
 
@@ -139,10 +141,13 @@ def magnet_designs(study, geometry, transducers, particle: int = 13) -> dict:
         linear = dict(report.transducers)
         tr = linear[particle]
         coil = next(u.coil for u in g.sensors if u.coil.particle == particle)
+        start = time.perf_counter()
         maps = tuple(contact_maps(layer_model(g, c), [coil])[0] for c in own_contacts)
+        seconds = time.perf_counter() - start
         variants = {"linear": tr, "carried_over": tr.reading_maps_of(transducers[particle]),
                     "own_maps": replace(tr, approach_map=ApproachMap(maps))}
-        row: dict = {"design": dict(zip(keys, values, strict=True))}
+        row: dict = {"design": dict(zip(keys, values, strict=True)),
+                     "own_maps_s_per_contact": seconds / len(own_contacts)}
         for name, t in variants.items():
             wave = study_wave(study, {**linear, particle: t}, particle)
             r = design_rows([coil], np.array([t.resistance_ohm]), np.array([t.inductance_H]),
@@ -181,6 +186,10 @@ def main() -> dict:
         for own, other in ((a, b), (b, a)):
             scale, misfit = shape_misfit(maps[own][c](delta), maps[other][c](delta))
             row[f"coil_{own}_read_by_{other}"] = {"scale": scale, "shape_misfit": misfit}
+        for p in (a, b):  # the map's own static slope against the linear source's
+            k = int(np.flatnonzero(transducers[p].contacts == c)[0])
+            row[f"coil_{p}_static_slope_over_linear"] = (
+                maps[p][c].static_slope / float(transducers[p].dlambda_dapproach[k]))
         out[str(c)] = row
     result = {"study": "paper-mss", "coils": [a, b], "delta_range_m": [-12e-6, 2.5e-6],
               "contacts": out}

@@ -22,24 +22,24 @@ import os
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import contextmanager
+from contextvars import ContextVar
 from typing import Any
 
 from msens.errors import InputError
 
 #: Whether a library call may start its own local process pool (see :func:`pools_allowed`).
-_POOLS_ALLOWED = [False]
+_POOLS_ALLOWED: ContextVar[bool] = ContextVar("msens_pools_allowed", default=False)
 
 
 @contextmanager
 def allow_pools(allowed: bool = True) -> Iterator[None]:
     """Let library calls inside the block start local process pools (the ``msens`` console
     command does; restored after)."""
-    before = _POOLS_ALLOWED[0]
-    _POOLS_ALLOWED[0] = bool(allowed)
+    token = _POOLS_ALLOWED.set(bool(allowed))
     try:
         yield
     finally:
-        _POOLS_ALLOWED[0] = before
+        _POOLS_ALLOWED.reset(token)
 
 
 def pools_allowed() -> bool:
@@ -49,7 +49,7 @@ def pools_allowed() -> bool:
     first: a pool's workers import the caller's main script, so a user's script without an
     ``if __name__ == "__main__":`` guard would run again in every worker and fail.
     """
-    return _POOLS_ALLOWED[0] and multiprocessing.parent_process() is None
+    return _POOLS_ALLOWED.get() and multiprocessing.parent_process() is None
 
 
 def default_workers() -> int:

@@ -473,29 +473,29 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     from msens.io._files import atomic_write_bytes
     from msens.io.hashing import content_hash
 
-    def file_name(subset: Sequence[int] | None) -> str:
+    def map_key(subset: Sequence[int] | None) -> str:
         payload = {} if subset is None else {"coils": sorted(subset)}
-        return "contact-map-" + content_hash(
+        return content_hash(
             {"version": MAP_VERSION, "transducer": transducer_key, **payload,
              "contacts": list(mapped_contacts(geometry, subset)),
              "steel_nodes": list(STEEL_NODES), "air_gaps": list(AIR_GAPS),
-             "layer": LAYER_FRACTION, "closed": CLOSED_THICKNESS}, 16) + ".json"
+             "layer": LAYER_FRACTION, "closed": CLOSED_THICKNESS}, 16)
 
     if particles is not None and {u.coil.particle for u in geometry.sensors} <= set(particles):
         particles = None  # every coil: the same table as without a selection
     coils = [u.coil for u in geometry.iter_units()
              if particles is None or u.coil.particle in particles]
     contacts = mapped_contacts(geometry, particles)
-    name = file_name(None if particles is None else [c.particle for c in coils])
-    key = name.removeprefix("contact-map-").removesuffix(".json")
+    key = map_key(None if particles is None else [c.particle for c in coils])
     directory = Path(cache_dir) if cache_dir is not None else default_mesh_dir()
     search = [directory] if cache_dir is not None else [*committed_mesh_dirs(), directory]
     # the maps of every coil hold those of a few (same contacts, same solves)
-    names = [name] if particles is None else [name, file_name(None)]
+    keys = [key] if particles is None else [key, map_key(None)]
     for d in search:
-        for n in names:
-            if (d / n).is_file():
-                data = json.loads((d / n).read_text())
+        for k in keys:
+            path = d / f"contact-map-{k}.json"
+            if path.is_file():
+                data = json.loads(path.read_text())
                 return {int(p): ApproachMap(tuple(_map_from_json(m) for m in maps))
                         for p, maps in data["coils"].items()
                         if particles is None or int(p) in particles}
@@ -503,8 +503,7 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
         # only where a pool is safe: the msens command, not a worker or a user's script
         workers = default_workers() if pools_allowed() else 1
     _log.info("contact maps %s (cached: no): %d contacts, a layer mesh and 18 nonlinear "
-              "solves each, %d at a time", key, len(contacts),
-              min(default_workers() if workers is None else workers, len(contacts)))
+              "solves each, %d at a time", key, len(contacts), min(workers, len(contacts)))
     start = time.perf_counter()
     tasks = [(geometry, c, coils, options, None if mesh_dir is None else str(mesh_dir))
              for c in contacts]
@@ -518,7 +517,8 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     data = {"key": key, "version": MAP_VERSION, "transducer": transducer_key,
             "coils": {str(p): [_map_json(m) for m in ms] for p, ms in tables.items()}}
     directory.mkdir(parents=True, exist_ok=True)
-    atomic_write_bytes(directory / name, json.dumps(data, indent=1).encode(), overwrite=True)
+    atomic_write_bytes(directory / f"contact-map-{key}.json",
+                       json.dumps(data, indent=1).encode(), overwrite=True)
     return {p: ApproachMap(tuple(ms)) for p, ms in tables.items()}
 
 

@@ -343,7 +343,8 @@ class ApproachMap:
     and the maps add the nonlinearity of large ones. Its scale is the reading coil's own
     sensitivity, whatever the coil or the small-signal permeability (the maps come from full
     nonlinear solves, which do not depend on it). On the differential permeability the two
-    slopes agree within 1 % for the main study's coil contacts (two meshes).
+    slopes (two meshes) agree within 1 % at the main study's mapped contacts, except contact
+    20 read by coil 13 (3.5 %; ``python benchmarks/contact_map_transfer.py``).
 
     Attributes
     ----------

@@ -14,6 +14,13 @@ import time
 from pathlib import Path
 
 
+def pools_allowed_here(_) -> bool:
+    """:func:`msens.parallel.pools_allowed` as a worker sees it."""
+    from msens.parallel import pools_allowed
+
+    return pools_allowed()
+
+
 def square(payload: tuple[int, float, str]) -> dict:
     index, delay, log = payload
     time.sleep(delay)

@@ -114,11 +114,5 @@ def test_library_pools_only_under_the_msens_command():
     assert not pools_allowed()
     # run_tasks' workers see no permission
     with allow_pools():
-        assert [r for _, r in run_tasks(_worker_pools_allowed, [0, 1], workers=2)] \
+        assert [r for _, r in run_tasks(standin.pools_allowed_here, [0, 1], workers=2)] \
             == [False, False]
-
-
-def _worker_pools_allowed(_):
-    from msens.parallel import pools_allowed
-
-    return pools_allowed()

@@ -47,6 +47,25 @@ def test_model_contact_map_overrides_the_study():
         parse_sweep(HEAD + body + "[model]\ncontact_map = 'no'\n")
 
 
+def test_model_verify_needs_a_screening_magnet_sweep():
+    """``[model] verify``: the number of best screened designs evaluated again with the
+    contact maps; only in a magnet sweep that screens without them, at most every design."""
+    body = "[magnet]\ngrade = ['N38', 'ceramic8']\n[model]\n"
+    assert parse_sweep(HEAD + body + "contact_map = false\n").verify == 0
+    assert parse_sweep(HEAD + body + "contact_map = false\nverify = 2\n").verify == 2
+    for extra, words in (("verify = 1\n", "contact_map = false"),
+                         ("contact_map = true\nverify = 1\n", "contact_map = false"),
+                         ("contact_map = false\nverify = 3\n", "<= 2"),
+                         ("contact_map = false\nverify = -1\n", ">= 0"),
+                         ("contact_map = false\nverify = 1.5\n", "integer")):
+        with pytest.raises(InputError, match=r"model\.verify") as info:
+            parse_sweep(HEAD + body + extra)
+        assert words in str(info.value)
+    with pytest.raises(InputError, match="magnet sweeps"):
+        parse_sweep(HEAD + "[coil]\nturns = [1, 2]\n[model]\ncontact_map = false\n"
+                           "verify = 1\n")
+
+
 @pytest.mark.parametrize("body, words", [
     ("[coil]\nturns = []\n", ["coil.turns", "empty range"]),
     ("[coil]\nlength_m = { start = 5e-3, stop = 4e-3, step = 1e-3 }\n",

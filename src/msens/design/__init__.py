@@ -20,7 +20,7 @@ from pathlib import Path
 from msens.config.fieldsetup import geometry_from_study
 from msens.config.study import Study
 from msens.design.cache import ResultCache, atomic_write_bytes, content_key
-from msens.design.report import csv_text, pareto_plot, recommend
+from msens.design.report import csv_text, pareto_plot, ranked, recommend, verification
 from msens.design.sweep import (
     SweepSpec,
     base_geometry,
@@ -30,6 +30,7 @@ from msens.design.sweep import (
     sweep_sensor,
     validate_designs,
 )
+from msens.errors import InputError
 from msens.io.output import OutputDir, to_json
 
 
@@ -88,6 +89,11 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
     target = OutputDir(out)
     target.check(list(files(fig_format)))  # before any work: never overwrite a user's file
     sensor = sweep_sensor(study, spec)
+    if spec.verify and not study.field.contact_map:
+        raise InputError(f"{spec.source}: [model] verify = {spec.verify} evaluates designs "
+                         "again with the study's contact maps, but the study has none: set "
+                         "[field] contact_map = true in the study, or drop verify")
+    own = study  # the study's physics, which verify restores
     if spec.contact_map is not None and spec.contact_map != study.field.contact_map:
         study = study.replace({"field.contact_map": spec.contact_map})
     designs = spec.designs()
@@ -95,6 +101,7 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
     cache = ResultCache((Path(cache_dir) if cache_dir else target.path / "cache").resolve())
     _log.info("%s sweep of the MsS at particle %d: %d designs (results cached in %s)",
               spec.kind, sensor.particle, len(designs), cache.directory)
+    screening: dict[int, dict] | None = None  # verified designs' screening rows
     if spec.kind == "coil":
         _log.info("coil sweep: the study's field model and source potentials, then the "
                   "designs in chunks")
@@ -103,6 +110,8 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         validate_designs(full, sensor.particle, designs, spec.source)
         rows, computed = run_coil_sweep(study, full, sensor.particle, designs, cache,
                                         scheduler=scheduler, progress=progress)
+        rows = [{**r, "contact_maps": study.field.contact_map} if r["status"] == "ok" else r
+                for r in rows]
     else:
         base = (geometry_from_study(study) if spec.bead_padding is None
                 else base_geometry(study, spec.bead_padding))
@@ -112,23 +121,44 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
             _log.info("contact maps: each design solves its own for the %d contacts around "
                       "coil %d (about 30 s each)",
                       len(mapped_contacts(base, (sensor.particle,))), sensor.particle)
-        tasks = []
-        for d in designs:
-            g = design_geometry(base, sensor.particle, d)
-            tasks.append((content_key("magnet-design/2", study, g, sensor.particle),
-                          MagnetTask(study, g, sensor.particle, mesh_dir)))
-        rows, computed = run_cached(evaluate_design, tasks, cache, scheduler=scheduler,
-                                    workers=workers, progress=progress,
-                                    description="magnet designs")
+        geometries = [design_geometry(base, sensor.particle, d) for d in designs]
+
+        def tasks(s: Study, which: list[int]) -> list[tuple[str, MagnetTask]]:
+            return [(content_key("magnet-design/2", s, geometries[i], sensor.particle),
+                     MagnetTask(s, geometries[i], sensor.particle, mesh_dir)) for i in which]
+
+        rows, computed = run_cached(evaluate_design, tasks(study, list(range(len(designs)))),
+                                    cache, scheduler=scheduler, workers=workers,
+                                    progress=progress, description="magnet designs")
+        if spec.verify:
+            verified = ranked(rows, spec.recommend)[:spec.verify]
+            _log.info("verifying the %d best screened designs with their own contact maps "
+                      "(%d contacts each, about 30 s per contact)", len(verified),
+                      len(mapped_contacts(base, (sensor.particle,))))
+            again, _ = run_cached(evaluate_design, tasks(own, verified), cache,
+                                     scheduler=scheduler, workers=workers, progress=progress,
+                                     description="verified with contact maps")
+            screening = {i: rows[i] for i in verified}
+            rows = list(rows)
+            for i, r in zip(verified, again, strict=True):
+                rows[i] = r
     _log.info("writing %s", ", ".join(files(fig_format)))
     return write_results(spec, designs, rows, target, computed=computed,
-                         provenance=provenance, fig_format=fig_format)
+                         provenance=provenance, fig_format=fig_format, screening=screening)
 
 
 def write_results(spec: SweepSpec, designs, rows, out: OutputDir, *, computed: int,
-                  provenance: dict | None = None, fig_format: str = "png") -> DesignResult:
-    """Write the three output files (atomically, only over msens' own) and the summary."""
-    rec = recommend(designs, rows, spec.recommend)
+                  provenance: dict | None = None, fig_format: str = "png",
+                  screening: dict[int, dict] | None = None) -> DesignResult:
+    """Write the three output files (atomically, only over msens' own) and the summary.
+
+    ``screening``: the screening rows of the designs ``rows`` holds verified (by position);
+    the recommendation is then made among those."""
+    if screening is None:
+        rec = recommend(designs, rows, spec.recommend)
+    else:
+        rec = recommend(designs, rows, spec.recommend, among=list(screening))
+        rec = verification(rec, designs, rows, screening, spec.recommend)
     if provenance:
         rec = {**rec, "provenance": provenance}
     names = files(fig_format)
@@ -136,7 +166,8 @@ def write_results(spec: SweepSpec, designs, rows, out: OutputDir, *, computed: i
     for f in names:
         out.record(f)
     atomic_write_bytes(paths[0], csv_text(designs, rows).encode())
-    pareto_plot(designs, rows, paths[1], rec.get("design"), spec.recommend.objective)
+    pareto_plot(designs, rows, paths[1], rec.get("design"), spec.recommend.objective,
+                verified=None if screening is None else list(screening))
     atomic_write_bytes(paths[2], (to_json(rec, sort_keys=True) + "\n").encode())
     failed = sum(r["status"] != "ok" for r in rows)
     return DesignResult(out=out.path, files=tuple(paths), recommendation=rec,

@@ -14,6 +14,11 @@ currents each design also gets its own eddy-current model
 cached beside the meshes) and its row is the frequency-domain read-out of
 :func:`msens.design.metrics.dynamic_design_rows`.
 
+Own maps cost a few minutes per design, so a sweep may screen without them (``[model]
+contact_map = false``, the linear approach sources) and evaluate only its best designs
+again with them (``[model] verify``, :func:`msens.design.run_design`): the recommendation is
+then made among the verified designs.
+
 Model size: by default the study's whole field model (every MsS sensor: the other sensor's
 magnet changes the forces near this one; every bead), as ``msens run``. ``[model]
 bead_padding`` keeps only that many beads beyond the outermost sensors
@@ -88,7 +93,8 @@ def evaluate_design(task: MagnetTask) -> dict:
     return {**row, "contacts": [int(k) for k in tr.contacts],
             "dLambda_dF_Wb_per_N": [float(v) for v in tr.sensitivity_villari],
             "dLambda_ddelta_Wb_per_m": [float(v) for v in tr.dlambda_dapproach],
-            "newton_iterations": report.details["newton_iterations"]}
+            "newton_iterations": report.details["newton_iterations"],
+            "contact_maps": bool(task.study.field.contact_map)}
 
 
 __all__ = ["MagnetTask", "evaluate_design"]

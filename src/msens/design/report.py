@@ -2,7 +2,9 @@
 
 designs.csv: one row per design in sweep order; SI column names; every float written with 10
 significant digits (``%.10g``) so that reruns, resumed runs and Dask runs give identical
-bytes; failed designs keep their parameters, ``status = failed`` and the ``reason``.
+bytes; ``contact_maps`` says whether the row's figures read the nonlinear contact maps (a
+screening sweep's verified designs: true); failed designs keep their parameters, ``status =
+failed`` and the ``reason``.
 """
 
 from __future__ import annotations
@@ -34,6 +36,8 @@ LABELS = {"snr": "SNR (peak DAQ voltage / noise rms)", "peak_emf_V": "peak EMF (
 def _fmt(v) -> str:
     if v is None:
         return ""
+    if isinstance(v, bool):
+        return "true" if v else "false"
     if isinstance(v, float):
         return "nan" if math.isnan(v) else format(v, ".10g")
     return str(v)
@@ -49,10 +53,12 @@ def csv_text(designs: Sequence[Design], rows: Sequence[dict]) -> str:
     params = [k for k, _ in designs[0].values] if designs else []
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["design", "status", *map(column_name, params), *METRICS, "reason"])
+    w.writerow(["design", "status", *map(column_name, params), *METRICS, "contact_maps",
+                "reason"])
     for d, r in zip(designs, rows, strict=True):
         w.writerow([d.index, r["status"], *(_fmt(v) for _, v in d.values),
-                    *(_fmt(r.get(m)) for m in METRICS), r.get("reason", "")])
+                    *(_fmt(r.get(m)) for m in METRICS), _fmt(r.get("contact_maps")),
+                    r.get("reason", "")])
     return buf.getvalue()
 
 
@@ -66,8 +72,7 @@ def pareto_mask(x: np.ndarray, y: np.ndarray, x_better: str) -> np.ndarray:
     return keep
 
 
-def recommend(designs: Sequence[Design], rows: Sequence[dict], rule: Recommend) -> dict:
-    """The best design by ``rule`` and why (``{"design": None, ...}`` if none qualifies)."""
+def _limits(rule: Recommend) -> list[tuple[str, str, float]]:
     limits = []
     if rule.min_bandwidth_hz is not None:
         limits.append(("bandwidth_Hz", ">=", rule.min_bandwidth_hz))
@@ -77,24 +82,41 @@ def recommend(designs: Sequence[Design], rows: Sequence[dict], rule: Recommend) 
         limits.append(("snr", ">=", rule.min_snr))
     if rule.min_resonance_hz is not None:
         limits.append(("resonance_Hz", ">=", rule.min_resonance_hz))
-    ok = [i for i, r in enumerate(rows) if r["status"] == "ok"]
-    feasible = [i for i in ok if all(
-        (rows[i][k] >= v) if op == ">=" else (rows[i][k] <= v) for k, op, v in limits)]
+    return limits
+
+
+def ranked(rows: Sequence[dict], rule: Recommend) -> list[int]:
+    """Indices of the designs that meet ``rule``'s limits, best first (largest
+    |objective|; ties keep sweep order)."""
+    limits = _limits(rule)
+    feasible = [i for i, r in enumerate(rows) if r["status"] == "ok" and all(
+        (r[k] >= v) if op == ">=" else (r[k] <= v) for k, op, v in limits)]
+    return sorted(feasible, key=lambda i: -abs(rows[i][rule.objective]))  # stable: ties in order
+
+
+def recommend(designs: Sequence[Design], rows: Sequence[dict], rule: Recommend,
+              among: Sequence[int] | None = None) -> dict:
+    """The best design by ``rule`` and why (``{"design": None, ...}`` if none qualifies).
+
+    ``among``: positions in ``designs`` the recommendation may choose from (default all),
+    e.g. the designs a sweep verified with the contact maps."""
+    limits = _limits(rule)
+    allowed = set(range(len(rows)) if among is None else among)
+    ok = [i for i in allowed if rows[i]["status"] == "ok"]
+    order = [i for i in ranked(rows, rule) if i in allowed]
     out = {"objective": rule.objective,
            "limits": [f"{k} {op} {v:g}" for k, op, v in limits],
-           "designs_ok": len(ok), "designs_failed": len(rows) - len(ok),
-           "designs_feasible": len(feasible)}
-    if not feasible:
+           "designs_ok": len(ok), "designs_failed": len(allowed) - len(ok),
+           "designs_feasible": len(order)}
+    if not order:
         return {**out, "design": None,
                 "reasons": ["no design meets every limit" if ok else "every design failed"]}
-    score = [abs(rows[i][rule.objective]) for i in feasible]
-    order = np.argsort(score, kind="stable")[::-1]
-    best = feasible[int(order[0])]
+    best = order[0]
     r = rows[best]
     reasons = [f"largest |{rule.objective}| = {abs(r[rule.objective]):.4g} among "
-               f"{len(feasible)} designs meeting the limits"]
+               f"{len(order)} designs meeting the limits"]
     if len(order) > 1:
-        second = feasible[int(order[1])]
+        second = order[1]
         reasons.append(f"runner-up design {designs[second].index}: "
                        f"{abs(rows[second][rule.objective]):.4g}")
     for k, op, v in limits:
@@ -111,6 +133,42 @@ def recommend(designs: Sequence[Design], rows: Sequence[dict], rule: Recommend) 
             "at_range_edge": [column_name(k) for k, _, _ in edges],
             "parameters": {column_name(k): v for k, v in designs[best].values},
             "metrics": {m: r[m] for m in METRICS}, "reasons": reasons}
+
+
+def verification(rec: dict, designs: Sequence[Design], rows: Sequence[dict],
+                 screening: dict[int, dict], rule: Recommend) -> dict:
+    """``rec`` (made among the verified designs) with what verification changed.
+
+    Adds ``verification``: per verified design its objective, peak EMF and peak DAQ voltage
+    screened (linear approach sources) and verified (its own contact maps), and the reasons
+    gain a line on the screening's error and a warning when a design left unverified
+    screens above the recommended design's verified objective (verify more designs)."""
+    keys = (rule.objective, "peak_emf_V", "peak_voltage_V")
+    entries = []
+    for i, before in screening.items():
+        after = rows[i]
+        e = {"design": designs[i].index, "status": after["status"]}
+        if before["status"] == "ok" and after["status"] == "ok":
+            e.update({f"screening_{k}": before[k] for k in keys})
+            e.update({f"verified_{k}": after[k] for k in keys})
+            e["objective_change"] = abs(after[rule.objective]) / abs(before[rule.objective]) - 1
+        entries.append(e)
+    reasons = list(rec["reasons"])
+    changes = [abs(e["objective_change"]) for e in entries if "objective_change" in e]
+    reasons.insert(0, f"recommended among the {len(screening)} best screened designs, "
+                      f"evaluated again with their own contact maps (the screening's "
+                      f"{rule.objective} off by up to {100 * max(changes, default=0):.2g} %)")
+    best = rec.get("design")
+    if best is not None:
+        target = abs(rows[[d.index for d in designs].index(best)][rule.objective])
+        above = [i for i in ranked(rows, rule) if i not in screening
+                 and abs(rows[i][rule.objective]) > target]
+        if above:
+            reasons.insert(1, f"{len(above)} unverified design(s) screen above the "
+                              f"recommended design's verified {rule.objective} (first: "
+                              f"design {designs[above[0]].index}): verify more designs")
+    return {**rec, "verified_designs": [designs[i].index for i in screening],
+            "verification": entries, "reasons": reasons}
 
 
 def range_edges(designs: Sequence[Design], best: int) -> list[tuple[str, float, str]]:
@@ -133,8 +191,10 @@ def range_edges(designs: Sequence[Design], best: int) -> list[tuple[str, float, 
 
 
 def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
-                best: int | None, objective: str = "snr") -> None:
-    """The objective against precompression and against bandwidth, Pareto fronts marked.
+                best: int | None, objective: str = "snr",
+                verified: Sequence[int] | None = None) -> None:
+    """The objective against precompression and against bandwidth, Pareto fronts marked
+    (and the designs verified with the contact maps, positions ``verified``, ringed).
 
     Written in the format of ``path``'s suffix (png, pdf or svg) at :data:`msens.io.output.DPI`.
     """
@@ -162,6 +222,10 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
             ax.scatter(x[~front], s[~front], s=8, c="0.6", label="design")
             o = np.argsort(x[front])
             ax.plot(x[front][o], s[front][o], "o-", c="C0", ms=4, label="Pareto front")
+            ring = [k for k, i in enumerate(ok) if verified is not None and i in verified]
+            if ring:
+                ax.scatter(x[ring], s[ring], s=90, facecolors="none", edgecolors="k",
+                           label="verified with contact maps")
             if best is not None and best in [designs[i].index for i in ok]:
                 k = [designs[i].index for i in ok].index(best)
                 ax.plot(x[k], s[k], "*", c="C3", ms=14, label=f"recommended ({best})")
@@ -182,4 +246,4 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
 
 
 __all__ = ["LABELS", "METRICS", "column_name", "csv_text", "pareto_mask", "pareto_plot",
-           "range_edges", "recommend"]
+           "range_edges", "ranked", "recommend", "verification"]

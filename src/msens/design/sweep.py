@@ -19,6 +19,8 @@ one varying fastest)::
     [model]                      # optional
     bead_padding = 4             # magnet sweeps: a smaller per-design field model
     contact_map = false          # overrides the study's [field] contact_map (screening)
+    verify = 3                   # magnet sweeps screened without maps: the 3 best again
+                                 # with the study's maps, recommended among them
     [recommend]
     objective = "snr"            # or "peak_emf_V"
     min_bandwidth_Hz = 50e3
@@ -122,6 +124,11 @@ class SweepSpec:
         ``[model] contact_map``: the nonlinear contact maps on or off for this sweep; None
         (default): the study's ``[field] contact_map``. Off, a magnet design is a few times
         faster (no maps to solve in its bias field), for screening.
+    verify : int
+        ``[model] verify``: in a magnet sweep screened without the maps (``contact_map =
+        false``) of a study that has them, the number of best screened designs evaluated
+        again with the study's maps (each solving its own); the recommendation is made
+        among them. 0 (default): none.
     recommend : Recommend
     """
 
@@ -131,6 +138,7 @@ class SweepSpec:
     axes: tuple[tuple[str, tuple[Any, ...]], ...]
     bead_padding: int | None = None
     contact_map: bool | None = None
+    verify: int = 0
     recommend: Recommend = Recommend()
 
     @property
@@ -191,16 +199,25 @@ def parse_sweep(text: str, *, source: str = "<memory>") -> SweepSpec:
     model = root.table("model")
     padding = None
     contact_map = None
+    verify = 0
     if model is not None:
         if model.raw("bead_padding") is not None:
             padding = model.integer("bead_padding", low=1, high=30)
         if model.raw("contact_map") is not None:
             contact_map = model.boolean("contact_map", False)
+        verify = model.integer("verify", 0, low=0, high=count)
+        if verify and contact_map is not False:
+            raise model.error("verify", "re-evaluates designs screened without the contact "
+                                        "maps: it needs contact_map = false in [model]")
+        if verify and not any(k.startswith("magnet.") for k, _ in axes):
+            raise model.error("verify", "applies to magnet sweeps (a coil sweep reads the "
+                                        "study's contact maps in every design)")
         model.finish()
     rec = _recommend(root.table("recommend"))
     root.finish()
     return SweepSpec(name=name, source=source, sensor=sensor, axes=tuple(axes),
-                     bead_padding=padding, contact_map=contact_map, recommend=rec)
+                     bead_padding=padding, contact_map=contact_map, verify=verify,
+                     recommend=rec)
 
 
 def _values(t: Table, key: str, raw: Any, kind: str, low: float, high: float) -> tuple:

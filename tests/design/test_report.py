@@ -1,0 +1,63 @@
+"""Recommendation among verified designs (pure functions of the rows)."""
+
+from __future__ import annotations
+
+import pytest
+
+from msens.design.report import METRICS, csv_text, ranked, recommend, verification
+from msens.design.sweep import Design, Recommend
+
+
+def _row(snr: float, pre: float = 1.0, maps: bool = False) -> dict:
+    return {"status": "ok", **dict.fromkeys(METRICS, 1.0), "snr": snr,
+            "peak_emf_V": snr / 100, "peak_voltage_V": snr / 90,
+            "bandwidth_Hz": 5e4, "resonance_Hz": 7e4, "precompression_N": pre,
+            "precompression_max_N": pre, "wave_speed_change": 0.0, "contact_maps": maps}
+
+
+DESIGNS = [Design(i, (("magnet.radial_gap_m", g),)) for i, g in
+           enumerate((0.1e-3, 0.5e-3, 1e-3, 2e-3, 3e-3))]
+
+
+def test_ranked_orders_feasible_designs_by_objective():
+    rows = [_row(10), _row(30), _row(20, pre=9.0), {"status": "failed", "reason": "x"},
+            _row(30)]
+    assert ranked(rows, Recommend(max_precompression_n=5.0)) == [1, 4, 0]
+    assert ranked(rows, Recommend()) == [1, 4, 2, 0]
+
+
+def test_recommendation_among_verified_designs_and_its_warning():
+    """Screened 10, 30, 25, 5, 28; the best two verified read 24 and 26 with their maps: the
+    recommendation is design 2 (26) among the verified, and design 4 (screened 28, not
+    verified) lies above it, so the reasons ask to verify more."""
+    screened = [_row(10), _row(30), _row(25), _row(5), _row(28)]
+    rule = Recommend()
+    best2 = ranked(screened, rule)[:2]
+    assert best2 == [1, 4]
+    rows = list(screened)
+    rows[1], rows[4] = _row(24, maps=True), _row(29, maps=True)
+    screening = {i: screened[i] for i in best2}
+    rec = verification(recommend(DESIGNS, rows, rule, among=best2), DESIGNS, rows,
+                       screening, rule)
+    assert rec["design"] == 4 and rec["designs_feasible"] == 2
+    assert rec["verified_designs"] == [1, 4]
+    (a, b) = rec["verification"]
+    assert a["screening_snr"] == 30 and a["verified_snr"] == 24
+    assert a["objective_change"] == pytest.approx(-0.2)
+    assert b["objective_change"] == pytest.approx(29 / 28 - 1)
+    assert "off by up to 20 %" in rec["reasons"][0]
+    assert not any("verify more" in r for r in rec["reasons"])
+    # the second verified design loses too: design 2 (screened 25) now screens above both
+    rows[4] = _row(22, maps=True)
+    rec = verification(recommend(DESIGNS, rows, rule, among=best2), DESIGNS, rows,
+                       screening, rule)
+    assert rec["design"] == 1
+    assert "design 2" in rec["reasons"][1] and "verify more" in rec["reasons"][1]
+
+
+def test_csv_says_which_rows_read_the_contact_maps():
+    rows = [_row(10), _row(30, maps=True), {"status": "failed", "reason": "boom"}]
+    lines = csv_text(DESIGNS[:3], rows).splitlines()
+    head = lines[0].split(",")
+    k = head.index("contact_maps")
+    assert [ln.split(",")[k] for ln in lines[1:]] == ["false", "true", ""]

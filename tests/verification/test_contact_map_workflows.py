@@ -10,6 +10,7 @@ nonlinear maps.
 from __future__ import annotations
 
 import csv
+import json
 
 import numpy as np
 import pytest
@@ -161,3 +162,20 @@ def test_magnet_design_solves_its_own_maps_and_equals_msens_run(tmp_path, monkey
     assert float(rows["maps"]["peak_voltage_V"]) == pytest.approx(run["peak_voltage_V"],
                                                                    rel=1e-3)
     assert float(rows["linear"]["peak_emf_V"]) != pytest.approx(run["peak_emf_V"], rel=1e-4)
+    # screening both magnets and verifying the best, the study's own ceramic 8 (its SNR
+    # 1.09e5 against N38's 9.4e4): its row is then msens run of the study, which solves the
+    # same maps; N38 keeps its screening row
+    (tmp_path / "verify").mkdir()
+    both = _design(study, tmp_path / "verify", '[magnet]\ngrade = ["ceramic8", "N38"]\n'
+                   "[model]\ncontact_map = false\nverify = 1\n")
+    assert [r["contact_maps"] for r in both] == ["true", "false"]
+    assert both[1] == {**rows["linear"], "design": "1"}
+    own = next(c for c in api.physics_summary(api.run(study))["coils"] if c["particle"] == 6)
+    assert float(both[0]["peak_emf_V"]) == pytest.approx(own["peak_emf_V"], rel=1e-6)
+    assert float(both[0]["peak_voltage_V"]) == pytest.approx(own["peak_voltage_V"], rel=1e-3)
+    rec = json.loads((tmp_path / "verify" / "out" / "recommendation.json").read_text())
+    assert rec["design"] == 0 and rec["verified_designs"] == [0]
+    (entry,) = rec["verification"]
+    assert entry["verified_snr"] == pytest.approx(float(both[0]["snr"]), rel=1e-9)
+    assert abs(entry["objective_change"]) > 1e-3  # the maps change the screened figure
+    assert "own contact maps" in rec["reasons"][0]

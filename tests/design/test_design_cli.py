@@ -130,7 +130,9 @@ def test_sweep_local_and_dask_identical(tmp_path, sweep, monkeypatch):
 
 @pytest.mark.slow
 def test_paper_magnet_sweep_24_designs(tmp_path):
-    """Acceptance: 24 magnet designs of the paper's sensor (time printed, not asserted)."""
+    """Acceptance: 24 magnet designs of the paper's sensor screened, the best three verified
+    with their own contact maps and the recommendation made among them (time printed, not
+    asserted)."""
     t0 = time.perf_counter()
     result = api.design(api.load(ROOT / "studies" / "paper-mss.toml"),
                         ROOT / "studies" / "sweep-magnet.toml", tmp_path, workers=2,
@@ -139,4 +141,8 @@ def test_paper_magnet_sweep_24_designs(tmp_path):
     assert result.designs == 24
     rows = _rows(tmp_path / "designs.csv")
     assert sum(r["status"] == "ok" for r in rows) >= 20
+    verified = [int(r["design"]) for r in rows if r["contact_maps"] == "true"]
+    rec = result.recommendation
+    assert len(verified) == 3 and rec["verified_designs"] == verified
+    assert rec["design"] in verified
     shutil.rmtree(tmp_path / "cache")

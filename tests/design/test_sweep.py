@@ -49,13 +49,13 @@ def test_model_contact_map_overrides_the_study():
 
 def test_model_verify_needs_a_screening_magnet_sweep():
     """``[model] verify``: the number of best screened designs evaluated again with the
-    contact maps; only in a magnet sweep that screens without them, at most every design."""
+    contact maps; only in a magnet sweep that screens without them."""
     body = "[magnet]\ngrade = ['N38', 'ceramic8']\n[model]\n"
     assert parse_sweep(HEAD + body + "contact_map = false\n").verify == 0
     assert parse_sweep(HEAD + body + "contact_map = false\nverify = 2\n").verify == 2
+    assert parse_sweep(HEAD + body + "contact_map = false\nverify = 9\n").verify == 9  # all
     for extra, words in (("verify = 1\n", "contact_map = false"),
                          ("contact_map = true\nverify = 1\n", "contact_map = false"),
-                         ("contact_map = false\nverify = 3\n", "<= 2"),
                          ("contact_map = false\nverify = -1\n", ">= 0"),
                          ("contact_map = false\nverify = 1.5\n", "integer")):
         with pytest.raises(InputError, match=r"model\.verify") as info:

@@ -82,7 +82,8 @@ def evaluate_design(task: MagnetTask) -> dict:
     if task.study.field.eddy_currents:
         eddy = eddy_settings(task.study)
         rsp = dynamic_report(task.geometry, options=eddy.options, steel=eddy.steel,
-                             mesh_dir=mesh_dir, cache_dir=mesh_dir).responses[task.particle]
+                             mesh_dir=mesh_dir, cache_dir=mesh_dir,
+                             start=report.bias).responses[task.particle]
         row = dynamic_design_rows([coil], resistance, inductance, rsp.frequencies,
                                   rsp.villari[None], rsp.approach[None],
                                   np.asarray(rsp.inductance)[None], wave,

@@ -128,7 +128,7 @@ class SweepSpec:
         ``[model] verify``: in a magnet sweep screened without the maps (``contact_map =
         false``) of a study that has them, the number of best screened designs evaluated
         again with the study's maps (each solving its own); the recommendation is made
-        among them. 0 (default): none.
+        among them. 0 (default): none; more than the sweep's designs: all of them.
     recommend : Recommend
     """
 
@@ -205,7 +205,7 @@ def parse_sweep(text: str, *, source: str = "<memory>") -> SweepSpec:
             padding = model.integer("bead_padding", low=1, high=30)
         if model.raw("contact_map") is not None:
             contact_map = model.boolean("contact_map", False)
-        verify = model.integer("verify", 0, low=0, high=count)
+        verify = model.integer("verify", 0, low=0, high=MAX_DESIGNS)  # > count: every one
         if verify and contact_map is not False:
             raise model.error("verify", "re-evaluates designs screened without the contact "
                                         "maps: it needs contact_map = false in [model]")

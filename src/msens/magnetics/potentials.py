@@ -220,17 +220,24 @@ def _cumtrapz(f: np.ndarray, h: float, axis: int) -> np.ndarray:
     return np.moveaxis(out, -1, axis)
 
 
-def p2_probes(basis, r: np.ndarray, z: np.ndarray) -> sp.csr_matrix:
+def p2_probes(basis, r: np.ndarray, z: np.ndarray, *, outside_zero: bool = False
+              ) -> sp.csr_matrix:
     """Sparse evaluation matrix of a P2 field on straight triangles at points, (n_pts, N).
 
     Point location by matplotlib's trapezoid-map finder (fast for many points); P2 shape
     functions in barycentric coordinates λ: λ_i(2λ_i − 1) at the vertices, 4 λ_i λ_j on the
     edges (0,1), (1,2), (0,2) — scikit-fem's local dof order for ElementTriP2 (checked against
-    ``basis.probes`` in the tests).
+    ``basis.probes`` in the tests). Points outside the mesh are an error, or with
+    ``outside_zero`` rows of zeros.
     """
     mesh = basis.mesh
     tri = mtri.Triangulation(mesh.p[0], mesh.p[1], mesh.t.T)
     e = tri.get_trifinder()(r, z)
+    if outside_zero:
+        inside = np.flatnonzero(e >= 0)
+        m = p2_probes(basis, r[inside], z[inside])
+        rows = np.repeat(inside, np.diff(m.indptr))
+        return sp.csr_matrix((m.data, (rows, m.indices)), shape=(r.size, basis.N))
     internal(bool(np.all(e >= 0)), "internal: linkage-table points outside the field mesh")
     p0, p1, p2 = (mesh.p[:, mesh.t[k, e]] for k in range(3))
     det = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1])

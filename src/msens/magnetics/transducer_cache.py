@@ -124,7 +124,8 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
         maps = approach_maps(geometry, map_key, options=options, mesh_dir=mesh_dir,
                              cache_dir=cache_dir, particles=map_particles)
         return TransducerReport({p: replace(tr, approach_map=maps.get(p))
-                                 for p, tr in report.transducers.items()}, report.details)
+                                 for p, tr in report.transducers.items()}, report.details,
+                                bias=report.bias)
     if not refresh:
         for d in search:
             path = d / name

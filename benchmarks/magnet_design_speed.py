@@ -13,13 +13,15 @@ swept coil in its own bias field (:mod:`msens.design.magnet_sweep`). Printed as 
   user runs), wall time per design;
 - ``screening``: the same sweep with ``[model] contact_map = false`` (the linear contact
   sources: no maps per design);
+- ``screen_and_verify``: the screening sweep with ``verify = 1`` (its best design evaluated
+  again with its own maps, as ``studies/sweep-magnet.toml`` verifies three of 24);
 - ``lu``: one factorisation of that design's K_t + jωM_σ at 30 kHz with msens' sparse LU
   (:mod:`msens.field.linsolve`) against scipy's ``splu`` with its defaults (what a user would
   pick), as a ratio.
 
 Every cache goes to a temporary folder (``MSENS_MESH_DIR``), so each run starts cold.
 
-Run: ``python benchmarks/magnet_design_speed.py [--designs 4]`` (about 15 min on 2 cores).
+Run: ``python benchmarks/magnet_design_speed.py [--designs 4]`` (about 20 min on 2 cores).
 """
 
 from __future__ import annotations
@@ -115,9 +117,12 @@ def main() -> None:
         many = sweep(study, args.designs, Path(tmp) / "maps")
         screening = sweep(study, args.designs, Path(tmp) / "screening",
                           "[model]\ncontact_map = false\n")
+        verified = sweep(study, args.designs, Path(tmp) / "verified",
+                         "[model]\ncontact_map = false\nverify = 1\n")
     print(json.dumps({"study": "paper-mss with [field] eddy_currents = true",
                       "contact_map": study.field.contact_map,
-                      "single_design": one, "sweep": many, "screening": screening, "lu": lu,
+                      "single_design": one, "sweep": many, "screening": screening,
+                      "screen_and_verify": verified, "lu": lu,
                       "target_per_design_s": 20.0}, indent=1))
 
 

@@ -232,7 +232,11 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
         ax.set_xlabel(label)
         ax.set_ylabel(LABELS.get(objective, objective))
         ax.legend(fontsize=8)
-    fig.suptitle(f"{len(ok)} designs ({len(rows) - len(ok)} failed)")
+    title = f"{len(ok)} designs ({len(rows) - len(ok)} failed)"
+    if verified:
+        title += (f"; linear contact sources, the best {len(verified)} verified with their "
+                  "own contact maps")
+    fig.suptitle(title)
     buf = io.BytesIO()
     fmt = Path(path).suffix.lstrip(".") or "png"
     # no version or date stamp: reruns write identical bytes

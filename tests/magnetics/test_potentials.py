@@ -10,6 +10,7 @@ import pytest
 
 from msens.field.geometry import BeadChain, SensorGeometry
 from msens.field.parts import BiasMagnet, Coil, SensorUnit
+from msens.field.probes import p2_probes
 from msens.field.sensor_model import bias_problem, load_mesh
 from msens.field.solve import solve
 from msens.magnetics.mechanisms import coil_linkage, mechanism_potentials
@@ -17,7 +18,6 @@ from msens.magnetics.potentials import (
     LinkageTable,
     _cumtrapz,
     linkage_table,
-    p2_probes,
     rect_integral,
     region_linkage,
 )

@@ -44,7 +44,7 @@ from msens.errors import internal
 from msens.field.geometry import SensorGeometry
 from msens.field.parts import SensorUnit
 from msens.field.sensor_model import coil_resistance
-from msens.magnetics.dynamic import dynamic_report
+from msens.magnetics.dynamic import dynamic_report, eddy_bias_solution
 from msens.magnetics.emf import ContactRates
 from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables
 from msens.magnetics.mechanisms import contact_profiles, mechanism_potentials
@@ -134,7 +134,7 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
     eddy = eddy_settings(study)
     response = dynamic_report(geometry, options=eddy.options,
                               steel=eddy.steel).responses[particle]
-    sol, _ = bias_solution(geometry, options=eddy.options)
+    sol = eddy_bias_solution(geometry, eddy.options)
     model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
                                  law=law_for_steel(geometry.steel))
     harmonic = harmonic_tables(model, geometry, response.frequencies, r_rng, z_rng,

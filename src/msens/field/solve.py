@@ -42,6 +42,7 @@ from msens.field.forms import (
 )
 from msens.field.linsolve import factorize
 from msens.field.mesh import AxiMesh, axis_facets
+from msens.field.probes import p2_probes
 from msens.field.regions import PermanentMagnet, Region, Winding
 
 
@@ -238,7 +239,8 @@ def _line_search(d: Discretisation, a: np.ndarray, da: np.ndarray, r0: np.ndarra
 
 
 def solve(problem: MagnetostaticProblem, *, tol: float = 1e-8, max_iter: int = 15,
-          initial: np.ndarray | None = None) -> FieldSolution:
+          initial: np.ndarray | None = None, start: FieldSolution | None = None
+          ) -> FieldSolution:
     """Solve the magnetostatic problem.
 
     Parameters
@@ -252,6 +254,10 @@ def solve(problem: MagnetostaticProblem, *, tol: float = 1e-8, max_iter: int = 1
     initial : ndarray, shape (n_dofs,), optional
         Starting dofs for Newton (default: a linear solve with the secant reluctivity of
         the nonlinear regions at 1.8 T, ``constitutive.INITIAL_SECANT_B``).
+    start : FieldSolution, optional
+        Instead of ``initial``: a solution of the same domain on another mesh, interpolated
+        at this mesh's dofs (P2; the fixed dofs keep their boundary values, dofs outside its
+        mesh start at 0).
 
     Returns
     -------
@@ -268,6 +274,11 @@ def solve(problem: MagnetostaticProblem, *, tol: float = 1e-8, max_iter: int = 1
     lift = _lift(d)
     nu0 = np.broadcast_to(mat.nu[:, None], d.quad.w.shape)
     free = d.pattern.free
+    if start is not None:
+        require(initial is None, "give initial or start, not both")
+        x = d.basis.doflocs
+        initial = p2_probes(start.basis, x[0], x[1], outside_zero=True) @ start.a
+        initial[d.fixed] = d.fixed_values
     if initial is None:
         a, res = _solve_linear(d, nu0, load, lift)
     else:

@@ -265,7 +265,7 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
 # ----------------------------------------------------------------------------- cache
 
 #: Version of what :func:`frequency_responses` computes; part of the cache key.
-DYNAMIC_VERSION = "dynamic/1"
+DYNAMIC_VERSION = "dynamic/2"  # 2: the eddy mesh's bias starts from the plain mesh's
 
 
 def dynamic_key(transducer_key: str, frequencies: Sequence[float], steel: float,
@@ -397,22 +397,32 @@ def _workers(scheduler: str) -> int:
         return max(1, len(client.scheduler_info()["workers"]))
 
 
+def eddy_bias_solution(geometry: SensorGeometry, options: MeshOptions | None, *,
+                       mesh_dir: str | Path | None = None,
+                       start: FieldSolution | None = None) -> FieldSolution:
+    """The bias on the eddy-current mesh (``options``), Newton starting from the bias on the
+    plain mesh (``options=None``), interpolated: 4 iterations instead of 13, and a start that
+    does not depend on what a caller has at hand. ``start``: that plain-mesh solution if the
+    caller has it (e.g. :attr:`msens.magnetics.transducer.TransducerReport.bias`), else it
+    is solved first; the same start either way, so the same result."""
+    from msens.magnetics.transducer import bias_solution
+
+    if options is None or options == MeshOptions():
+        start = None  # the plain mesh itself: a cold start, as the static transducer's
+    elif start is None:
+        start, _ = bias_solution(geometry, mesh_dir=mesh_dir)
+    sol, _ = bias_solution(geometry, options=options, mesh_dir=mesh_dir, start=start)
+    return sol
+
+
 def _report_task(args: tuple) -> DynamicReport:
     """Mesh, bias, sources and the harmonic solves of one list of frequencies (from 0)."""
     from msens.magnetics.mechanisms import mechanism_potentials
     from msens.magnetics.steel_law import law_for_steel
-    from msens.magnetics.transducer import bias_solution
 
     geometry, options, mesh_dir, freqs, steel, magnets, offsets, start = args
     t0 = time.perf_counter()
-    if options is None or options == MeshOptions():
-        start = None  # the plain mesh itself: a cold start, as the static transducer's
-    elif start is None:
-        # Newton on the eddy-current mesh always starts from the plain mesh's bias (4
-        # iterations instead of 13); a caller that has it hands it over (same start, same
-        # result to round-off)
-        start, _ = bias_solution(geometry, mesh_dir=mesh_dir)
-    sol, _ = bias_solution(geometry, options=options, mesh_dir=mesh_dir, start=start)
+    sol = eddy_bias_solution(geometry, options, mesh_dir=mesh_dir, start=start)
     timings: dict[str, float] = {"mesh_and_bias_solve": time.perf_counter() - t0}
     model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
                                  law=law_for_steel(geometry.steel), timings=timings)
@@ -479,6 +489,7 @@ __all__ = [
     "DynamicReport",
     "dynamic_key",
     "dynamic_report",
+    "eddy_bias_solution",
     "frequency_responses",
     "join_reports",
     "report_from_json",

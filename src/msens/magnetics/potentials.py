@@ -22,7 +22,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import matplotlib.tri as mtri
 import numpy as np
 import scipy.sparse as sp
 
@@ -31,6 +30,7 @@ from msens.field.assembly import assemble_matrix, assemble_vector
 from msens.field.constitutive import reluctivities, small_signal_tangent, tangent
 from msens.field.forms import element_stiffness, flux_density_qp
 from msens.field.linsolve import factorize
+from msens.field.probes import p2_probes
 from msens.field.solve import FieldSolution
 from msens.params.units import TWO_PI
 
@@ -220,37 +220,6 @@ def _cumtrapz(f: np.ndarray, h: float, axis: int) -> np.ndarray:
     return np.moveaxis(out, -1, axis)
 
 
-def p2_probes(basis, r: np.ndarray, z: np.ndarray, *, outside_zero: bool = False
-              ) -> sp.csr_matrix:
-    """Sparse evaluation matrix of a P2 field on straight triangles at points, (n_pts, N).
-
-    Point location by matplotlib's trapezoid-map finder (fast for many points); P2 shape
-    functions in barycentric coordinates λ: λ_i(2λ_i − 1) at the vertices, 4 λ_i λ_j on the
-    edges (0,1), (1,2), (0,2) — scikit-fem's local dof order for ElementTriP2 (checked against
-    ``basis.probes`` in the tests). Points outside the mesh are an error, or with
-    ``outside_zero`` rows of zeros.
-    """
-    mesh = basis.mesh
-    tri = mtri.Triangulation(mesh.p[0], mesh.p[1], mesh.t.T)
-    e = tri.get_trifinder()(r, z)
-    if outside_zero:
-        inside = np.flatnonzero(e >= 0)
-        m = p2_probes(basis, r[inside], z[inside])
-        rows = np.repeat(inside, np.diff(m.indptr))
-        return sp.csr_matrix((m.data, (rows, m.indices)), shape=(r.size, basis.N))
-    internal(bool(np.all(e >= 0)), "internal: linkage-table points outside the field mesh")
-    p0, p1, p2 = (mesh.p[:, mesh.t[k, e]] for k in range(3))
-    det = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1])
-    l1 = ((r - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (z - p0[1])) / det
-    l2 = ((p1[0] - p0[0]) * (z - p0[1]) - (r - p0[0]) * (p1[1] - p0[1])) / det
-    l0 = 1.0 - l1 - l2
-    shape = np.stack([l0 * (2 * l0 - 1), l1 * (2 * l1 - 1), l2 * (2 * l2 - 1),
-                      4 * l0 * l1, 4 * l1 * l2, 4 * l0 * l2])
-    rows = np.broadcast_to(np.arange(r.size), shape.shape)
-    return sp.csr_matrix((shape.ravel(), (rows.ravel(), basis.element_dofs[:, e].ravel())),
-                         shape=(r.size, basis.N))
-
-
 @dataclass(frozen=True)
 class TableGrid:
     """The nodes of a linkage table and a field model's P2 evaluation matrix at them (built
@@ -343,7 +312,6 @@ __all__ = [
     "bias_residual",
     "linkage_table",
     "nonlinear_resolve",
-    "p2_probes",
     "rect_integral",
     "region_linkage",
     "table_grid",

@@ -50,7 +50,7 @@ from msens.field.sensor_model import (
     group_force,
     load_mesh,
 )
-from msens.field.solve import FieldSolution, MagnetostaticProblem, discretise, solve
+from msens.field.solve import FieldSolution, solve
 from msens.io.hashing import canonical as _canonical
 from msens.io.hashing import content_hash
 from msens.magnetics.approach import hertz_approach_rate, hertz_stiffness
@@ -278,21 +278,7 @@ def bias_solution(geometry: SensorGeometry, *, options: MeshOptions | None = Non
     (on the eddy-current mesh from the plain mesh's solution: 4 iterations instead of 13).
     """
     axi, path = load_mesh(geometry, options, mesh_dir)
-    problem = bias_problem(geometry, axi)
-    initial = None if start is None else transferred(start, problem)
-    return solve(problem, max_iter=max_iter, initial=initial), path
-
-
-def transferred(source: FieldSolution, problem: MagnetostaticProblem) -> np.ndarray:
-    """``source``'s potential at the dofs of ``problem`` (P2 interpolation; the problem's
-    fixed dofs take its boundary values, dofs outside ``source``'s mesh 0), shape (n_dofs,)."""
-    from msens.magnetics.potentials import p2_probes
-
-    d = discretise(problem)
-    x = d.basis.doflocs
-    a = p2_probes(source.basis, x[0], x[1], outside_zero=True) @ source.a
-    a[d.fixed] = d.fixed_values
-    return a
+    return solve(bias_problem(geometry, axi), max_iter=max_iter, start=start), path
 
 
 def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None = None,

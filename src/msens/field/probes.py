@@ -1,0 +1,44 @@
+"""Point evaluation of P2 fields on straight triangles: sparse probe matrices for many points
+(linkage tables, moving a solution onto another mesh of the same domain)."""
+
+from __future__ import annotations
+
+import matplotlib.tri as mtri
+import numpy as np
+import scipy.sparse as sp
+
+from msens.errors import internal
+
+
+def p2_probes(basis, r: np.ndarray, z: np.ndarray, *, outside_zero: bool = False
+              ) -> sp.csr_matrix:
+    """Sparse evaluation matrix of a P2 field on straight triangles at points, (n_pts, N).
+
+    Point location by matplotlib's trapezoid-map finder (fast for many points); P2 shape
+    functions in barycentric coordinates λ: λ_i(2λ_i − 1) at the vertices, 4 λ_i λ_j on the
+    edges (0,1), (1,2), (0,2) — scikit-fem's local dof order for ElementTriP2 (checked against
+    ``basis.probes`` in the tests). Points outside the mesh are an error, or with
+    ``outside_zero`` rows of zeros.
+    """
+    mesh = basis.mesh
+    tri = mtri.Triangulation(mesh.p[0], mesh.p[1], mesh.t.T)
+    e = tri.get_trifinder()(r, z)
+    if outside_zero:
+        inside = np.flatnonzero(e >= 0)
+        m = p2_probes(basis, r[inside], z[inside])
+        rows = np.repeat(inside, np.diff(m.indptr))
+        return sp.csr_matrix((m.data, (rows, m.indices)), shape=(r.size, basis.N))
+    internal(bool(np.all(e >= 0)), "internal: linkage-table points outside the field mesh")
+    p0, p1, p2 = (mesh.p[:, mesh.t[k, e]] for k in range(3))
+    det = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1])
+    l1 = ((r - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (z - p0[1])) / det
+    l2 = ((p1[0] - p0[0]) * (z - p0[1]) - (r - p0[0]) * (p1[1] - p0[1])) / det
+    l0 = 1.0 - l1 - l2
+    shape = np.stack([l0 * (2 * l0 - 1), l1 * (2 * l1 - 1), l2 * (2 * l2 - 1),
+                      4 * l0 * l1, 4 * l1 * l2, 4 * l0 * l2])
+    rows = np.broadcast_to(np.arange(r.size), shape.shape)
+    return sp.csr_matrix((shape.ravel(), (rows.ravel(), basis.element_dofs[:, e].ravel())),
+                         shape=(r.size, basis.N))
+
+
+__all__ = ["p2_probes"]

@@ -75,8 +75,11 @@ def sweep(study, designs: int, folder: Path, model: str = "") -> dict:
                     f"axial_offset_m = [{offsets}]\n{model}")
     # a cold user cache per sweep: no sweep reads another's maps or transducers
     os.environ["MSENS_MESH_DIR"] = str(folder / "user-cache")  # workers inherit it
+    from msens.parallel import allow_pools
+
     t0 = time.perf_counter()
-    api.design(study, spec, folder / "out", workers=2, progress=False)
+    with allow_pools():  # as `msens design` runs: contact maps may use the local cores
+        api.design(study, spec, folder / "out", workers=2, progress=False)
     wall = time.perf_counter() - t0
     return {"designs": designs, "workers": 2, "wall_s": round(wall, 1),
             "per_design_s": round(wall / designs, 2)}

@@ -32,6 +32,7 @@ from msens.design.sweep import (
 )
 from msens.errors import InputError
 from msens.io.output import OutputDir, to_json
+from msens.parallel import pools_allowed
 
 
 def files(fig_format: str = "png") -> tuple[str, ...]:
@@ -135,9 +136,13 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
             _log.info("verifying the %d best screened designs with their own contact maps "
                       "(%d contacts each, about 30 s per contact)", len(verified),
                       len(mapped_contacts(base, (sensor.particle,))))
+            # one design at a time with its maps on the local cores where a pool may start
+            # (the msens command: no core idles when fewer designs than workers remain);
+            # otherwise the designs go to the workers
+            local = scheduler is None and pools_allowed()
             again, _ = run_cached(evaluate_design, tasks(own, verified), cache,
-                                     scheduler=scheduler, workers=workers, progress=progress,
-                                     description="verified with contact maps")
+                                  scheduler=scheduler, workers=1 if local else workers,
+                                  progress=progress, description="verified with contact maps")
             screening = {i: rows[i] for i in verified}
             rows = list(rows)
             for i, r in zip(verified, again, strict=True):

@@ -146,3 +146,15 @@ def test_paper_magnet_sweep_24_designs(tmp_path):
     assert len(verified) == 3 and rec["verified_designs"] == verified
     assert rec["design"] in verified
     shutil.rmtree(tmp_path / "cache")
+
+
+def test_verify_needs_a_study_with_contact_maps(tmp_path, capsys):
+    """``[model] verify`` on a study without contact maps: exit 2 before any work, naming
+    the sweep file, the key and what to set."""
+    study, spec = _files(tmp_path, TINY_MAGNET + "contact_map = false\nverify = 1\n")
+    out = tmp_path / "out"
+    assert main(["design", str(study), "--sweep", str(spec), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "verify = 1" in err and "contact_map = true" in err and str(spec) in err
+    assert "Traceback" not in err
+    assert not (out / "designs.csv").exists()

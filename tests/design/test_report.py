@@ -61,3 +61,14 @@ def test_csv_says_which_rows_read_the_contact_maps():
     head = lines[0].split(",")
     k = head.index("contact_maps")
     assert [ln.split(",")[k] for ln in lines[1:]] == ["false", "true", ""]
+
+
+def test_failed_verification_recommends_nothing_and_says_why():
+    screened = [_row(10), _row(30)]
+    rows = [screened[0], {"status": "failed", "reason": "maps: Newton did not converge"}]
+    rule = Recommend()
+    rec = verification(recommend(DESIGNS[:2], rows, rule, among=[1]), DESIGNS[:2], rows,
+                       {1: screened[1]}, rule)
+    assert rec["design"] is None and rec["designs_failed"] == 1
+    assert rec["verification"] == [{"design": 1, "status": "failed"}]
+    assert "none of them evaluated" in rec["reasons"][0]

@@ -155,9 +155,10 @@ def verification(rec: dict, designs: Sequence[Design], rows: Sequence[dict],
         entries.append(e)
     reasons = list(rec["reasons"])
     changes = [abs(e["objective_change"]) for e in entries if "objective_change" in e]
+    off = (f"the screening's {rule.objective} off by up to {100 * max(changes):.2g} %"
+           if changes else "none of them evaluated")
     reasons.insert(0, f"recommended among the {len(screening)} best screened designs, "
-                      f"evaluated again with their own contact maps (the screening's "
-                      f"{rule.objective} off by up to {100 * max(changes, default=0):.2g} %)")
+                      f"evaluated again with their own contact maps ({off})")
     best = rec.get("design")
     if best is not None:
         target = abs(rows[[d.index for d in designs].index(best)][rule.objective])

@@ -68,6 +68,8 @@ def test_model_verify_needs_a_screening_magnet_sweep():
 
 @pytest.mark.parametrize("body, words", [
     ("[coil]\nturns = []\n", ["coil.turns", "empty range"]),
+    ("[coil]\nturns = { start = 400, stop = 1200, step = 5e-324 }\n",
+     ["coil.turns", "more than"]),
     ("[coil]\nlength_m = { start = 5e-3, stop = 4e-3, step = 1e-3 }\n",
      ["coil.length_m", "empty range"]),
     ("[coil]\nlength_m = { start = 5e-3, stop = 6e-3, num = 0 }\n", ["empty range"]),

@@ -262,9 +262,11 @@ def _range(t: Table, key: str, raw: dict) -> list[float]:
     step = float(raw["step"])
     if step == 0 or (stop - start) / step < 0:
         return []
-    n = math.floor((stop - start) / step * (1 + 1e-12) + 1e-9) + 1
-    if n > MAX_DESIGNS:
-        raise InputError(f"{where}: the range has {n} values, more than {MAX_DESIGNS}")
+    count = (stop - start) / step * (1 + 1e-12) + 1e-9  # inf for a subnormal step
+    if not count < MAX_DESIGNS:
+        raise InputError(f"{where}: the range has more than {MAX_DESIGNS} values "
+                         f"(step {step!r})")
+    n = math.floor(count) + 1
     return [start + i * step for i in range(n)]
 
 

@@ -131,8 +131,9 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         rows, computed = run_cached(evaluate_design, tasks(study, list(range(len(designs)))),
                                     cache, scheduler=scheduler, workers=workers,
                                     progress=progress, description="magnet designs")
-        if spec.verify:
-            verified = ranked(rows, spec.recommend)[:spec.verify]
+        # none to verify when no screened design meets the limits: say so from the screening
+        verified = ranked(rows, spec.recommend)[:spec.verify]
+        if verified:
             _log.info("verifying the %d best screened designs with their own contact maps "
                       "(%d contacts each, about 30 s per contact)", len(verified),
                       len(mapped_contacts(base, (sensor.particle,))))

@@ -107,7 +107,9 @@ def mutated(draw, base: dict) -> dict:
             table = _node(doc, draw(st.sampled_from(_tables(doc))))
             table[draw(st.sampled_from(["colour", "t_end", "Beads", "gamma"]))] = 1
         else:
-            parent[key] = draw(HOSTILE)
+            # a copy: sampled_from hands out the same {} / [] object every time, and an
+            # "unknown" edit into it would nest it into itself over the examples
+            parent[key] = copy.deepcopy(draw(HOSTILE))
     return doc
 
 

@@ -12,7 +12,7 @@ L(ω); the read-out's resonance (frequency and peak gain) with the study's cable
 
 ``--rebuild`` also builds the model again in an empty cache folder, without and with the
 coil-offset profiles that diagnose reads (``dynamic_report(offsets=True)``), and prints each
-build's wall time and stages (``rebuild``).
+build's wall time, stages and the eddy mesh's Newton iterations (``rebuild``).
 """
 
 from __future__ import annotations
@@ -57,7 +57,8 @@ def rebuild(geometry, eddy) -> dict:
                                  cache_dir=tmp, offsets=offsets)
             out["with_offsets" if offsets else "plain"] = {
                 "seconds": round(time.perf_counter() - t0, 1),
-                "stages_s": {k: round(v, 2) for k, v in rep.details["timings_s"].items()}}
+                "stages_s": {k: round(v, 2) for k, v in rep.details["timings_s"].items()},
+                "bias_newton_iterations": rep.details.get("bias_newton_iterations")}
     return out
 
 

@@ -401,7 +401,7 @@ def eddy_bias_solution(geometry: SensorGeometry, options: MeshOptions | None, *,
                        mesh_dir: str | Path | None = None,
                        start: FieldSolution | None = None) -> FieldSolution:
     """The bias on the eddy-current mesh (``options``), Newton starting from the bias on the
-    plain mesh (``options=None``), interpolated: 4 iterations instead of 13, and a start that
+    plain mesh (``options=None``), interpolated: a start close to the solution, and one that
     does not depend on what a caller has at hand. ``start``: that plain-mesh solution if the
     caller has it (e.g. :attr:`msens.magnetics.transducer.TransducerReport.bias`), else it
     is solved first; the same start either way, so the same result."""
@@ -429,6 +429,7 @@ def _report_task(args: tuple) -> DynamicReport:
     rep = frequency_responses(model, geometry, freqs, steel=steel, magnets=magnets,
                               offsets=offsets)
     rep.details["timings_s"] = {**timings, **rep.details["timings_s"]}
+    rep.details["bias_newton_iterations"] = sol.iterations
     return rep
 
 

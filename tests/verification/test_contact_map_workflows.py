@@ -165,9 +165,13 @@ def test_magnet_design_solves_its_own_maps_and_equals_msens_run(tmp_path, monkey
     # screening both magnets and verifying the best, the study's own ceramic 8 (its SNR
     # 1.09e5 against N38's 9.4e4): its row is then msens run of the study, which solves the
     # same maps; N38 keeps its screening row
+    # as the msens command runs it: the verified design in this process, its maps on a pool
+    from msens.parallel import allow_pools
+
     (tmp_path / "verify").mkdir()
-    both = _design(study, tmp_path / "verify", '[magnet]\ngrade = ["ceramic8", "N38"]\n'
-                   "[model]\ncontact_map = false\nverify = 1\n")
+    with allow_pools():
+        both = _design(study, tmp_path / "verify", '[magnet]\ngrade = ["ceramic8", "N38"]\n'
+                       "[model]\ncontact_map = false\nverify = 1\n")
     assert [r["contact_maps"] for r in both] == ["true", "false"]
     assert both[1] == {**rows["linear"], "design": "1"}
     own = next(c for c in api.physics_summary(api.run(study))["coils"] if c["particle"] == 6)

@@ -15,7 +15,7 @@ cached beside the meshes) and its row is the frequency-domain read-out of
 :func:`msens.design.metrics.dynamic_design_rows`.
 
 Own maps cost a few minutes per design, so a sweep may screen without them (``[model]
-contact_map = false``, the linear approach sources) and evaluate only its best designs
+contact_map = false``, the linear contact sources) and evaluate only its best designs
 again with them (``[model] verify``, :func:`msens.design.run_design`): the recommendation is
 then made among the verified designs.
 

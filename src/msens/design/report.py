@@ -140,7 +140,7 @@ def verification(rec: dict, designs: Sequence[Design], rows: Sequence[dict],
     """``rec`` (made among the verified designs) with what verification changed.
 
     Adds ``verification``: per verified design its objective, peak EMF and peak DAQ voltage
-    screened (linear approach sources) and verified (its own contact maps), and the reasons
+    screened (linear contact sources) and verified (its own contact maps), and the reasons
     gain a line on the screening's error and a warning when a design left unverified
     screens above the recommended design's verified objective (verify more designs)."""
     keys = (rule.objective, "peak_emf_V", "peak_voltage_V")

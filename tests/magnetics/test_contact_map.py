@@ -355,7 +355,8 @@ def test_transducers_with_contact_maps(tmp_path):
                        sensors=(SensorUnit(Coil(particle=13), BiasMagnet(particle=13)),),
                        air=AirBox(0.06, 0.05))
     kw = {"options": COARSE, "cache_dir": tmp_path, "mesh_dir": tmp_path}
-    tr = transducer_report(g, contact_maps=True, **kw).transducers[13]
+    report = transducer_report(g, contact_maps=True, **kw)
+    tr = report.transducers[13]
     assert tr.approach_map.contacts == (11, 12, 13, 14)
     for m in tr.approach_map.maps:
         k = int(np.flatnonzero(tr.contacts == m.contact)[0])
@@ -365,12 +366,15 @@ def test_transducers_with_contact_maps(tmp_path):
     for a, b in zip(tr.approach_map.maps, again.approach_map.maps, strict=True):
         assert np.array_equal(a.air_flux, b.air_flux)
         assert np.array_equal(a.steel_flux, b.steel_flux)
-    # two worker processes give the tables of one process
+    # two worker processes give the tables of one process (from the same Newton start: the
+    # plain mesh's bias, which the report handed to its maps)
+    from msens.field.probes import P2Field
     from msens.magnetics.contact_map import approach_maps
 
     (tmp_path / "pool").mkdir()
     pool = approach_maps(g, "pool", options=COARSE, mesh_dir=tmp_path,
-                         cache_dir=tmp_path / "pool", workers=2)[13]
+                         cache_dir=tmp_path / "pool", workers=2,
+                         start=P2Field.of(report.bias))[13]
     for a, b in zip(tr.approach_map.maps, pool.maps, strict=True):
         assert np.array_equal(a.air_flux, b.air_flux)
         assert np.array_equal(a.steel_flux, b.steel_flux)
@@ -413,3 +417,49 @@ def test_maps_of_one_coil_come_from_the_committed_maps_of_all():
     for m in one[13].approach_map.maps:
         np.testing.assert_array_equal(m.air_flux, full[m.contact].air_flux)
         np.testing.assert_array_equal(m.steel_flux, full[m.contact].steel_flux)
+
+
+def test_fast_paths_equal_the_plain_solves(layered):
+    """The map solves' shortcuts change nothing beyond round-off: the morphed quadrature
+    re-evaluates only stretched elements (against every element), the state Newton keeps its
+    Jacobian near convergence (against Newton with a fresh one every step, tol 1e-13), and
+    the layer model started from the plain mesh's bias has the cold start's solution."""
+    import skfem
+
+    import msens.magnetics.potentials as potentials
+    from msens.field.forms import quadrature_data
+    from msens.field.mesh import from_arrays
+    from msens.field.probes import P2Field
+    from msens.magnetics.approach import _morphed_quadrature
+    from msens.magnetics.contact_map import state_points
+
+    g, model, coil, _, d = layered
+    sol = model.air
+    p = state_points(model, "air", static_approach(model.geometry) - 6e-6)
+    q = _morphed_quadrature(sol, p)
+    axi = sol.problem.mesh
+    moved = from_arrays(p, axi.mesh.t, axi.subdomains, axi.boundaries)
+    full = quadrature_data(skfem.CellBasis(moved.mesh, sol.basis.elem,
+                                           intorder=2 * sol.problem.order))
+    assert np.allclose(q.g, full.g, rtol=1e-10, atol=1e-10 * np.abs(full.g).max())
+    assert np.allclose(q.w, full.w, rtol=1e-10, atol=0.0)
+
+    chord = potentials.nonlinear_resolve(sol, q, tol=1e-13, max_iter=30)
+    old = potentials.CHORD_BELOW
+    try:
+        potentials.CHORD_BELOW = 0.0  # a fresh Jacobian every step
+        newton = potentials.nonlinear_resolve(sol, q, tol=1e-13, max_iter=30)
+    finally:
+        potentials.CHORD_BELOW = old
+    assert np.abs(chord - newton).max() <= 1e-11 * np.abs(newton).max()
+
+    axi_plain, _ = load_mesh(g, COARSE, d)
+    plain = solve(bias_problem(g, axi_plain), tol=1e-10)
+    warm = layer_model(g, CONTACT, COARSE, d, start=P2Field.of(plain))
+    assert warm.steel.iterations < model.steel.iterations
+    for state in ("steel", "air"):
+        a, b = warm.solution(state).a, model.solution(state).a
+        assert np.abs(a - b).max() <= 1e-8 * np.abs(b).max()
+    delta = static_approach(model.geometry) + 1.2e-6
+    assert state_flux(warm, "steel", delta, coil) == pytest.approx(
+        state_flux(model, "steel", delta, coil), rel=1e-10, abs=0.0)

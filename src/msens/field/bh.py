@@ -15,6 +15,7 @@ reluctivity ν_d(|B|) = dH/dB. The Jacobian of H(B) = ν(|B|²) B with respect t
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PchipInterpolator, PPoly
@@ -59,10 +60,14 @@ class MonotoneBH:
         h_lin = self.h_max + (b - self.b_max) / MU0
         return np.where(inside, self.h_of_b(np.minimum(b, self.b_max)), h_lin)
 
+    @cached_property
+    def _dh_db(self) -> PPoly:
+        return self.h_of_b.derivative()
+
     def differential_reluctivity(self, b: np.ndarray) -> np.ndarray:
         """ν_d = dH/dB, m/H, at magnitudes ``b`` (T, any shape)."""
         b = np.asarray(b, dtype=float)
-        d = self.h_of_b.derivative()(np.minimum(b, self.b_max))
+        d = self._dh_db(np.minimum(b, self.b_max))
         return np.where(b <= self.b_max, d, 1.0 / MU0)
 
     def reluctivity(self, b: np.ndarray) -> np.ndarray:

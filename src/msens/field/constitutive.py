@@ -101,8 +101,20 @@ def material_fields(mesh: AxiMesh, regions: Mapping[str, Region]) -> Materials:
             reversibility.append(float(reg.reversibility))
         else:
             raise InputError(f"region '{name}': unknown region kind {type(reg).__name__}")
+    soft, reversibility = _grouped(soft, reversibility)
     return Materials(nu=nu, hc=hc, br=br, j=j, soft=tuple(soft),
                      reversibility=tuple(reversibility))
+
+
+def _grouped(soft: list, reversibility: list) -> tuple[list, list]:
+    """One entry per (B–H curve, reversibility): every bead is its own region, and the
+    Newton loop evaluates each entry's law once per iteration (33 small calls → 1)."""
+    groups: dict[tuple, tuple[list, MonotoneBH, float]] = {}
+    for (el, law), c in zip(soft, reversibility, strict=True):
+        k = (law.curve.name, law.curve.b.tobytes(), law.curve.h.tobytes(), c)
+        groups.setdefault(k, ([], law, c))[0].append(el)
+    return ([(np.sort(np.concatenate(els)), law) for els, law, _ in groups.values()],
+            [c for *_, c in groups.values()])
 
 
 def reluctivities(mat: Materials, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import matplotlib.tri as mtri
 import numpy as np
 import scipy.sparse as sp
@@ -41,4 +43,38 @@ def p2_probes(basis, r: np.ndarray, z: np.ndarray, *, outside_zero: bool = False
                          shape=(r.size, basis.N))
 
 
-__all__ = ["p2_probes"]
+@dataclass(frozen=True)
+class P2Field:
+    """A P2 field with just what :func:`p2_probes` needs: light to send to another process
+    (a solution's basis holds every element's shape functions).
+
+    Attributes
+    ----------
+    mesh : skfem.MeshTri
+    element_dofs : ndarray of int, shape (6, n_elements)
+        Global dof of each local basis function (scikit-fem's order).
+    a : ndarray, shape (n_dofs,)
+        The dofs.
+    """
+
+    mesh: object
+    element_dofs: np.ndarray
+    a: np.ndarray
+
+    @classmethod
+    def of(cls, solution) -> P2Field:
+        """The field of a P2 :class:`msens.field.solve.FieldSolution`."""
+        return cls(solution.basis.mesh, solution.basis.element_dofs, solution.a)
+
+    @property
+    def N(self) -> int:  # scikit-fem's name for the dof count
+        """Number of dofs."""
+        return int(self.a.size)
+
+    @property
+    def basis(self) -> P2Field:
+        """Itself: it answers :func:`p2_probes`' questions to a basis."""
+        return self
+
+
+__all__ = ["P2Field", "p2_probes"]

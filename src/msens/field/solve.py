@@ -42,7 +42,7 @@ from msens.field.forms import (
 )
 from msens.field.linsolve import factorize
 from msens.field.mesh import AxiMesh, axis_facets
-from msens.field.probes import p2_probes
+from msens.field.probes import P2Field, p2_probes
 from msens.field.regions import PermanentMagnet, Region, Winding
 
 
@@ -239,7 +239,7 @@ def _line_search(d: Discretisation, a: np.ndarray, da: np.ndarray, r0: np.ndarra
 
 
 def solve(problem: MagnetostaticProblem, *, tol: float = 1e-8, max_iter: int = 15,
-          initial: np.ndarray | None = None, start: FieldSolution | None = None
+          initial: np.ndarray | None = None, start: FieldSolution | P2Field | None = None
           ) -> FieldSolution:
     """Solve the magnetostatic problem.
 
@@ -254,7 +254,7 @@ def solve(problem: MagnetostaticProblem, *, tol: float = 1e-8, max_iter: int = 1
     initial : ndarray, shape (n_dofs,), optional
         Starting dofs for Newton (default: a linear solve with the secant reluctivity of
         the nonlinear regions at 1.8 T, ``constitutive.INITIAL_SECANT_B``).
-    start : FieldSolution, optional
+    start : FieldSolution or P2Field, optional
         Instead of ``initial``: a solution of the same domain on another mesh, interpolated
         at this mesh's dofs (P2; the fixed dofs keep their boundary values, dofs outside its
         mesh start at 0).

@@ -48,6 +48,7 @@ from msens.errors import internal, require
 from msens.field.build import MeshOptions
 from msens.field.geometry import SensorGeometry
 from msens.field.parts import Coil
+from msens.field.probes import P2Field
 from msens.field.regions import NonlinearSoft
 from msens.field.sensor_model import bias_problem, load_mesh, shell_function
 from msens.field.solve import FieldSolution, MagnetostaticProblem, solve
@@ -121,18 +122,21 @@ class LayerModel:
 
 
 def layer_model(geometry: SensorGeometry, contact: int, options: MeshOptions | None = None,
-                mesh_dir: str | Path | None = None) -> LayerModel:
+                mesh_dir: str | Path | None = None, start: P2Field | None = None
+                ) -> LayerModel:
     """Mesh ``geometry`` with a layer at ``contact`` and solve its bias with the disc steel
-    and with it air."""
+    and with it air; Newton starts from ``start`` (the plain mesh's bias of ``geometry``,
+    optional: about half the iterations) and the air disc's from the steel disc's."""
     lg = layer_geometry(geometry, contact)
     axi, _ = load_mesh(lg, options, mesh_dir)
     air = bias_problem(lg, axi)
     name = lg.beads.layer_rect().name
     steel_regions = dict(air.regions)
     steel_regions[name] = NonlinearSoft(lg.steel, reversibility=lg.reversibility)
-    steel = MagnetostaticProblem(axi, steel_regions)
-    return LayerModel(lg, solve(steel, max_iter=40, tol=1e-11),
-                      solve(air, max_iter=40, tol=1e-11))
+    steel = solve(MagnetostaticProblem(axi, steel_regions), max_iter=40, tol=1e-11,
+                  start=start)
+    # the disc is a thousandth of a bead radius: its material barely moves the field
+    return LayerModel(lg, steel, solve(air, max_iter=40, tol=1e-11, initial=steel.a))
 
 
 def _layer_weights(sol: FieldSolution, geometry: SensorGeometry) -> tuple[np.ndarray,
@@ -445,14 +449,15 @@ def _map_from_json(d: dict) -> ContactMap:
 
 def _contact_task(args: tuple) -> tuple[ContactMap, ...]:
     """One contact's maps for every coil (a worker task: layer mesh, bias, table solves)."""
-    geometry, contact, coils, options, mesh_dir = args
-    return contact_maps(layer_model(geometry, contact, options, mesh_dir), coils)
+    geometry, contact, coils, options, mesh_dir, start = args
+    return contact_maps(layer_model(geometry, contact, options, mesh_dir, start), coils)
 
 
 def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
                   options: MeshOptions | None = None, mesh_dir: str | Path | None = None,
                   cache_dir: str | Path | None = None, workers: int | None = None,
-                  particles: Sequence[int] | None = None) -> dict[int, ApproachMap]:
+                  particles: Sequence[int] | None = None,
+                  start: P2Field | None = None) -> dict[int, ApproachMap]:
     """The contact maps of every coil of ``geometry`` (cached ``contact-map-<key>.json``).
 
     The key joins the transducer key (mesh, steel, magnets) and the table nodes. Lookup as
@@ -463,7 +468,9 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     (:func:`msens.parallel.run_tasks`; default: one per CPU under the ``msens`` command,
     else one, :func:`msens.parallel.pools_allowed`). ``particles``: the maps of those coils
     only, of their own contacts when solved; a cached table of every coil serves them too
-    (then with all its contacts, as ``msens run`` reads them).
+    (then with all its contacts, as ``msens run`` reads them). ``start``: the bias of
+    ``geometry`` on its plain mesh, where the layer meshes' Newton solves begin (the same
+    maps, about 1 s less per contact).
 
     Returns
     -------
@@ -505,14 +512,14 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
         workers = default_workers() if pools_allowed() else 1
     _log.info("contact maps %s (cached: no): %d contacts, a layer mesh and 18 nonlinear "
               "solves each, %d at a time", key, len(contacts), min(workers, len(contacts)))
-    start = time.perf_counter()
-    tasks = [(geometry, c, coils, options, None if mesh_dir is None else str(mesh_dir))
+    began = time.perf_counter()
+    tasks = [(geometry, c, coils, options, None if mesh_dir is None else str(mesh_dir), start)
              for c in contacts]
     per_contact: dict[int, tuple[ContactMap, ...]] = {}
     for i, maps in run_tasks(_contact_task, tasks, workers=workers):
         per_contact[contacts[i]] = maps
         _log.info("contact map %d/%d (contact %d) after %.0f s", len(per_contact),
-                  len(contacts), contacts[i], time.perf_counter() - start)
+                  len(contacts), contacts[i], time.perf_counter() - began)
     tables = {coil.particle: [per_contact[c][k] for c in contacts]
               for k, coil in enumerate(coils)}
     data = {"key": key, "version": MAP_VERSION, "transducer": transducer_key,

@@ -120,10 +120,21 @@ def bias_residual(sol: FieldSolution, q, a: np.ndarray, shift: np.ndarray | None
     mat = sol.disc.materials if elements is None else sol.disc.materials.take(elements)
     b = flux_density_qp(q, a) if shift is None else flux_density_qp(q, a) - shift
     nu, _ = reluctivities(mat, b)
+    return _residual_at(q, mat, b, nu, sol.basis.N)
+
+
+def _residual_at(q, mat, b: np.ndarray, nu: np.ndarray, n: int) -> np.ndarray:
+    """The residual of :func:`bias_residual` from the flux density and secant reluctivity at
+    the quadrature points (shape (n_el, n_qp, 2) and (n_el, n_qp))."""
     h = nu[..., None] * b
     h[..., 1] -= mat.hc[:, None]
-    return assemble_vector(q.dofs, np.einsum("eqic,eqc->ei", q.g, h * q.w[..., None]),
-                           sol.basis.N)
+    return assemble_vector(q.dofs, np.einsum("eqic,eqc->ei", q.g, h * q.w[..., None]), n)
+
+
+#: Relative Newton step below which :func:`nonlinear_resolve` keeps its factorised Jacobian
+#: (chord steps: the Jacobian's change is of the order of the step, so each further step
+#: shrinks about this much; a factorisation costs ~12 back-substitutions).
+CHORD_BELOW = 1e-5
 
 
 def nonlinear_resolve(sol: FieldSolution, q, shift: np.ndarray | None = None, *,
@@ -132,20 +143,30 @@ def nonlinear_resolve(sol: FieldSolution, q, shift: np.ndarray | None = None, *,
     """Newton re-solve of the bias problem on quadrature ``q`` and with the magnetisation
     ``shift`` (see :func:`bias_residual`): the independent check of the linearised sources.
     Starts from the bias solution, or from ``start`` (dofs of a nearby state on the same
-    mesh, shape (n_dofs,); its fixed dofs must be the bias solution's). Returns the dofs,
-    shape (n_dofs,)."""
+    mesh, shape (n_dofs,); its fixed dofs must be the bias solution's). Stops when the step
+    is at most ``tol`` of the free dofs' norm; once a step is below :data:`CHORD_BELOW`, the
+    last Jacobian is kept while the steps keep shrinking tenfold. Returns the dofs, shape
+    (n_dofs,)."""
     d = sol.disc
+    mat = d.materials
     free = d.pattern.free
     a = (sol.a if start is None else np.asarray(start, dtype=float)).copy()
+    lu, last = None, np.inf
     for _ in range(max_iter):
         b = flux_density_qp(q, a) if shift is None else flux_density_qp(q, a) - shift
-        nu, nu_d = reluctivities(d.materials, b)
-        res = bias_residual(sol, q, a, shift)[free]
-        _, ff = assemble_matrix(d.pattern, element_stiffness(q, tangent(b, nu, nu_d)))
-        da = factorize(ff).solve(-res)
+        nu, nu_d = reluctivities(mat, b)
+        res = _residual_at(q, mat, b, nu, sol.basis.N)[free]
+        if lu is None or last > CHORD_BELOW:
+            _, ff = assemble_matrix(d.pattern, element_stiffness(q, tangent(b, nu, nu_d)))
+            lu = factorize(ff)
+        da = lu.solve(-res)
         a[free] += da
-        if np.linalg.norm(da) <= tol * np.linalg.norm(a[free]):
+        step = np.linalg.norm(da) / max(np.linalg.norm(a[free]), 1e-300)
+        if step <= tol:
             break
+        # a chord step that did not shrink tenfold: the next one re-factorises
+        lu = lu if step <= 0.1 * last else None
+        last = step
     return a
 
 

@@ -20,6 +20,7 @@ from msens.errors import InputError, require
 from msens.field.build import MeshOptions
 from msens.field.cache import committed_mesh_dirs, default_mesh_dir
 from msens.field.geometry import SensorGeometry
+from msens.field.probes import P2Field
 from msens.io._files import atomic_write_bytes
 from msens.magnetics.magnetoelastic import JilesAthertonSablik
 from msens.magnetics.steel_law import law_for_steel
@@ -122,7 +123,8 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
         map_key = cache_key(replace(geometry, reversibility=1.0), options, stress_force=force,
                             law=law, material=material, approach=approach)
         maps = approach_maps(geometry, map_key, options=options, mesh_dir=mesh_dir,
-                             cache_dir=cache_dir, particles=map_particles)
+                             cache_dir=cache_dir, particles=map_particles,
+                             start=None if report.bias is None else P2Field.of(report.bias))
         return TransducerReport({p: replace(tr, approach_map=maps.get(p))
                                  for p, tr in report.transducers.items()}, report.details,
                                 bias=report.bias)

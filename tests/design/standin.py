@@ -21,6 +21,15 @@ def pools_allowed_here(_) -> bool:
     return pools_allowed()
 
 
+def blas_threads(_) -> int:
+    """The most threads a BLAS library loaded in this process would start."""
+    import numpy  # noqa: F401 - loads the BLAS library
+    import threadpoolctl
+
+    return max(i["num_threads"] for i in threadpoolctl.threadpool_info()
+               if i["user_api"] == "blas")
+
+
 def square(payload: tuple[int, float, str]) -> dict:
     index, delay, log = payload
     time.sleep(delay)

@@ -463,3 +463,32 @@ def test_fast_paths_equal_the_plain_solves(layered):
     delta = static_approach(model.geometry) + 1.2e-6
     assert state_flux(warm, "steel", delta, coil) == pytest.approx(
         state_flux(model, "steel", delta, coil), rel=1e-10, abs=0.0)
+
+
+def test_refresh_solves_the_maps_again(tmp_path, monkeypatch):
+    """``approach_maps(refresh=True)`` (``transducer_report(refresh=True)`` with maps) solves
+    the tables again instead of reading the cache, and rewrites the cache file."""
+    import msens.magnetics.contact_map as cm
+
+    calls = []
+
+    def fake(args):
+        calls.append(args[1])
+        n = len(args[2])
+        table = ContactMap(args[1], 5e-7, np.array([0.0, 1e-6]), np.array([0.0, len(calls)]),
+                           np.array([CLOSED_THICKNESS, 1e-6]), np.array([0.0, -1.0]))
+        return (table,) * n
+
+    monkeypatch.setattr(cm, "_contact_task", fake)
+    g = _small()
+    first = cm.approach_maps(g, "k", cache_dir=tmp_path, workers=1)
+    n = len(calls)
+    assert n == len(cm.mapped_contacts(g))
+    again = cm.approach_maps(g, "k", cache_dir=tmp_path, workers=1)
+    assert len(calls) == n  # read from the cache
+    assert np.array_equal(again[13].maps[0].steel_flux, first[13].maps[0].steel_flux)
+    fresh = cm.approach_maps(g, "k", cache_dir=tmp_path, workers=1, refresh=True)
+    assert len(calls) == 2 * n
+    assert not np.array_equal(fresh[13].maps[0].steel_flux, first[13].maps[0].steel_flux)
+    cached = cm.approach_maps(g, "k", cache_dir=tmp_path, workers=1)
+    assert np.array_equal(cached[13].maps[0].steel_flux, fresh[13].maps[0].steel_flux)

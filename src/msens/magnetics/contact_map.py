@@ -457,7 +457,8 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
                   options: MeshOptions | None = None, mesh_dir: str | Path | None = None,
                   cache_dir: str | Path | None = None, workers: int | None = None,
                   particles: Sequence[int] | None = None,
-                  start: P2Field | None = None) -> dict[int, ApproachMap]:
+                  start: P2Field | None = None, refresh: bool = False
+                  ) -> dict[int, ApproachMap]:
     """The contact maps of every coil of ``geometry`` (cached ``contact-map-<key>.json``).
 
     The key joins the transducer key (mesh, steel, magnets) and the table nodes. Lookup as
@@ -470,7 +471,8 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     only, of their own contacts when solved; a cached table of every coil serves them too
     (then with all its contacts, as ``msens run`` reads them). ``start``: the bias of
     ``geometry`` on its plain mesh, where the layer meshes' Newton solves begin (the same
-    maps, about 1 s less per contact).
+    maps, about 1 s less per contact). ``refresh`` solves them again (and overwrites the
+    user cache's table; a committed table is never written).
 
     Returns
     -------
@@ -499,7 +501,7 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     search = [directory] if cache_dir is not None else [*committed_mesh_dirs(), directory]
     # the maps of every coil hold those of a few (same contacts, same solves)
     keys = [key] if particles is None else [key, map_key(None)]
-    for d in search:
+    for d in [] if refresh else search:
         for k in keys:
             path = d / f"contact-map-{k}.json"
             if path.is_file():

@@ -99,7 +99,7 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
     folder; otherwise the committed folders (:func:`msens.field.cache.committed_mesh_dirs`,
     where the project commits the transducers of its default studies beside their meshes),
     and new results go to :func:`msens.field.cache.default_mesh_dir` (the user cache, never
-    the committed ``meshes/``). ``refresh`` recomputes.
+    the committed ``meshes/``). ``refresh`` recomputes (with ``contact_maps`` the maps too).
     """
     force = geometry.beads.contact_load if stress_force is None else float(stress_force)
     law = law_for_steel(geometry.steel) if law is None else law
@@ -124,7 +124,8 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
                             law=law, material=material, approach=approach)
         maps = approach_maps(geometry, map_key, options=options, mesh_dir=mesh_dir,
                              cache_dir=cache_dir, particles=map_particles,
-                             start=None if report.bias is None else P2Field.of(report.bias))
+                             start=None if report.bias is None else P2Field.of(report.bias),
+                             refresh=refresh)
         return TransducerReport({p: replace(tr, approach_map=maps.get(p))
                                  for p, tr in report.transducers.items()}, report.details,
                                 bias=report.bias)

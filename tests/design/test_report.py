@@ -4,7 +4,14 @@ from __future__ import annotations
 
 import pytest
 
-from msens.design.report import METRICS, csv_text, ranked, recommend, verification
+from msens.design.report import (
+    METRICS,
+    above_verified,
+    csv_text,
+    ranked,
+    recommend,
+    verification,
+)
 from msens.design.sweep import Design, Recommend
 
 
@@ -72,3 +79,55 @@ def test_failed_verification_recommends_nothing_and_says_why():
     assert rec["design"] is None and rec["designs_failed"] == 1
     assert rec["verification"] == [{"design": 1, "status": "failed"}]
     assert "none of them evaluated" in rec["reasons"][0]
+
+
+def test_designs_above_the_best_verified_one():
+    """Screened 10, 30, 25, 5, 28: with design 1 verified at 24, designs 4 and 2 screen above
+    it (best first); with design 2 verified at 26 too, design 4; with design 4 verified at
+    22, none; with no verified design meeting the limits, every feasible one left."""
+    rule = Recommend()
+    rows = [_row(10), _row(24, maps=True), _row(25), _row(5), _row(28)]
+    assert above_verified(rows, {1}, rule) == [4, 2]
+    rows[2] = _row(26, maps=True)
+    assert above_verified(rows, {1, 2}, rule) == [4]
+    rows[4] = _row(22, maps=True)
+    assert above_verified(rows, {1, 2, 4}, rule) == []
+    rows[1] = _row(24, pre=9.0, maps=True)
+    limited = Recommend(max_precompression_n=5.0)
+    assert above_verified(rows, {1}, limited) == [2, 4, 0, 3]
+
+
+def test_auto_verification_stops_when_no_design_screens_above(tmp_path, monkeypatch):
+    """``verify = "auto"`` through :func:`msens.design.run_design` (a stand-in design
+    function: screened SNR 10, 30, 25, 5, 28; verified 24, 26 and 22 for designs 1, 2, 4):
+    design 1 first (30 → 24), then design 4 (28 → 22), then design 2 (25 → 26), and no
+    unverified design screens above 26: three verified, design 2 recommended."""
+    import msens.design.magnet_sweep as magnet_sweep
+    from msens import api
+    from msens.config.fieldsetup import geometry_from_study
+    from msens.design import run_design
+    from msens.design.sweep import design_geometry, parse_sweep, sweep_sensor
+
+    gaps = (0.1e-3, 0.5e-3, 1e-3, 2e-3, 3e-3)
+    screened, verified = (10, 30, 25, 5, 28), {1: 24, 2: 26, 4: 22}
+    calls = []
+
+    def fake(task):
+        i = geometries.index(task.geometry)
+        maps = task.study.field.contact_map
+        calls.append((i, maps))
+        return _row(verified[i] if maps else screened[i], maps=maps)
+
+    monkeypatch.setattr(magnet_sweep, "evaluate_design", fake)
+    study = api.load("tests/data/tiny-mss.toml").replace({"field.contact_map": True})
+    spec = parse_sweep('schema = "msens.sweep/1"\nname = "auto"\n[magnet]\nradial_gap_m = ['
+                       + ", ".join(map(repr, gaps)) + ']\n[model]\ncontact_map = false\n'
+                       'verify = "auto"\n')
+    base = geometry_from_study(study)
+    particle = sweep_sensor(study, spec).particle
+    geometries = [design_geometry(base, particle, d) for d in spec.designs()]
+    result = run_design(study, spec, tmp_path / "out", workers=1, progress=False)
+    assert [c for c in calls if c[1]] == [(1, True), (4, True), (2, True)]
+    rec = result.recommendation
+    assert rec["design"] == 2 and rec["verified_designs"] == [1, 4, 2]
+    assert not any("verify more" in r for r in rec["reasons"])

@@ -54,10 +54,13 @@ def test_model_verify_needs_a_screening_magnet_sweep():
     assert parse_sweep(HEAD + body + "contact_map = false\n").verify == 0
     assert parse_sweep(HEAD + body + "contact_map = false\nverify = 2\n").verify == 2
     assert parse_sweep(HEAD + body + "contact_map = false\nverify = 9\n").verify == 9  # all
+    assert parse_sweep(HEAD + body + 'contact_map = false\nverify = "auto"\n').verify == "auto"
     for extra, words in (("verify = 1\n", "contact_map = false"),
                          ("contact_map = true\nverify = 1\n", "contact_map = false"),
                          ("contact_map = false\nverify = -1\n", ">= 0"),
-                         ("contact_map = false\nverify = 1.5\n", "integer")):
+                         ("contact_map = false\nverify = 1.5\n", "integer"),
+                         ('contact_map = false\nverify = "all"\n', "'auto'"),
+                         ('verify = "auto"\n', "contact_map = false")):
         with pytest.raises(InputError, match=r"model\.verify") as info:
             parse_sweep(HEAD + body + extra)
         assert words in str(info.value)

@@ -20,8 +20,16 @@ from pathlib import Path
 from msens.config.fieldsetup import geometry_from_study
 from msens.config.study import Study
 from msens.design.cache import ResultCache, atomic_write_bytes, content_key
-from msens.design.report import csv_text, pareto_plot, ranked, recommend, verification
+from msens.design.report import (
+    above_verified,
+    csv_text,
+    pareto_plot,
+    ranked,
+    recommend,
+    verification,
+)
 from msens.design.sweep import (
+    VERIFY_AUTO,
     SweepSpec,
     base_geometry,
     design_geometry,
@@ -120,7 +128,7 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         mesh_dir = str(cache.directory / "meshes")
         if study.field.contact_map:
             _log.info("contact maps: each design solves its own for the %d contacts around "
-                      "coil %d (about 30 s each)",
+                      "coil %d (about 12 s each on a core)",
                       len(mapped_contacts(base, (sensor.particle,))), sensor.particle)
         geometries = [design_geometry(base, sensor.particle, d) for d in designs]
 
@@ -132,22 +140,29 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
                                     cache, scheduler=scheduler, workers=workers,
                                     progress=progress, description="magnet designs")
         # none to verify when no screened design meets the limits: say so from the screening
-        verified = ranked(rows, spec.recommend)[:spec.verify]
-        if verified:
-            _log.info("verifying the %d best screened designs with their own contact maps "
-                      "(%d contacts each, about 30 s per contact)", len(verified),
+        auto = spec.verify == VERIFY_AUTO
+        first = ranked(rows, spec.recommend)[:1 if auto else spec.verify]
+        if first:
+            _log.info("verifying %s with their own contact maps (%d contacts each)",
+                      "the best screened designs until none unverified screens above the "
+                      "best verified one" if auto else f"the {len(first)} best screened designs",
                       len(mapped_contacts(base, (sensor.particle,))))
             # one design at a time with its maps on the local cores where a pool may start
             # (the msens command: no core idles when fewer designs than workers remain);
             # otherwise the designs go to the workers
             local = scheduler is None and pools_allowed()
-            again, _ = run_cached(evaluate_design, tasks(own, verified), cache,
-                                  scheduler=scheduler, workers=1 if local else workers,
-                                  progress=progress, description="verified with contact maps")
-            screening = {i: rows[i] for i in verified}
-            rows = list(rows)
-            for i, r in zip(verified, again, strict=True):
-                rows[i] = r
+            screened, rows, screening = rows, list(rows), {}
+            which = first
+            while which:
+                again, _ = run_cached(evaluate_design, tasks(own, which), cache,
+                                      scheduler=scheduler, workers=1 if local else workers,
+                                      progress=progress, description="verified with contact maps")
+                for i, r in zip(which, again, strict=True):
+                    screening[i], rows[i] = screened[i], r
+                which = above_verified(rows, screening, spec.recommend)[:1] if auto else []
+                if which:
+                    _log.info("design %d screens above the best verified design: verifying it",
+                              designs[which[0]].index)
     _log.info("writing %s", ", ".join(files(fig_format)))
     return write_results(spec, designs, rows, target, computed=computed,
                          provenance=provenance, fig_format=fig_format, screening=screening)

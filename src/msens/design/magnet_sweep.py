@@ -8,16 +8,18 @@ inductance, the magnets' pull on the beads), the study's wave with that pull
 :mod:`msens.design.metrics` — the same chain of functions as ``msens run``.
 With contact maps (``[field] contact_map``) each design solves the maps of the swept coil's
 contacts in its own bias field (:func:`msens.magnetics.contact_map.approach_maps`, about
-30 s per contact, cached as ``msens run`` caches them): a magnet changes their shape. With eddy
+12 s per contact on a core, cached as ``msens run`` caches them): a magnet changes their
+shape. With eddy
 currents each design also gets its own eddy-current model
 (:func:`msens.magnetics.dynamic.dynamic_report` with the run's mesh options and conductivity,
 cached beside the meshes) and its row is the frequency-domain read-out of
 :func:`msens.design.metrics.dynamic_design_rows`.
 
-Own maps cost a few minutes per design, so a sweep may screen without them (``[model]
-contact_map = false``, the linear contact sources) and evaluate only its best designs
-again with them (``[model] verify``, :func:`msens.design.run_design`): the recommendation is
-then made among the verified designs.
+Own maps cost about a minute per design, several times the rest, so a sweep may screen
+without them (``[model] contact_map = false``, the linear contact sources) and evaluate
+only its best designs again with them (``[model] verify``, a number or ``"auto"``,
+:func:`msens.design.run_design`): the recommendation is then made among the verified
+designs.
 
 Model size: by default the study's whole field model (every MsS sensor: the other sensor's
 magnet changes the forces near this one; every bead), as ``msens run``. ``[model]

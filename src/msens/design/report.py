@@ -12,7 +12,7 @@ from __future__ import annotations
 import csv
 import io
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -94,6 +94,17 @@ def ranked(rows: Sequence[dict], rule: Recommend) -> list[int]:
     return sorted(feasible, key=lambda i: -abs(rows[i][rule.objective]))  # stable: ties in order
 
 
+def above_verified(rows: Sequence[dict], verified: Collection[int],
+                   rule: Recommend) -> list[int]:
+    """Designs meeting the limits, not among ``verified`` (positions), whose screened
+    |objective| exceeds the best verified design's (every one, if no verified design meets
+    the limits), best first: the designs that could still beat the recommendation."""
+    order = ranked(rows, rule)
+    best = next((i for i in order if i in verified), None)
+    target = -math.inf if best is None else abs(rows[best][rule.objective])
+    return [i for i in order if i not in verified and abs(rows[i][rule.objective]) > target]
+
+
 def recommend(designs: Sequence[Design], rows: Sequence[dict], rule: Recommend,
               among: Sequence[int] | None = None) -> dict:
     """The best design by ``rule`` and why (``{"design": None, ...}`` if none qualifies).
@@ -159,11 +170,8 @@ def verification(rec: dict, designs: Sequence[Design], rows: Sequence[dict],
            if changes else "none of them evaluated")
     reasons.insert(0, f"recommended among the {len(screening)} best screened designs, "
                       f"evaluated again with their own contact maps ({off})")
-    best = rec.get("design")
-    if best is not None:
-        target = abs(rows[[d.index for d in designs].index(best)][rule.objective])
-        above = [i for i in ranked(rows, rule) if i not in screening
-                 and abs(rows[i][rule.objective]) > target]
+    if rec.get("design") is not None:
+        above = above_verified(rows, screening, rule)
         if above:
             reasons.insert(1, f"{len(above)} unverified design(s) screen above the "
                               f"recommended design's verified {rule.objective} (first: "

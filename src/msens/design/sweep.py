@@ -20,7 +20,8 @@ one varying fastest)::
     bead_padding = 4             # magnet sweeps: a smaller per-design field model
     contact_map = false          # overrides the study's [field] contact_map (screening)
     verify = 3                   # magnet sweeps screened without maps: the 3 best again
-                                 # with the study's maps, recommended among them
+                                 # with the study's maps, recommended among them ("auto":
+                                 # until no unverified design screens above the best)
     [recommend]
     objective = "snr"            # or "peak_emf_V"
     min_bandwidth_Hz = 50e3
@@ -75,6 +76,8 @@ MAGNET_PARAMETERS: dict[str, tuple[str, float, float]] = {
 }
 #: Most designs a sweep may hold (a guard against typos such as num = 1e6).
 MAX_DESIGNS = 200_000
+#: ``[model] verify = "auto"``: verify until no unverified design screens above the best.
+VERIFY_AUTO = "auto"
 OBJECTIVES = ("snr", "peak_voltage_V", "peak_emf_V", "bandwidth_Hz")
 
 
@@ -124,11 +127,13 @@ class SweepSpec:
         ``[model] contact_map``: the nonlinear contact maps on or off for this sweep; None
         (default): the study's ``[field] contact_map``. Off, a magnet design is a few times
         faster (no maps to solve in its bias field), for screening.
-    verify : int
+    verify : int or "auto"
         ``[model] verify``: in a magnet sweep screened without the maps (``contact_map =
         false``) of a study that has them, the number of best screened designs evaluated
         again with the study's maps (each solving its own); the recommendation is made
         among them. 0 (default): none; more than the sweep's designs: all of them.
+        ``"auto"`` (:data:`VERIFY_AUTO`): the best screened designs one at a time, until
+        no unverified design screens above the best verified one.
     recommend : Recommend
     """
 
@@ -138,7 +143,7 @@ class SweepSpec:
     axes: tuple[tuple[str, tuple[Any, ...]], ...]
     bead_padding: int | None = None
     contact_map: bool | None = None
-    verify: int = 0
+    verify: int | str = 0
     recommend: Recommend = Recommend()
 
     @property
@@ -205,7 +210,10 @@ def parse_sweep(text: str, *, source: str = "<memory>") -> SweepSpec:
             padding = model.integer("bead_padding", low=1, high=30)
         if model.raw("contact_map") is not None:
             contact_map = model.boolean("contact_map", False)
-        verify = model.integer("verify", 0, low=0, high=MAX_DESIGNS)  # > count: every one
+        if isinstance(model.raw("verify"), str):
+            verify = model.string("verify", choices=(VERIFY_AUTO,))
+        else:
+            verify = model.integer("verify", 0, low=0, high=MAX_DESIGNS)  # > count: every one
         if verify and contact_map is not False:
             raise model.error("verify", "re-evaluates designs screened without the contact "
                                         "maps: it needs contact_map = false in [model]")
@@ -377,6 +385,6 @@ def validate_designs(base: SensorGeometry, particle: int, designs: list[Design],
                 from None
 
 
-__all__ = ["COIL_PARAMETERS", "MAGNET_PARAMETERS", "SCHEMA", "Design", "Recommend",
-           "SweepSpec", "base_geometry", "design_geometry", "design_unit", "load_sweep",
-           "parse_sweep", "sweep_sensor", "validate_designs"]
+__all__ = ["COIL_PARAMETERS", "MAGNET_PARAMETERS", "SCHEMA", "VERIFY_AUTO", "Design",
+           "Recommend", "SweepSpec", "base_geometry", "design_geometry", "design_unit",
+           "load_sweep", "parse_sweep", "sweep_sensor", "validate_designs"]

@@ -465,9 +465,9 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     :func:`msens.magnetics.transducer_cache.transducer_report`: with ``cache_dir`` only there;
     otherwise the committed folders, then the user cache, where new maps are written. Cold:
     one layer mesh and 18 nonlinear solves per contact of :func:`mapped_contacts` (about
-    30 s each on the default geometry), the contacts spread over ``workers`` local processes
-    (:func:`msens.parallel.run_tasks`; default: one per CPU under the ``msens`` command,
-    else one, :func:`msens.parallel.pools_allowed`). ``particles``: the maps of those coils
+    12 s each on a core for the default geometry), the contacts spread over ``workers`` local
+    processes (:func:`msens.parallel.run_tasks`; default: one per CPU under the ``msens``
+    command, else one, :func:`msens.parallel.pools_allowed`). ``particles``: the maps of those coils
     only, of their own contacts when solved; a cached table of every coil serves them too
     (then with all its contacts, as ``msens run`` reads them). ``start``: the bias of
     ``geometry`` on its plain mesh, where the layer meshes' Newton solves begin (the same

@@ -31,7 +31,7 @@ sources, the study's maps carried over
 peak DAQ voltage, and each map's shape misfit against the study's.
 
 Run: ``python benchmarks/contact_map_transfer.py [--moved] [--remanence] [--magnet]``
-(seconds: the maps are committed; each option about half a minute per contact and case).
+(seconds: the maps are committed; each option about 12 s per contact and case).
 """
 
 from __future__ import annotations

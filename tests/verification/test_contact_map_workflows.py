@@ -183,3 +183,11 @@ def test_magnet_design_solves_its_own_maps_and_equals_msens_run(tmp_path, monkey
     assert entry["verified_snr"] == pytest.approx(float(both[0]["snr"]), rel=1e-9)
     assert abs(entry["objective_change"]) > 1e-3  # the maps change the screened figure
     assert "own contact maps" in rec["reasons"][0]
+    # verify = "auto": ceramic 8 first; N38 screens below its verified SNR, so it stops there
+    (tmp_path / "auto").mkdir()
+    with allow_pools():
+        auto = _design(study, tmp_path / "auto", '[magnet]\ngrade = ["ceramic8", "N38"]\n'
+                       '[model]\ncontact_map = false\nverify = "auto"\n')
+    assert auto == both
+    rec_auto = json.loads((tmp_path / "auto" / "out" / "recommendation.json").read_text())
+    assert rec_auto["verified_designs"] == [0] and rec_auto["design"] == 0

@@ -20,7 +20,8 @@ def p2_probes(basis, r: np.ndarray, z: np.ndarray, *, outside_zero: bool = False
     functions in barycentric coordinates λ: λ_i(2λ_i − 1) at the vertices, 4 λ_i λ_j on the
     edges (0,1), (1,2), (0,2) — scikit-fem's local dof order for ElementTriP2 (checked against
     ``basis.probes`` in the tests). Points outside the mesh are an error, or with
-    ``outside_zero`` rows of zeros.
+    ``outside_zero`` rows of zeros. ``basis``: a scikit-fem P2 basis, or a :class:`P2Field`
+    (what is read of it: ``mesh``, ``element_dofs``, ``N``).
     """
     mesh = basis.mesh
     tri = mtri.Triangulation(mesh.p[0], mesh.p[1], mesh.t.T)
@@ -71,10 +72,9 @@ class P2Field:
         """Number of dofs."""
         return int(self.a.size)
 
-    @property
-    def basis(self) -> P2Field:
-        """Itself: it answers :func:`p2_probes`' questions to a basis."""
-        return self
+    def at(self, r: np.ndarray, z: np.ndarray, *, outside_zero: bool = False) -> np.ndarray:
+        """The field at points (m, shape (n,) each), shape (n,) (:func:`p2_probes`)."""
+        return p2_probes(self, r, z, outside_zero=outside_zero) @ self.a
 
 
 __all__ = ["P2Field", "p2_probes"]

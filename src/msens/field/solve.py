@@ -42,7 +42,7 @@ from msens.field.forms import (
 )
 from msens.field.linsolve import factorize
 from msens.field.mesh import AxiMesh, axis_facets
-from msens.field.probes import P2Field, p2_probes
+from msens.field.probes import P2Field
 from msens.field.regions import PermanentMagnet, Region, Winding
 
 
@@ -277,7 +277,8 @@ def solve(problem: MagnetostaticProblem, *, tol: float = 1e-8, max_iter: int = 1
     if start is not None:
         require(initial is None, "give initial or start, not both")
         x = d.basis.doflocs
-        initial = p2_probes(start.basis, x[0], x[1], outside_zero=True) @ start.a
+        field = start if isinstance(start, P2Field) else P2Field.of(start)
+        initial = field.at(x[0], x[1], outside_zero=True)
         initial[d.fixed] = d.fixed_values
     if initial is None:
         a, res = _solve_linear(d, nu0, load, lift)

@@ -102,10 +102,9 @@ def test_auto_verification_stops_when_no_design_screens_above(tmp_path, monkeypa
     function: screened SNR 10, 30, 25, 5, 28; verified 24, 26 and 22 for designs 1, 2, 4):
     design 1 first (30 → 24), then design 4 (28 → 22), then design 2 (25 → 26), and no
     unverified design screens above 26: three verified, design 2 recommended."""
-    import msens.design.magnet_sweep as magnet_sweep
     from msens import api
     from msens.config.fieldsetup import geometry_from_study
-    from msens.design import run_design
+    from msens.design import magnet_sweep, run_design
     from msens.design.sweep import design_geometry, parse_sweep, sweep_sensor
 
     gaps = (0.1e-3, 0.5e-3, 1e-3, 2e-3, 3e-3)

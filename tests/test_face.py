@@ -94,3 +94,46 @@ def test_run_the_default_study_from_the_face():
     assert result.study.name == msens.load_default().name
     rows = result.rows()
     assert rows and all(r["tof_us"] > 0 for r in rows)
+
+
+def _packages() -> list[str]:
+    """Every public (sub)package of msens, by dotted name."""
+    src = ROOT / "src"
+    return sorted(".".join(p.parent.relative_to(src).parts)
+                  for p in (src / "msens").rglob("__init__.py")
+                  if not any(part.startswith("_") for part in p.parent.relative_to(src).parts))
+
+
+def test_the_package_list_is_complete():
+    assert {"msens.chain", "msens.config", "msens.design", "msens.diagnose", "msens.field",
+            "msens.io", "msens.magnetics", "msens.mechanics", "msens.params", "msens.readout",
+            "msens.signals"} <= set(_packages())
+
+
+@pytest.mark.parametrize("package", _packages())
+def test_every_public_package_lists_its_api(package):
+    """``__all__`` exists, every name in it resolves, and none is also the name of a
+    submodule (importing that submodule would replace the name on the package)."""
+    module = importlib.import_module(package)
+    assert isinstance(getattr(module, "__all__", None), list | tuple), f"{package}: no __all__"
+    assert len(module.__all__) == len(set(module.__all__))
+    missing = [n for n in module.__all__ if not hasattr(module, n)]
+    assert not missing, f"{package}.__all__ names what it does not define: {missing}"
+    folder = Path(module.__file__).parent
+    submodules = {p.stem for p in folder.glob("*.py")} | {p.parent.name
+                                                           for p in folder.glob("*/__init__.py")}
+    shadowed = msens._SHADOWED if package == "msens" else frozenset()  # the face's own rule
+    clash = sorted(n for n in set(module.__all__) & submodules - shadowed
+                   if getattr(module, n) is not importlib.import_module(f"{package}.{n}"))
+    assert not clash, f"{package}.__all__ names that are also submodules: {clash}"
+    namespace: dict = {}
+    exec(f"from {package} import *", namespace)  # the star import a user may write
+    assert set(module.__all__) <= set(namespace)
+
+
+def test_a_light_module_does_not_load_its_heavy_siblings():
+    """``msens.mechanics.hertz`` (needed by the chain) without scikit-fem."""
+    code = "import sys, msens.mechanics.hertz; print('skfem' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=60)
+    assert out.stdout.strip() == "False"

@@ -41,7 +41,15 @@ class MssModel(enum.Enum):
 
 @dataclass(frozen=True)
 class WallSpec:
-    """The half-space the chain stands on. Moduli in Pa."""
+    """The half-space the chain stands on (``[chain.wall]``).
+
+    Attributes
+    ----------
+    youngs_modulus_pa : float
+        Young's modulus of the wall, Pa (the paper gives no wall material: steel assumed).
+    poisson_ratio : float
+        Poisson's ratio of the wall. Unit: 1.
+    """
 
     youngs_modulus_pa: float = 200e9
     poisson_ratio: float = 0.29
@@ -55,19 +63,31 @@ class ChainSpec:
     ----------
     beads : int
         Number of beads below the striker (the paper: 29); particles are numbered
-        1 (striker) to ``beads + 1`` (on the wall).
+        1 (striker) to ``beads + 1`` (on the wall). Unit: count.
     bead_diameter_m, bead_mass_kg : float
-        Bead diameter (m) and mass (kg); the striker is an identical bead.
-    youngs_modulus_pa, poisson_ratio : float
-        Bead elastic constants.
+        Bead diameter (m) and mass (kg); the striker is an identical bead. Mass and
+        diameter must give a density of a solid (100–30,000 kg/m³).
+    material : str
+        Name of the bead material, for reports (the elastic constants are the keys below).
+    youngs_modulus_pa : float
+        Young's modulus of the beads, Pa.
+    poisson_ratio : float
+        Poisson's ratio of the beads. Unit: 1.
     gravity_m_per_s2 : float
-        Acceleration of gravity along the chain, toward the wall.
+        Acceleration of gravity along the chain, toward the wall, m/s² (TOML key
+        ``gravity``; 0 for a horizontal chain).
     damping : Damping
-        Dissipation law in the contacts.
+        Dissipation law in the contacts: ``"linear"`` (the paper's Eq. 6 dashpot, acting
+        both ways), ``"linear-loading"`` (the dashpot acts only while a contact is being
+        compressed: with it the paper's γc = 4.8 kg/s reproduces its Table 2) or
+        ``"hertz-kuwabara-kono"``.
     gamma_contact, gamma_wall : float
-        Damping coefficients: kg/s for the linear law, kg/(s m^0.5) for
-        Hertz–Kuwabara–Kono.
+        Damping coefficients of the bead–bead and bead–wall contacts: ``gamma_contact_kg_per_s``
+        and ``gamma_wall_kg_per_s`` (kg/s) for the linear laws, ``hkk_contact_kg_per_s_sqrt_m``
+        and ``hkk_wall_kg_per_s_sqrt_m`` (kg/(s m^0.5)) for Hertz–Kuwabara–Kono. A dashpot
+        time m/(2γ) below 0.1 µs is refused (the chain would carry no wave).
     wall : WallSpec
+        The ``[chain.wall]`` table.
     """
 
     beads: int = N_PARTICLES - 1
@@ -90,7 +110,26 @@ class ChainSpec:
 
 @dataclass(frozen=True)
 class InsertSpec:
-    """A cylinder (piezo rod) that replaces the bead at ``particle``."""
+    """A cylinder (piezo rod) that replaces the bead at ``particle`` (``[[chain.insert]]``).
+
+    Defaults are the paper's rod (Piezo Kinetics, 0.8144 g, 6 mm long).
+
+    Attributes
+    ----------
+    particle : int
+        Particle the rod replaces, from 2 to the last (1 is the striker); two rods may not
+        touch and the last particle must be a bead. Unit: particle number.
+    kind : str
+        ``"rod"``, the only insert the chain model has.
+    mass_kg : float
+        Mass of the rod, kg.
+    youngs_modulus_pa : float
+        Young's modulus of the rod, Pa.
+    poisson_ratio : float
+        Poisson's ratio of the rod. Unit: 1.
+    length_m : float
+        Length of the rod along the chain, m.
+    """
 
     particle: int
     kind: str = "rod"
@@ -106,6 +145,15 @@ class PrecompressionSpec:
 
     Contact c_i joins particles i and i+1 (1-based). The compression is applied as a pair of
     equal and opposite static forces on particles ``first`` and ``last + 1``.
+
+    Attributes
+    ----------
+    first, last : int
+        First and last contact compressed, the TOML key ``contacts`` = ``[first, last]`` with
+        1 <= first <= last <= the number of contacts. Unit: contact number.
+    force_n : float
+        Static compression added to each of those contacts, N; its peak Hertz pressure must
+        stay below 10 GPa (steels yield above).
     """
 
     first: int
@@ -115,7 +163,28 @@ class PrecompressionSpec:
 
 @dataclass(frozen=True)
 class CoilSpec:
-    """Receiver coil wound around the tube, centred on its sensor's particle."""
+    """Receiver coil wound around the tube, centred on its sensor's particle (``[sensor.coil]``).
+
+    Defaults are the paper's coil: 1100 turns of AWG36, 7 mm long, on a former of 12.7 mm
+    inner diameter and 1.6 mm wall.
+
+    Attributes
+    ----------
+    turns : int
+        Number of turns. Unit: count.
+    length_m : float
+        Winding length along the tube, m.
+    inner_radius_m : float
+        Inner radius of the winding (the former's outer radius), m.
+    wire : str
+        Wire gauge, ``"AWG10"`` to ``"AWG50"``.
+    axial_offset_m : float
+        Shift of the coil's centre from its particle's centre, m (+ = up, toward the
+        striker), within half a bead diameter.
+    packing_factor : float or None
+        Fraction of the winding cross-section filled by copper and enamel; none means square
+        packing (π/4). At most π/(2√3) = 0.907 (orthocyclic). Unit: 1.
+    """
 
     turns: int = 1100
     length_m: float = 7e-3
@@ -127,9 +196,31 @@ class CoilSpec:
 
 @dataclass(frozen=True)
 class MagnetSpec:
-    """Bias magnet: an axially magnetised ring with two steel pole pieces.
+    """Bias magnet: an axially magnetised ring with two steel pole pieces (``[sensor.magnet]``).
 
-    Dimensions left as ``None`` take the field model's documented defaults.
+    The paper's bridge magnet is undocumented: this is its axisymmetric *equivalent*.
+    Dimensions left as ``None`` take the field model's documented defaults
+    (:class:`msens.field.parts.MagnetAssembly`: ring 12.5/20 mm radii, 16 mm long, pole pieces
+    6.5/20 mm radii, 3 mm thick, pole centres 19 mm apart).
+
+    Attributes
+    ----------
+    enabled : bool
+        Whether the coil has a bias magnet (false: the coil reads the beads unbiased).
+    grade : str or None
+        Magnet grade, ``"ceramic8"`` (default, B_r 0.39 T), ``"N38"`` or ``"N42"``; or give
+        ``remanence_T`` and ``recoil_permeability`` instead.
+    remanence_t : float or None
+        Remanence B_r of the ring magnet, T (TOML key ``remanence_T``).
+    recoil_permeability : float or None
+        Relative recoil permeability μ_rec of the magnet, given with ``remanence_T``. Unit: 1.
+    inner_radius_m, outer_radius_m, length_m : float or None
+        Ring magnet's inner and outer radius and axial length, m.
+    pole_inner_radius_m, pole_outer_radius_m, pole_thickness_m : float or None
+        The two annular AISI 1018 pole pieces' inner and outer radius and thickness, m.
+    axial_offset_m : float
+        Shift of the assembly's centre from its particle's centre, m (+ = up), within half a
+        bead diameter.
     """
 
     enabled: bool = True
@@ -147,7 +238,25 @@ class MagnetSpec:
 
 @dataclass(frozen=True)
 class SensorSpec:
-    """One sensor at ``particle`` (1-based, striker = 1)."""
+    """One sensor at ``particle`` (1-based, striker = 1): a ``[[sensor]]`` table.
+
+    Attributes
+    ----------
+    kind : SensorKind
+        ``"bead"`` (an instrumented bead: the mean of its two contact forces), ``"rod"`` (a
+        piezo rod, which needs an ``[[chain.insert]]`` at its particle) or ``"mss"`` (a
+        magnetostrictive sensor: coil and bias magnet around the tube).
+    particle : int
+        The sensor's particle, 1-based counting the striker as 1 (the paper's numbering);
+        from 2 (3 for an MsS) to the last, one sensor per particle. Unit: particle number.
+    model : MssModel or None
+        For an MsS: ``"physics"`` (field model, both mechanisms, read-out circuit: volts) or
+        ``"four-contact"`` (the paper's hypothesis: the mean of four contact forces).
+    coil : CoilSpec or None
+        The MsS's ``[sensor.coil]`` table.
+    magnet : MagnetSpec or None
+        The MsS's ``[sensor.magnet]`` table.
+    """
 
     kind: SensorKind
     particle: int
@@ -158,7 +267,17 @@ class SensorSpec:
 
 @dataclass(frozen=True)
 class SetupSpec:
-    """One experimental configuration of the chain."""
+    """One experimental configuration of the chain (a ``[[setup]]`` table).
+
+    Attributes
+    ----------
+    name : str
+        The setup's name, unique in the study (used by ``--setup`` and in the results).
+    sensors, inserts, precompression : tuple
+        Its ``[[setup.sensor]]``, ``[[setup.insert]]`` and ``[[setup.precompression]]``
+        tables, with the keys of ``[[sensor]]``, ``[[chain.insert]]`` and
+        ``[[precompression]]``.
+    """
 
     name: str
     sensors: tuple[SensorSpec, ...]
@@ -168,7 +287,15 @@ class SetupSpec:
 
 @dataclass(frozen=True)
 class StrikerSpec:
-    """Striker impact: a drop height (m) or a velocity (m/s)."""
+    """Striker impact: a drop height (m) or a velocity (m/s); give exactly one.
+
+    Attributes
+    ----------
+    velocity_m_per_s : float
+        Striker speed at impact, m/s (given, or √(2 g h) from the drop height).
+    drop_height_m : float or None
+        Free-fall height of the striker (a bead identical to the chain's) above bead 2, m.
+    """
 
     velocity_m_per_s: float
     drop_height_m: float | None = None
@@ -176,7 +303,19 @@ class StrikerSpec:
 
 @dataclass(frozen=True)
 class SimulationSpec:
-    """Time span (s), output sampling (Hz) and optional fixed step (s) of the chain run."""
+    """Time span (s), output sampling (Hz) and optional fixed step (s) of the chain run.
+
+    Attributes
+    ----------
+    t_end_s : float
+        Simulated time after the striker's impact, s; at least 100 output samples and at
+        most 5e7.
+    sample_rate_hz : float
+        Output sampling rate of the chain records (forces, approaches), Hz.
+    dt_s : float or None
+        Fixed integration step, s; none means the compiled integrator's adaptive default
+        (8th-order, about t_c/20 of the contact time).
+    """
 
     t_end_s: float = 1e-3
     sample_rate_hz: float = 10e6
@@ -190,7 +329,8 @@ class FieldSpec:
     Attributes
     ----------
     beads : (int, int) or None
-        First and last particle in the field model (default: the whole chain).
+        First and last particle in the field model, ``[first, last]`` with 2 <= first <=
+        last <= the last particle (default: the whole chain). Unit: particle number.
     contact_load_n : float or None
         Static load that sets the Hertz contact-flat radius, N.
     min_flat_radius_m, contact_gap_m : float or None
@@ -198,10 +338,11 @@ class FieldSpec:
     air_radius_m, air_margin_m : float or None
         Truncation of open space, m.
     steel_bh : BHCurve or None
-        User B–H table of the beads and pole pieces (``steel_bh`` = [[B_T, H_A_per_m], ...]);
+        User B–H table of the beads and pole pieces (``steel_bh`` = [[B_T, H_A_per_m], ...],
+        starting at [0, 0], both columns strictly increasing, B below 5 T);
         None means the field model's default, AISI 1018 (FEMM library). The beads'
         magnetoelastic (JAS) anhysteretic is fitted to the same table
-        (:func:`msens.magnetics.steel_law.law_for_steel`).
+        (:func:`msens.magnetics.steel_law.law_for_steel`). Unit: T, A/m.
     eddy_currents : bool
         Physics MsS with eddy currents in the conducting beads and pole pieces: frequency
         dependent sensitivities and coil impedance (:mod:`msens.magnetics.dynamic`) instead
@@ -215,7 +356,8 @@ class FieldSpec:
         reversible part c (``reversibility``; :class:`msens.field.regions.NonlinearSoft`).
     reversibility : float or None
         c in (0, 1) with ``"reversible"``; None means
-        :data:`msens.params.materials.STEEL_REVERSIBILITY`.
+        :data:`msens.params.materials.STEEL_REVERSIBILITY` (0.1, an estimate quoted for
+        steels). Unit: 1.
     skin_size_m : float or None
         Element size at the surfaces of the beads near a coil for the eddy-current model, m;
         None means :data:`msens.field.eddy.SKIN_SIZE`.
@@ -251,7 +393,18 @@ class FieldSpec:
 
 @dataclass(frozen=True)
 class DissipationFitSpec:
-    """Fit γc, γw ≥ 0 to measured amplitude ratios (paper Eq. 10) on ``setup``."""
+    """Fit γc, γw ≥ 0 to measured amplitude ratios (paper Eq. 10) on ``setup``.
+
+    The ``[calibration.dissipation]`` table.
+
+    Attributes
+    ----------
+    setup : str
+        The two-sensor setup whose measured amplitude ratios are fitted.
+    ar_top, ar_bottom : float
+        Measured amplitude ratio (reflected over incident peak) at the top and the bottom
+        sensor. Unit: 1.
+    """
 
     setup: str
     ar_top: float
@@ -260,7 +413,26 @@ class DissipationFitSpec:
 
 @dataclass(frozen=True)
 class ReferenceRow:
-    """A published row to compare with (e.g. paper Table 2): experiment and its model."""
+    """A published row to compare with (e.g. paper Table 2): experiment and its model.
+
+    A ``[[reference.row]]`` table.
+
+    Attributes
+    ----------
+    setup : str
+        The setup the row belongs to.
+    position : str
+        ``"top"`` or ``"bottom"`` sensor of that setup.
+    tof_us, tof_std_us : float
+        Measured time of flight between incident and reflected pulse and its standard
+        deviation, µs.
+    ar, ar_std : float
+        Measured amplitude ratio and its standard deviation. Unit: 1.
+    model_tof_us : float or None
+        The publication's own model TOF, µs.
+    model_ar : float or None
+        The publication's own model AR. Unit: 1.
+    """
 
     setup: str
     position: str

@@ -55,7 +55,28 @@ from msens.readout.electronics import ElectronicsSpec
 
 @dataclass(frozen=True)
 class Study:
-    """A validated study."""
+    """A validated study.
+
+    Attributes
+    ----------
+    name : str
+        The study's name (names its output folder and, in a plain study, its one setup).
+    chain, striker, setups, simulation, electronics, field : records
+        The ``[chain]``, ``[striker]``, ``[[sensor]]``/``[[setup]]``, ``[simulation]``,
+        ``[electronics]`` and ``[field]`` tables (:mod:`msens.config.schema`).
+    dissipation_fit : DissipationFitSpec or None
+        The ``[calibration.dissipation]`` table.
+    reference : tuple of ReferenceRow
+        The ``[[reference.row]]`` tables.
+    measurement_file : Path or None
+        A measured waveform file of this study, the ``file`` key of ``[measurement]``
+        (relative to the study file; it must exist).
+    source : str
+        Where the study was read from (file name, or the file and the replaced keys).
+    schema : str
+        The file's format, ``"msens.study/1"`` (the TOML key ``schema``, required; not a
+        field of the record).
+    """
 
     name: str
     chain: ChainSpec

@@ -46,6 +46,30 @@ class ElectronicsSpec:
     Capacitances in F, resistance in Ohm, rate in Hz. Defaults: 1 m of RG-58 coaxial cable
     into a 1 MOhm || 20 pF DAQ input sampled at the paper's 10 MHz; noise off unless asked
     for. :func:`msens.magnetics.mss.readout` maps them onto a :class:`ReadoutCircuit`.
+
+    Attributes
+    ----------
+    cable_capacitance_f : float
+        Lumped capacitance of the cable at the DAQ end, F (RG-58: about 100 pF per metre).
+    input_resistance_ohm : float
+        DAQ input resistance, Ω.
+    input_capacitance_f : float
+        DAQ input capacitance, F.
+    sample_rate_hz : float
+        DAQ sampling rate of the coil's voltage, Hz.
+    johnson_noise : bool
+        Add the coil's thermal (Johnson) noise, 4kT Re Z per hertz.
+    temperature_k : float
+        Temperature of the coil for its thermal noise, K.
+    adc_bits : int or None
+        Resolution of the DAQ's converter, given with ``adc_range_V`` (0 or absent: no
+        quantisation). Unit: bits.
+    adc_range_v : float or None
+        Full-scale range of the DAQ's converter, V (given with ``adc_bits``).
+    input_noise_v_per_rthz : float
+        White voltage noise density of the DAQ input, V/√Hz.
+    seed : int
+        Seed of the noise generator, so that a noisy record is reproducible. Unit: 1.
     """
 
     cable_capacitance_f: float = RG58_CAPACITANCE_PER_M * 1.0

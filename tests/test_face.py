@@ -137,3 +137,19 @@ def test_a_light_module_does_not_load_its_heavy_siblings():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=60)
     assert out.stdout.strip() == "False"
+
+
+def test_python_dash_m_msens_is_the_command():
+    """``python -m msens`` runs the ``msens`` command: its help, its version, its exit codes."""
+    def run(*args):
+        return subprocess.run([sys.executable, "-m", "msens", *args], capture_output=True,
+                              text=True, timeout=120)
+
+    out = run("--help")
+    assert out.returncode == 0 and out.stdout.startswith("usage: msens")
+    assert "compare" in out.stdout and "diagnose" in out.stdout
+    out = run("--version")
+    assert out.returncode == 0 and version("msens") in out.stdout
+    out = run("run", "no-such-study.toml")
+    assert out.returncode == 2 and "no-such-study.toml" in out.stderr
+    assert "Traceback" not in out.stderr

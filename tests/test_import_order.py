@@ -20,7 +20,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "msens"
 #: Stage of every top-level unit, lowest first.
 STAGES = {
     0: ("errors", "version", "parallel", "meshing", "_lazy"),
-    1: ("params", "io"),
+    1: ("params", "io", "store"),
     2: ("mechanics", "readout", "signals"),
     3: ("chain", "field"),
     4: ("calibrate",),

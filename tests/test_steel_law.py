@@ -12,6 +12,7 @@ from msens.field.geometry import SensorGeometry
 from msens.magnetics.magnetoelastic import DEFAULT_STEEL, flux_density
 from msens.magnetics.steel_law import fit_anhysteretic, law_for_steel
 from msens.params.materials import STEEL_1018_BH, BHCurve
+from msens.store import Store
 
 #: A softer steel: the 1018 table with B scaled by 0.85 at the same H.
 SOFT = BHCurve(name="soft", b=0.85 * STEEL_1018_BH.b, h=STEEL_1018_BH.h.copy(), source="test")
@@ -63,5 +64,6 @@ def test_transducers_use_the_geometrys_steel(monkeypatch, tmp_path):
     monkeypatch.setattr(transducer_cache, "compute_transducers", fake_compute)
     for steel, expected in ((STEEL_1018_BH, DEFAULT_STEEL), (SOFT, law_for_steel(SOFT))):
         with pytest.raises(Stop):
-            transducer_cache.transducer_report(SensorGeometry(steel=steel), cache_dir=tmp_path)
+            transducer_cache.transducer_report(SensorGeometry(steel=steel),
+                                               store=Store.at(tmp_path))
         assert seen[-1] is expected

@@ -15,6 +15,7 @@ from msens.field.geometry import AirBox, BeadChain, SensorGeometry, hertz_flat_r
 from msens.field.mesh import read_gmsh
 from msens.field.parts import WIRES, BiasMagnet, Coil, SensorUnit
 from msens.params.materials import BEAD_STEEL
+from msens.store import Store
 
 
 def small_geometry(**beads) -> SensorGeometry:
@@ -120,13 +121,14 @@ def test_cache_reuses_and_regenerates(tmp_path):
     g = small_geometry()
     assert geometry_key(g) == geometry_key(small_geometry())
     assert geometry_key(g) != geometry_key(g, MeshOptions(bead_size=0.3e-3))
-    path = cached_mesh(g, directory=tmp_path)
+    store = Store.at(tmp_path)
+    path = cached_mesh(g, store=store)
     stamp = path.stat().st_mtime_ns
-    assert cached_mesh(small_geometry(), directory=tmp_path) == path
+    assert cached_mesh(small_geometry(), store=store) == path
     assert path.stat().st_mtime_ns == stamp  # reused, not rebuilt
     c = g.sensors[0].coil
     g2 = replace(g, sensors=(SensorUnit(replace(c, turns=1000), g.sensors[0].magnet),))
-    path2 = cached_mesh(g2, directory=tmp_path)
+    path2 = cached_mesh(g2, store=store)
     assert path2 != path and path2.is_file() and path2.with_suffix(".json").is_file()
     leftovers = [q for q in tmp_path.iterdir() if q.name.startswith(".")]
     assert leftovers == []

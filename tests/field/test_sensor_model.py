@@ -15,6 +15,7 @@ from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.field.regions import Winding
 from msens.field_outputs import write_field_outputs
 from msens.params.units import MU0, RHO_COPPER
+from msens.store import Store
 
 
 def one_sensor(**beads) -> SensorGeometry:
@@ -31,7 +32,7 @@ def mesh_dir(tmp_path_factory):
 @pytest.fixture(scope="module")
 def small(mesh_dir):
     g = one_sensor()
-    axi, _ = sm.load_mesh(g, mesh_dir=mesh_dir)
+    axi, _ = sm.load_mesh(g, store=Store.at(mesh_dir))
     return g, sm.solve(sm.bias_problem(g, axi))
 
 
@@ -39,7 +40,7 @@ def small(mesh_dir):
 def symmetric_report(mesh_dir):
     """Both paper sensors, beads 3..28: mirror-symmetric about the contact 15-16."""
     return sm.run_field_model(SensorGeometry(beads=BeadChain(first=3, last=28)),
-                              mesh_dir=mesh_dir)
+                              store=Store.at(mesh_dir))
 
 
 def test_coil_resistance_from_the_wire():
@@ -120,7 +121,7 @@ def test_contact_force_flat_term_is_small_but_counted(small):
 
 def test_virtual_work_agrees_with_eggshell_in_a_gapped_model(mesh_dir):
     g = one_sensor(contact_gap=2e-6)
-    axi, _ = sm.load_mesh(g, mesh_dir=mesh_dir)
+    axi, _ = sm.load_mesh(g, store=Store.at(mesh_dir))
     sol = sm.solve(sm.bias_problem(g, axi))
     group = [f"bead_{p}" for p in range(10, 13)]
     egg = sm.group_force(sol, group, layers=0)

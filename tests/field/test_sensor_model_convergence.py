@@ -14,6 +14,7 @@ import pytest
 from msens.field import sensor_model as sm
 from msens.field.build import MeshOptions
 from msens.field.geometry import AirBox, SensorGeometry
+from msens.store import Store
 
 pytestmark = pytest.mark.slow
 
@@ -21,7 +22,7 @@ CONTACTS = [(p, p + 1) for p in range(11, 20)]
 
 
 def quantities(geometry, mesh_dir, options=None):
-    axi, _ = sm.load_mesh(geometry, options, mesh_dir)
+    axi, _ = sm.load_mesh(geometry, options, Store.at(mesh_dir))
     sol = sm.solve(sm.bias_problem(geometry, axi), max_iter=40)
     bz = np.array([b.B_center_T[1] for b in sm.bead_fields(sol, geometry)
                    if 11 <= b.particle <= 20])

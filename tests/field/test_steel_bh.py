@@ -12,6 +12,7 @@ from msens.field.geometry import AirBox, BeadChain, SensorGeometry
 from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.field.regions import NonlinearSoft
 from msens.params.materials import STEEL_1018_BH, BHCurve
+from msens.store import Store
 
 SMALL = SensorGeometry(beads=BeadChain(first=10, last=16),
                        sensors=(SensorUnit(Coil(13), BiasMagnet(13)),), air=AirBox(0.06, 0.05))
@@ -29,7 +30,7 @@ def runs(tmp_path_factory):
     out = {}
     for name, k in [("1018", None), ("copy", 1.0), ("soft", 0.5), ("hard", 2.0)]:
         g = SMALL if k is None else dataclasses.replace(SMALL, steel=scaled(k))
-        axi, path = sm.load_mesh(g, mesh_dir=mesh_dir)
+        axi, path = sm.load_mesh(g, store=Store.at(mesh_dir))
         sol = sm.solve(sm.bias_problem(g, axi))
         bz = np.array([b.B_center_T[1] for b in sm.bead_fields(sol, g)])
         force = np.array([c.magnetic_force_N for c in sm.contact_forces(sol, g)])

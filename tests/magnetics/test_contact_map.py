@@ -13,7 +13,7 @@ import pytest
 
 from msens.errors import InputError
 from msens.field.build import MeshOptions
-from msens.field.cache import committed_mesh_dirs, geometry_key
+from msens.field.cache import geometry_key
 from msens.field.geometry import AirBox, BeadChain, SensorGeometry
 from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.field.sensor_model import bias_problem, load_mesh
@@ -32,6 +32,7 @@ from msens.magnetics.contact_map import (
 from msens.magnetics.mechanisms import coil_linkage, mechanism_potentials
 from msens.magnetics.steel_law import law_for_steel
 from msens.mechanics.hertz import hertz_approach
+from msens.store import Store, committed_dirs
 
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)
 CONTACT = 12
@@ -48,7 +49,7 @@ def _small() -> SensorGeometry:
 def layered(tmp_path_factory):
     g = _small()
     d = tmp_path_factory.mktemp("meshes")
-    model = layer_model(g, CONTACT, COARSE, d)
+    model = layer_model(g, CONTACT, COARSE, Store.at(d))
     coil = g.sensors[0].coil
     table = contact_map(model, coil, (0.0, 0.7e-6, 1.4e-6, 2.0e-6),
                         (1e-9, 0.1e-6, 0.5e-6, 2e-6, 6e-6, 14e-6))
@@ -57,7 +58,7 @@ def layered(tmp_path_factory):
 
 def test_default_geometry_keeps_its_committed_mesh():
     key = geometry_key(SensorGeometry())
-    assert any((d / f"sensor-{key}.msh").is_file() for d in committed_mesh_dirs())
+    assert any((d / f"sensor-{key}.msh").is_file() for d in committed_dirs())
 
 
 def test_layer_geometry_lifts_the_beads_above():
@@ -98,7 +99,7 @@ def test_closed_branch_is_the_linear_approach_source(layered):
     """The steel disc's slope at δ_s against the plain mesh's approach source (another
     mesh: agreement to the meshes' discretisation error, 2 %)."""
     g, _, coil, table, d = layered
-    axi, _ = load_mesh(g, COARSE, d)
+    axi, _ = load_mesh(g, COARSE, Store.at(d))
     sol = solve(bias_problem(g, axi), max_iter=40, tol=1e-11)
     model = mechanism_potentials(sol, g, stress_force=g.beads.contact_load,
                                  law=law_for_steel(g.steel))
@@ -354,7 +355,7 @@ def test_transducers_with_contact_maps(tmp_path):
     g = SensorGeometry(beads=BeadChain(first=11, last=15),
                        sensors=(SensorUnit(Coil(particle=13), BiasMagnet(particle=13)),),
                        air=AirBox(0.06, 0.05))
-    kw = {"options": COARSE, "cache_dir": tmp_path, "mesh_dir": tmp_path}
+    kw = {"options": COARSE, "store": Store.at(tmp_path)}
     report = transducer_report(g, contact_maps=True, **kw)
     tr = report.transducers[13]
     assert tr.approach_map.contacts == (11, 12, 13, 14)
@@ -372,8 +373,8 @@ def test_transducers_with_contact_maps(tmp_path):
     from msens.magnetics.contact_map import approach_maps
 
     (tmp_path / "pool").mkdir()
-    pool = approach_maps(g, "pool", options=COARSE, mesh_dir=tmp_path,
-                         cache_dir=tmp_path / "pool", workers=2,
+    pool = approach_maps(g, "pool", options=COARSE,
+                         store=Store.at(tmp_path / "pool", committed=[tmp_path]), workers=2,
                          start=P2Field.of(report.bias))[13]
     for a, b in zip(tr.approach_map.maps, pool.maps, strict=True):
         assert np.array_equal(a.air_flux, b.air_flux)
@@ -453,9 +454,9 @@ def test_fast_paths_equal_the_plain_solves(layered):
         potentials.CHORD_BELOW = old
     assert np.abs(chord - newton).max() <= 1e-11 * np.abs(newton).max()
 
-    axi_plain, _ = load_mesh(g, COARSE, d)
+    axi_plain, _ = load_mesh(g, COARSE, Store.at(d))
     plain = solve(bias_problem(g, axi_plain), tol=1e-10)
-    warm = layer_model(g, CONTACT, COARSE, d, start=P2Field.of(plain))
+    warm = layer_model(g, CONTACT, COARSE, Store.at(d), start=P2Field.of(plain))
     assert warm.steel.iterations < model.steel.iterations
     for state in ("steel", "air"):
         a, b = warm.solution(state).a, model.solution(state).a
@@ -481,14 +482,15 @@ def test_refresh_solves_the_maps_again(tmp_path, monkeypatch):
 
     monkeypatch.setattr(cm, "_contact_task", fake)
     g = _small()
-    first = cm.approach_maps(g, "k", cache_dir=tmp_path, workers=1)
+    store = Store.at(tmp_path)
+    first = cm.approach_maps(g, "k", store=store, workers=1)
     n = len(calls)
     assert n == len(cm.mapped_contacts(g))
-    again = cm.approach_maps(g, "k", cache_dir=tmp_path, workers=1)
+    again = cm.approach_maps(g, "k", store=store, workers=1)
     assert len(calls) == n  # read from the cache
     assert np.array_equal(again[13].maps[0].steel_flux, first[13].maps[0].steel_flux)
-    fresh = cm.approach_maps(g, "k", cache_dir=tmp_path, workers=1, refresh=True)
+    fresh = cm.approach_maps(g, "k", store=store, workers=1, refresh=True)
     assert len(calls) == 2 * n
     assert not np.array_equal(fresh[13].maps[0].steel_flux, first[13].maps[0].steel_flux)
-    cached = cm.approach_maps(g, "k", cache_dir=tmp_path, workers=1)
+    cached = cm.approach_maps(g, "k", store=store, workers=1)
     assert np.array_equal(cached[13].maps[0].steel_flux, fresh[13].maps[0].steel_flux)

@@ -34,6 +34,7 @@ from msens.magnetics.mss import MssSensor, mss_signals
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import Transducer, bias_solution
 from msens.readout.electronics import coil_transfer_function, readout_circuit, transfer_function
+from msens.store import Store
 
 #: The coarse model of test_transducer (~4k elements, ~2 s with its sources).
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)
@@ -50,7 +51,8 @@ def one_sensor() -> SensorGeometry:
 @pytest.fixture(scope="module")
 def model(tmp_path_factory):
     g = one_sensor()
-    sol, _ = bias_solution(g, options=COARSE, mesh_dir=tmp_path_factory.mktemp("meshes"))
+    sol, _ = bias_solution(g, options=COARSE,
+                           store=Store.at(tmp_path_factory.mktemp("meshes")))
     return g, mechanism_potentials(sol, g, stress_force=g.beads.contact_load,
                                    law=law_for_steel(g.steel))
 
@@ -257,12 +259,12 @@ def test_frequency_solves_on_a_dask_cluster(tmp_path):
     (each task meshes through the shared cache and re-solves bias and sources: round-off)."""
     distributed = pytest.importorskip("distributed")
     g = one_sensor()
-    local = dynamic_report(g, options=COARSE, cache_dir=tmp_path / "local",
-                           mesh_dir=tmp_path / "meshes", frequencies=FREQS)
+    local = dynamic_report(g, options=COARSE, store=Store.at(tmp_path / "local"),
+                           frequencies=FREQS)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=":0") as cluster:
-        remote = dynamic_report(g, options=COARSE, cache_dir=tmp_path / "dask",
-                                mesh_dir=tmp_path / "meshes", frequencies=FREQS,
+        remote = dynamic_report(g, options=COARSE, store=Store.at(tmp_path / "dask"),
+                                frequencies=FREQS,
                                 scheduler=cluster.scheduler_address)
         seen = {str(entry[0]) for entry in cluster.scheduler.transition_log}
     assert remote.details["tasks"] == 2 and len(seen) >= 2
@@ -299,16 +301,18 @@ def test_eddy_mesh_newton_starts_from_the_plain_mesh_bias(tmp_path):
     handed over (as a magnet design does) or solved first, the report is the same to the
     last bit; the start saves Newton iterations and lands on the cold start's solution."""
     g = one_sensor()
-    meshes = tmp_path / "meshes"
-    plain, _ = bias_solution(g, mesh_dir=meshes)
-    kw = {"options": COARSE, "mesh_dir": meshes, "frequencies": FREQS[:3]}
-    given = dynamic_report(g, cache_dir=tmp_path / "given", start=plain, **kw)
-    own = dynamic_report(g, cache_dir=tmp_path / "own", **kw)
+    meshes = Store.at(tmp_path / "meshes")
+    plain, _ = bias_solution(g, store=meshes)
+    kw = {"options": COARSE, "frequencies": FREQS[:3]}
+    given = dynamic_report(g, store=Store.at(tmp_path / "given", committed=[meshes.directory]),
+                           start=plain, **kw)
+    own = dynamic_report(g, store=Store.at(tmp_path / "own", committed=[meshes.directory]),
+                         **kw)
     for p, r in own.responses.items():
         for name in ("villari", "approach", "impedance"):
             assert np.array_equal(getattr(given.responses[p], name), getattr(r, name))
-    cold, _ = bias_solution(g, options=COARSE, mesh_dir=meshes)
-    warm, _ = bias_solution(g, options=COARSE, mesh_dir=meshes, start=plain)
+    cold, _ = bias_solution(g, options=COARSE, store=meshes)
+    warm, _ = bias_solution(g, options=COARSE, store=meshes, start=plain)
     assert warm.iterations < cold.iterations
     axi, _ = load_mesh(g, COARSE, meshes)
     tight = solve(bias_problem(g, axi), max_iter=60, tol=1e-13)

@@ -14,6 +14,7 @@ import pytest
 
 from msens import api
 from msens.errors import InputError
+from msens.store import Store
 
 TINY = (Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text().replace(
     "[[sensor]]", "[electronics]\nsample_rate_hz = 5e6\n[[sensor]]")
@@ -191,8 +192,7 @@ def test_moved_coil_response_equals_the_moved_coils_own_model(eddy_runs):
 
     tmp, study, _, _ = eddy_runs
     g, e = geometry_from_study(study), eddy_settings(study)
-    kw = {"options": e.options, "steel": e.steel, "cache_dir": tmp / "cache",
-          "mesh_dir": tmp / "cache"}
+    kw = {"options": e.options, "steel": e.steel, "store": Store.at(tmp / "cache")}
     (response,) = dynamic_report(g, offsets=True, **kw).responses.values()
     assert response.offsets[0] == pytest.approx(-3e-3) and response.offsets[-1] == 3e-3
     unit = g.sensors[0]

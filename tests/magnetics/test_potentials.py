@@ -22,6 +22,7 @@ from msens.magnetics.potentials import (
     region_linkage,
 )
 from msens.magnetics.steel_law import law_for_steel
+from msens.store import Store
 
 
 def _geometry(magnet: bool) -> SensorGeometry:
@@ -30,7 +31,7 @@ def _geometry(magnet: bool) -> SensorGeometry:
 
 
 def _model(g, mesh_dir):
-    axi, _ = load_mesh(g, mesh_dir=mesh_dir)
+    axi, _ = load_mesh(g, store=Store.at(mesh_dir))
     sol = solve(bias_problem(g, axi), max_iter=40)
     return sol, mechanism_potentials(sol, g, stress_force=g.beads.contact_load,
                                      law=law_for_steel(g.steel))

@@ -18,6 +18,7 @@ from msens.magnetics.transducer_cache import transducer_report, transducers_for
 from msens.magnetics.villari import StressSampler, bead_stress, contact_sensitivity
 from msens.mechanics.stress_sampling import stress_at
 from msens.params.materials import BEAD_STEEL
+from msens.store import Store
 
 #: Coarse mesh: enough for consistency and symmetry checks (~4k elements, ~1 s per model).
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)
@@ -38,7 +39,7 @@ def mesh_dir(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def report(mesh_dir):
-    return compute_transducers(one_sensor(), options=COARSE, mesh_dir=mesh_dir)
+    return compute_transducers(one_sensor(), options=COARSE, store=Store.at(mesh_dir))
 
 
 def test_contact_rule_averages_neighbour_beads():
@@ -91,7 +92,8 @@ def test_transducer_shapes_and_symmetry(report):
 
 
 def test_magnet_disabled_gives_no_signal(mesh_dir):
-    rep = compute_transducers(one_sensor(magnet=False), options=COARSE, mesh_dir=mesh_dir)
+    rep = compute_transducers(one_sensor(magnet=False), options=COARSE,
+                              store=Store.at(mesh_dir))
     tr = rep.transducers[13]
     assert np.all(tr.sensitivity_villari == 0.0)
     assert np.all(tr.dlambda_dapproach == 0.0)
@@ -154,28 +156,32 @@ def test_magnetic_precompression_counts_each_model_once():
         magnetic_precompression({})
 
 
-def test_cache_round_trip(tmp_path, mesh_dir):
+def test_cache_round_trip(tmp_path, mesh_dir, caplog):
     g = one_sensor()
-    first = transducer_report(g, options=COARSE, mesh_dir=mesh_dir, cache_dir=tmp_path)
+    store = Store.at(tmp_path, committed=[mesh_dir])  # the mesh is the fixture's
+    first = transducer_report(g, options=COARSE, store=store)
     files = list(tmp_path.glob("transducer-*.json"))
     assert len(files) == 1
-    again = transducers_for(g, options=COARSE, mesh_dir=mesh_dir, cache_dir=tmp_path)
+    again = transducers_for(g, options=COARSE, store=store)
     a, b = first.transducers[13], again[13]
     for name in ("contacts", "sensitivity_villari", "dlambda_dapproach",
                  "magnetic_particle_force"):
         assert np.array_equal(getattr(a, name), getattr(b, name))
     assert (a.inductance_H, a.source, a.contact_stiffness, a.reference_force) == \
         (b.inductance_H, b.source, b.contact_stiffness, b.reference_force)
+    # a file that is not what the store wrote is computed again, with a warning
     files[0].write_text(json.dumps({"schema": "other"}))
-    with pytest.raises(InputError, match="transducer cache"):
-        transducers_for(g, options=COARSE, mesh_dir=mesh_dir, cache_dir=tmp_path)
+    with caplog.at_level("WARNING", logger="msens.store"):
+        third = transducers_for(g, options=COARSE, store=store)
+    assert "no checksum" in caplog.text and files[0].name in caplog.text
+    assert third[13].inductance_H == a.inductance_H
+    assert json.loads(files[0].read_text())["schema"] == "msens.transducers/3"
     # a different stress force is a different cache entry
-    transducers_for(g, options=COARSE, mesh_dir=mesh_dir, cache_dir=tmp_path,
-                    stress_force=5.0, approach=False)
+    transducers_for(g, options=COARSE, store=store, stress_force=5.0, approach=False)
     assert len(list(tmp_path.glob("transducer-*.json"))) == 2
 
 
 def test_bad_stress_force(mesh_dir):
     with pytest.raises(InputError, match="stress_force"):
-        compute_transducers(one_sensor(), options=COARSE, mesh_dir=mesh_dir,
+        compute_transducers(one_sensor(), options=COARSE, store=Store.at(mesh_dir),
                             stress_force=-1.0, approach=False)

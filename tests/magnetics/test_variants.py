@@ -22,6 +22,7 @@ from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.magnetics.transducer import magnetic_precompression
 from msens.magnetics.transducer_cache import transducers_for
 from msens.magnetics.variants import remanence_family, scaled_geometry
+from msens.store import Store
 
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)
 
@@ -35,8 +36,7 @@ def _geometry(offset: float = 0.0) -> SensorGeometry:
 
 @pytest.fixture(scope="module")
 def dirs(tmp_path_factory):
-    return {"mesh_dir": tmp_path_factory.mktemp("meshes"),
-            "cache_dir": tmp_path_factory.mktemp("transducers"), "options": COARSE}
+    return {"store": Store.at(tmp_path_factory.mktemp("artifacts")), "options": COARSE}
 
 
 def _close(a, b, rel):

@@ -44,12 +44,13 @@ from msens.magnetics.mechanisms import adjoint_check, coil_linkage, mechanism_po
 from msens.magnetics.potentials import bias_residual
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.villari import coil_flux_linkage, nonlinear_flux_change
+from msens.store import Store
 
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)
 
 
 def _setup(geometry, options, mesh_dir):
-    axi, _ = load_mesh(geometry, options, mesh_dir)
+    axi, _ = load_mesh(geometry, options, Store.at(mesh_dir))
     sol = solve(bias_problem(geometry, axi), max_iter=40, tol=1e-11)
     model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
                                  law=law_for_steel(geometry.steel))

@@ -41,6 +41,7 @@ from msens.design.sweep import (
 from msens.errors import InputError
 from msens.io.output import OutputDir, to_json
 from msens.parallel import pools_allowed
+from msens.store import Store, committed_dirs, user_cache_dir
 
 
 def files(fig_format: str = "png") -> tuple[str, ...]:
@@ -125,7 +126,10 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         base = (geometry_from_study(study) if spec.bead_padding is None
                 else base_geometry(study, spec.bead_padding))
         validate_designs(base, sensor.particle, designs, spec.source)
-        mesh_dir = str(cache.directory / "meshes")
+        # the designs' meshes, transducers, maps and responses live with the sweep (a shared
+        # folder for Dask workers); the committed artifacts and the user cache serve too
+        artifacts = Store(cache.directory / "meshes",
+                          (*committed_dirs(), user_cache_dir().resolve()), max_bytes=None)
         if study.field.contact_map:
             _log.info("contact maps: each design solves its own for the %d contacts around "
                       "coil %d (about 12 s each on a core)",
@@ -134,7 +138,7 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
 
         def tasks(s: Study, which: list[int]) -> list[tuple[str, MagnetTask]]:
             return [(content_key("magnet-design/2", s, geometries[i], sensor.particle),
-                     MagnetTask(s, geometries[i], sensor.particle, mesh_dir)) for i in which]
+                     MagnetTask(s, geometries[i], sensor.particle, artifacts)) for i in which]
 
         rows, computed = run_cached(evaluate_design, tasks(study, list(range(len(designs)))),
                                     cache, scheduler=scheduler, workers=workers,

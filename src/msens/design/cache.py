@@ -1,32 +1,34 @@
-"""Content-hash disk cache of sweep results: one small JSON file per key, written atomically.
+"""Sweep results in the artifact store: one small verified JSON file per content key.
 
-A key is the SHA-256 of the canonical JSON of everything a result depends on (the code's
-:data:`RESULT_VERSION`, the study, the design's geometry ...). A file appears only complete
-(temporary file in the same directory, then :func:`os.replace`), so a sweep killed at any
-moment leaves valid entries for the designs that finished and none for the others.
+A key is :func:`msens.store.content_key` of everything a result depends on (the code's
+:data:`RESULT_VERSION`, the study, the design's geometry ...). The results live in the
+sweep's own folder (a :class:`msens.store.Store` without a size bound: a resumed sweep needs
+every one); each is written atomically with its checksum, so a sweep killed at any moment
+leaves valid entries for the designs that finished and none for the others, and an entry
+that is corrupted or altered is computed again, never used.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
-from msens.io.atomic import atomic_write_bytes, clean_stale
-from msens.io.hashing import content_hash
+from msens.io.atomic import atomic_write_bytes
+from msens.store import Store
+from msens.store import content_key as _content_key
 
 #: Bumped whenever a design function changes what it computes; part of every key.
 RESULT_VERSION = "msens.design/2"
 
 
 def content_key(*parts: Any) -> str:
-    """SHA-256 (hex) of the canonical JSON (:mod:`msens.io.hashing`) of ``parts`` and
+    """:func:`msens.store.content_key` (SHA-256 hex) of ``parts`` and
     :data:`RESULT_VERSION`."""
-    return content_hash([RESULT_VERSION, *parts])
+    return _content_key([RESULT_VERSION, *parts])
 
 
 class ResultCache:
-    """Directory of ``<key>.json`` results.
+    """Directory of ``<key>.json`` results (a :class:`msens.store.Store` there, unbounded).
 
     Parameters
     ----------
@@ -35,22 +37,23 @@ class ResultCache:
     """
 
     def __init__(self, directory: str | Path):
-        self.directory = Path(directory)
-        clean_stale(self.directory)  # temporary files of a killed sweep
+        self.store = Store.at(directory, max_bytes=None)
+
+    @property
+    def directory(self) -> Path:
+        """The results' folder (absolute)."""
+        return self.store.directory
 
     def path(self, key: str) -> Path:
-        return self.directory / f"{key}.json"
+        return self.store.path(f"{key}.json")
 
     def get(self, key: str) -> Any | None:
-        """The stored value, or None if absent (or unreadable: it is then recomputed)."""
-        try:
-            return json.loads(self.path(key).read_text())
-        except (FileNotFoundError, json.JSONDecodeError):
-            return None
+        """The stored value, or None if absent (or not valid: it is then recomputed)."""
+        return self.store.read_json(f"{key}.json")
 
-    def put(self, key: str, value: Any) -> None:
-        """Store ``value`` (JSON; floats round-trip exactly)."""
-        atomic_write_bytes(self.path(key), json.dumps(value, sort_keys=True).encode())
+    def put(self, key: str, value: dict) -> None:
+        """Store ``value`` (a dict of JSON values; floats round-trip exactly)."""
+        self.store.write_json(f"{key}.json", value, indent=None)
 
 
 __all__ = ["RESULT_VERSION", "ResultCache", "atomic_write_bytes", "content_key"]

@@ -248,12 +248,13 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
     unit = next(u for u in geometry.sensors if u.coil.particle == particle)
     ckey = content_key("coil-context/2", study, geometry, particle,
                        _coil_box(unit, designs, geometry))
-    cpath = cache.directory / f"context-{ckey}.npz"
-    if cpath.exists():
+    cname = f"context-{ckey}.npz"
+    cpath = cache.store.find_file(cname)
+    if cpath is not None:
         ctx = load_context(cpath)
     else:
         ctx = build_context(study, geometry, particle, designs)
-        save_context(ctx, cpath)
+        cache.store.write_file(cname, lambda tmp: save_context(ctx, tmp))
     chunks = [tuple(designs[k:k + CHUNK]) for k in range(0, len(designs), CHUNK)]
     tasks = [(content_key("coil-chunk/2", ckey, [d.values for d in c]),
               CoilChunk(ctx, unit, c, geometry, study.electronics)) for c in chunks]

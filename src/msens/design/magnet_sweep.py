@@ -31,7 +31,6 @@ the field's ends, and with strong magnets their pull can put an end contact in t
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -43,6 +42,7 @@ from msens.field.geometry import SensorGeometry
 from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.transducer import compute_transducers
 from msens.magnetics.transducer_cache import transducer_report
+from msens.store import Store
 
 
 @dataclass(frozen=True)
@@ -56,27 +56,28 @@ class MagnetTask:
         The design's field-model geometry.
     particle : int
         The swept sensor's coil particle.
-    mesh_dir : str or None
-        Absolute mesh-cache folder (workers may run in another working directory).
+    store : Store
+        Where the design's meshes, transducers, contact maps and responses are found and
+        written (absolute folders: workers may run in another working directory).
     """
 
     study: Study
     geometry: SensorGeometry
     particle: int
-    mesh_dir: str | None
+    store: Store
 
 
 def evaluate_design(task: MagnetTask) -> dict:
     """Metrics of one magnet (and coil) design; raises on failure (the runner records it)."""
-    mesh_dir = Path(task.mesh_dir) if task.mesh_dir else None
+    store = task.store
     if task.study.field.contact_map:
         # the design's own maps: the study magnet's do not carry over to another magnet
         # (benchmarks/contact_map_transfer.py --magnet)
         # (cached as msens run caches them: the study's own magnet reads its committed maps)
-        report = transducer_report(task.geometry, mesh_dir=mesh_dir, contact_maps=True,
+        report = transducer_report(task.geometry, store=store, contact_maps=True,
                                    map_particles=(task.particle,))
     else:
-        report = compute_transducers(task.geometry, mesh_dir=mesh_dir)
+        report = compute_transducers(task.geometry, store=store)
     tr = report.transducers[task.particle]
     coil = next(u.coil for u in task.geometry.sensors if u.coil.particle == task.particle)
     wave = study_wave(task.study, report.transducers, task.particle)
@@ -84,8 +85,7 @@ def evaluate_design(task: MagnetTask) -> dict:
     if task.study.field.eddy_currents:
         eddy = eddy_settings(task.study)
         rsp = dynamic_report(task.geometry, options=eddy.options, steel=eddy.steel,
-                             mesh_dir=mesh_dir, cache_dir=mesh_dir,
-                             start=report.bias).responses[task.particle]
+                             store=store, start=report.bias).responses[task.particle]
         row = dynamic_design_rows([coil], resistance, inductance, rsp.frequencies,
                                   rsp.villari[None], rsp.approach[None],
                                   np.asarray(rsp.inductance)[None], wave,

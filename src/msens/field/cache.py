@@ -1,24 +1,22 @@
-"""Mesh cache: one ``.msh`` per geometry, keyed by a content hash.
+"""Mesh artifacts: one gmsh ``.msh`` per geometry in the artifact store, keyed by content.
 
-The key is a SHA-256 of the canonical JSON of the geometry and the mesh options (plus
-:data:`BUILDER_VERSION`, bumped whenever :mod:`msens.field.build` changes what it writes), so a
-changed dimension gives a new file and an unchanged one reuses the old mesh. Files are written
-atomically (temporary file in the same directory, then :func:`os.replace`), so a crashed or
-concurrent run never leaves a half-written mesh under a valid name.
+The key is :func:`msens.store.content_key` of the canonical JSON of the geometry and the mesh
+options (plus :data:`BUILDER_VERSION`, bumped whenever :mod:`msens.field.build` changes what it
+writes), so a changed dimension gives a new mesh and an unchanged one reuses the old one. The
+store (:class:`msens.store.Store`) finds it among the committed artifacts or in the user cache,
+verifies it against the checksum in its sidecar ``sensor-<key>.json`` (which also records the
+geometry) and writes a new one atomically.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
-import os
-import sys
 from pathlib import Path
 
 from msens.field.build import MeshOptions, build_mesh
 from msens.field.geometry import SensorGeometry
 from msens.io import hashing
-from msens.io.atomic import atomic_write, atomic_write_text, clean_stale
+from msens.store import Store, content_key
 
 #: Version of the mesh builder's output; part of every cache key.
 BUILDER_VERSION = "sensor-mesh/3"
@@ -44,68 +42,40 @@ def canonical(obj: object) -> object:
 
 def geometry_key(geometry: SensorGeometry, options: MeshOptions | None = None) -> str:
     """Content hash (16 hex digits) of a geometry and its mesh options."""
-    return hashing.content_hash({"builder": BUILDER_VERSION, "geometry": canonical(geometry),
-                                 "options": canonical(options or MeshOptions())}, 16)
+    return content_key({"builder": BUILDER_VERSION, "geometry": canonical(geometry),
+                        "options": canonical(options or MeshOptions())}, 16)
 
 
-def committed_mesh_dirs() -> list[Path]:
-    """Folders searched for an existing mesh before one is built: ``$MSENS_MESH_DIR``,
-    ``./meshes``, the source checkout's ``meshes/`` (the project commits the meshes of its
-    default studies there, so a fresh clone needs no meshing) and their installed copy
-    (``<prefix>/share/msens/meshes``, so an installed msens finds them from any folder)."""
-    dirs = []
-    env = os.environ.get("MSENS_MESH_DIR")
-    if env:
-        dirs.append(Path(env))
-    dirs.append(Path.cwd() / "meshes")
-    dirs.append(Path(__file__).resolve().parents[3] / "meshes")
-    dirs.append(Path(sys.prefix) / "share" / "msens" / "meshes")
-    return dirs
-
-
-def default_mesh_dir() -> Path:
-    """Where new meshes are written: ``$MSENS_MESH_DIR``, else the user cache
-    (``$XDG_CACHE_HOME/msens/meshes``, default ``~/.cache/msens/meshes``) — never the
-    project's committed ``meshes/``, which changes only by a deliberate commit."""
-    env = os.environ.get("MSENS_MESH_DIR")
-    if env:
-        return Path(env)
-    cache = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(cache) / "msens" / "meshes"
+def mesh_name(geometry: SensorGeometry, options: MeshOptions | None = None) -> str:
+    """The mesh's artifact name, ``sensor-<key>.msh``."""
+    return f"sensor-{geometry_key(geometry, options)}.msh"
 
 
 def cached_mesh(geometry: SensorGeometry, options: MeshOptions | None = None,
-                directory: str | Path | None = None) -> Path:
-    """Path of the mesh of ``geometry``, building it first when absent.
+                store: Store | None = None) -> Path:
+    """Path of the mesh of ``geometry``, building it first when the store has no valid one.
 
     Parameters
     ----------
     geometry : SensorGeometry
     options : MeshOptions, optional
-    directory : str or Path, optional
-        Cache directory (created if needed); default: an existing mesh in
-        :func:`committed_mesh_dirs`, else built into :func:`default_mesh_dir`.
+    store : Store, optional
+        Where meshes are found and written (default :meth:`msens.store.Store.default`: the
+        committed meshes, then the user cache).
 
     Returns
     -------
     Path
-        ``<directory>/sensor-<key>.msh``; a ``.json`` beside it records the geometry.
+        ``sensor-<key>.msh``; the sidecar ``sensor-<key>.json`` beside it records the
+        geometry and the mesh's checksum.
     """
+    store = Store.default() if store is None else store
     options = options or MeshOptions()
-    key = geometry_key(geometry, options)
-    name = f"sensor-{key}.msh"
-    if directory is None:
-        for d in committed_mesh_dirs():
-            if (d / name).is_file():
-                return d / name
-    directory = Path(directory) if directory is not None else default_mesh_dir()
-    directory.mkdir(parents=True, exist_ok=True)
-    path = directory / name
-    if path.is_file():
+    name = mesh_name(geometry, options)
+    path = store.find_file(name)
+    if path is not None:
         return path
-    clean_stale(directory)  # the temporary files of builds that were killed
-    atomic_write(path, lambda tmp: build_mesh(geometry, str(tmp), options))
+    key = geometry_key(geometry, options)
     meta = {"key": key, "builder": BUILDER_VERSION, "geometry": canonical(geometry),
             "options": canonical(options)}
-    atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=1, sort_keys=True))
-    return path
+    return store.write_file(name, lambda tmp: build_mesh(geometry, str(tmp), options), meta)

@@ -42,6 +42,7 @@ from msens.field.regions import Air, NonlinearSoft, PermanentMagnet, Region, Win
 from msens.field.solve import FieldSolution, MagnetostaticProblem, incremental, solve
 from msens.params.materials import BHCurve
 from msens.params.units import MU0, RHO_COPPER, TWO_PI
+from msens.store import Store
 
 _log = logging.getLogger(__name__)
 
@@ -381,9 +382,10 @@ class FieldReport:
 
 
 def load_mesh(geometry: SensorGeometry, options: MeshOptions | None = None,
-              mesh_dir: str | Path | None = None) -> tuple[AxiMesh, Path]:
-    """Cached mesh of ``geometry`` (built when missing), read as :class:`AxiMesh`."""
-    path = cached_mesh(geometry, options, mesh_dir)
+              store: Store | None = None) -> tuple[AxiMesh, Path]:
+    """Mesh of ``geometry`` from ``store`` (built when missing; default
+    :meth:`msens.store.Store.default`), read as :class:`AxiMesh`."""
+    path = cached_mesh(geometry, options, store)
     return read_gmsh(path), path
 
 
@@ -453,7 +455,7 @@ def axis_profile(sol: FieldSolution, geometry: SensorGeometry, n: int = 401
 
 
 def run_field_model(geometry: SensorGeometry, *,
-                    options: MeshOptions | None = None, mesh_dir: str | Path | None = None,
+                    options: MeshOptions | None = None, store: Store | None = None,
                     inductance: bool = True) -> FieldReport:
     """Mesh (cached), solve the bias field and post-process the sensor model.
 
@@ -461,8 +463,8 @@ def run_field_model(geometry: SensorGeometry, *,
     ----------
     geometry : SensorGeometry
     options : MeshOptions, optional
-    mesh_dir : str or Path, optional
-        Mesh cache directory (default :func:`msens.field.cache.default_mesh_dir`).
+    store : Store, optional
+        Where the mesh is found or written (default :meth:`msens.store.Store.default`).
     inductance : bool
         False skips the two extra linear solves per coil.
 
@@ -472,7 +474,7 @@ def run_field_model(geometry: SensorGeometry, *,
     """
     _log.info("field model: mesh (cached on disk) and nonlinear bias solve")
     t0 = time.perf_counter()
-    axi, path = load_mesh(geometry, options, mesh_dir)
+    axi, path = load_mesh(geometry, options, store)
     t1 = time.perf_counter()
     sol = solve(bias_problem(geometry, axi))
     t2 = time.perf_counter()

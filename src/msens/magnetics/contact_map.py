@@ -32,13 +32,11 @@ branch, PCHIP in the gap for the air branch).
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
-from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -56,6 +54,7 @@ from msens.magnetics.approach import _morphed_quadrature
 from msens.magnetics.potentials import nonlinear_resolve
 from msens.magnetics.villari import coil_flux_linkage
 from msens.parallel import default_workers, pools_allowed, run_tasks
+from msens.store import Store, content_key
 
 _log = logging.getLogger(__name__)
 
@@ -122,13 +121,14 @@ class LayerModel:
 
 
 def layer_model(geometry: SensorGeometry, contact: int, options: MeshOptions | None = None,
-                mesh_dir: str | Path | None = None, start: P2Field | None = None
+                store: Store | None = None, start: P2Field | None = None
                 ) -> LayerModel:
     """Mesh ``geometry`` with a layer at ``contact`` and solve its bias with the disc steel
     and with it air; Newton starts from ``start`` (the plain mesh's bias of ``geometry``,
-    optional: about half the iterations) and the air disc's from the steel disc's."""
+    optional: about half the iterations) and the air disc's from the steel disc's. The
+    layer mesh comes from ``store`` (default :meth:`msens.store.Store.default`)."""
     lg = layer_geometry(geometry, contact)
-    axi, _ = load_mesh(lg, options, mesh_dir)
+    axi, _ = load_mesh(lg, options, store)
     air = bias_problem(lg, axi)
     name = lg.beads.layer_rect().name
     steel_regions = dict(air.regions)
@@ -449,21 +449,21 @@ def _map_from_json(d: dict) -> ContactMap:
 
 def _contact_task(args: tuple) -> tuple[ContactMap, ...]:
     """One contact's maps for every coil (a worker task: layer mesh, bias, table solves)."""
-    geometry, contact, coils, options, mesh_dir, start = args
-    return contact_maps(layer_model(geometry, contact, options, mesh_dir, start), coils)
+    geometry, contact, coils, options, store, start = args
+    return contact_maps(layer_model(geometry, contact, options, store, start), coils)
 
 
 def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
-                  options: MeshOptions | None = None, mesh_dir: str | Path | None = None,
-                  cache_dir: str | Path | None = None, workers: int | None = None,
+                  options: MeshOptions | None = None, store: Store | None = None,
+                  workers: int | None = None,
                   particles: Sequence[int] | None = None,
                   start: P2Field | None = None, refresh: bool = False
                   ) -> dict[int, ApproachMap]:
-    """The contact maps of every coil of ``geometry`` (cached ``contact-map-<key>.json``).
+    """The contact maps of every coil of ``geometry`` (artifact ``contact-map-<key>.json``).
 
-    The key joins the transducer key (mesh, steel, magnets) and the table nodes. Lookup as
-    :func:`msens.magnetics.transducer_cache.transducer_report`: with ``cache_dir`` only there;
-    otherwise the committed folders, then the user cache, where new maps are written. Cold:
+    The key joins the transducer key (mesh, steel, magnets) and the table nodes. ``store``
+    (default :meth:`msens.store.Store.default`) finds and verifies them among the committed
+    artifacts, then in the user cache, where new maps (and the layer meshes) are written. Cold:
     one layer mesh and 18 nonlinear solves per contact of :func:`mapped_contacts` (about
     12 s each on a core for the default geometry), the contacts spread over ``workers`` local
     processes (:func:`msens.parallel.run_tasks`; default: one per CPU under the ``msens``
@@ -479,13 +479,11 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     dict of int -> ApproachMap
         Keyed by coil particle.
     """
-    from msens.field.cache import committed_mesh_dirs, default_mesh_dir
-    from msens.io._files import atomic_write_bytes
-    from msens.io.hashing import content_hash
+    store = Store.default() if store is None else store
 
     def map_key(subset: Sequence[int] | None) -> str:
         payload = {} if subset is None else {"coils": sorted(subset)}
-        return content_hash(
+        return content_key(
             {"version": MAP_VERSION, "transducer": transducer_key, **payload,
              "contacts": list(mapped_contacts(geometry, subset)),
              "steel_nodes": list(STEEL_NODES), "air_gaps": list(AIR_GAPS),
@@ -497,26 +495,20 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
              if particles is None or u.coil.particle in particles]
     contacts = mapped_contacts(geometry, particles)
     key = map_key(None if particles is None else [c.particle for c in coils])
-    directory = Path(cache_dir) if cache_dir is not None else default_mesh_dir()
-    search = [directory] if cache_dir is not None else [*committed_mesh_dirs(), directory]
     # the maps of every coil hold those of a few (same contacts, same solves)
     keys = [key] if particles is None else [key, map_key(None)]
-    for d in [] if refresh else search:
-        for k in keys:
-            path = d / f"contact-map-{k}.json"
-            if path.is_file():
-                data = json.loads(path.read_text())
-                return {int(p): ApproachMap(tuple(_map_from_json(m) for m in maps))
-                        for p, maps in data["coils"].items()
-                        if particles is None or int(p) in particles}
+    data = None if refresh else store.read_json(*(f"contact-map-{k}.json" for k in keys))
+    if data is not None:
+        return {int(p): ApproachMap(tuple(_map_from_json(m) for m in maps))
+                for p, maps in data["coils"].items()
+                if particles is None or int(p) in particles}
     if workers is None:
         # only where a pool is safe: the msens command, not a worker or a user's script
         workers = default_workers() if pools_allowed() else 1
     _log.info("contact maps %s (cached: no): %d contacts, a layer mesh and 18 nonlinear "
               "solves each, %d at a time", key, len(contacts), min(workers, len(contacts)))
     began = time.perf_counter()
-    tasks = [(geometry, c, coils, options, None if mesh_dir is None else str(mesh_dir), start)
-             for c in contacts]
+    tasks = [(geometry, c, coils, options, store, start) for c in contacts]
     per_contact: dict[int, tuple[ContactMap, ...]] = {}
     for i, maps in run_tasks(_contact_task, tasks, workers=workers):
         per_contact[contacts[i]] = maps
@@ -526,9 +518,7 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
               for k, coil in enumerate(coils)}
     data = {"key": key, "version": MAP_VERSION, "transducer": transducer_key,
             "coils": {str(p): [_map_json(m) for m in ms] for p, ms in tables.items()}}
-    directory.mkdir(parents=True, exist_ok=True)
-    atomic_write_bytes(directory / f"contact-map-{key}.json",
-                       json.dumps(data, indent=1).encode(), overwrite=True)
+    store.write_json(f"contact-map-{key}.json", data)
     return {p: ApproachMap(tuple(ms)) for p, ms in tables.items()}
 
 

@@ -35,11 +35,9 @@ function with the coil's series impedance Z(ω)
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -49,8 +47,6 @@ from msens.field.eddy import SIGMA_1018, HarmonicOperator, dissipated_power
 from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import coil_current_density, coil_resistance
 from msens.field.solve import FieldSolution
-from msens.io._files import atomic_write_bytes
-from msens.io.hashing import content_hash
 from msens.magnetics.frequency_response import FrequencyResponse
 from msens.magnetics.mechanisms import (
     MechanismPotentials,
@@ -60,6 +56,7 @@ from msens.magnetics.mechanisms import (
 )
 from msens.magnetics.potentials import region_linkage
 from msens.params.units import TWO_PI
+from msens.store import Store, content_key
 
 #: Frequencies solved by default, Hz: 0 (the static transducer), 12 roughly log-spaced
 #: points over 0.5–200 kHz (1-2-3-5 steps, so the reported 1, 3, 10, 30, 100 kHz are solved)
@@ -279,7 +276,7 @@ def dynamic_key(transducer_key: str, frequencies: Sequence[float], steel: float,
                            sorted({**MAGNET_CONDUCTIVITY, **(magnets or {})}.items())}}
     if offsets is not None:
         payload["offsets"] = [repr(float(o)) for o in offsets]
-    return content_hash(payload, 16)
+    return content_key(payload, 16)
 
 
 def _cplx(a: np.ndarray) -> dict:
@@ -325,67 +322,58 @@ def report_from_json(data: dict) -> DynamicReport:
     return DynamicReport(out, data.get("details", {}))
 
 
-def dynamic_report(geometry: SensorGeometry, *, options=None, cache_dir: str | Path | None = None,
-                   mesh_dir: str | Path | None = None,
+def dynamic_report(geometry: SensorGeometry, *, options=None, store: Store | None = None,
                    frequencies: Sequence[float] = DEFAULT_FREQUENCIES,
                    steel: float = SIGMA_1018, magnets: Mapping[str, float] | None = None,
                    refresh: bool = False, scheduler: str | None = None,
                    offsets: bool = False, start: FieldSolution | None = None
                    ) -> DynamicReport:
-    """Cached :func:`frequency_responses` of a geometry (``dynamic-<key>.json``).
+    """Stored :func:`frequency_responses` of a geometry (artifact ``dynamic-<key>.json``).
 
     The sources are those of the default static transducer (:func:`transducer_report`'s
     defaults: stress at the geometry's contact load, the steel's JAS law, both mechanisms);
-    lookup and storage follow :func:`msens.magnetics.transducer_cache.transducer_report`.
+    ``store`` (default :meth:`msens.store.Store.default`) finds, verifies and writes the
+    responses and the meshes as for :func:`msens.magnetics.transducer_cache.transducer_report`.
 
     With ``scheduler`` (a Dask distributed scheduler address) the frequencies are split into
-    one chunk per worker; each task meshes (through the shared mesh cache ``mesh_dir``),
+    one chunk per worker; each task meshes (through ``store``, which travels with it),
     solves the bias and the sources and then its frequencies, and the chunks are joined
     (:func:`join_reports`). The result equals the local one to round-off.
 
     With ``offsets`` each response also holds its coil's profiles over ±3 mm of axial offset
     (:data:`RESPONSE_OFFSET_STEP`; every source is then solved at every frequency), for
-    :meth:`FrequencyResponse.shifted`; a separate cache file.
+    :meth:`FrequencyResponse.shifted`; a separate artifact.
 
     ``start``: the geometry's bias solution on the plain mesh (``options=None``, e.g.
     :attr:`msens.magnetics.transducer.TransducerReport.bias`), where the eddy mesh's Newton
     starts; without it that solution is solved first (the same start, so the same result).
     """
-    from msens.field.cache import committed_mesh_dirs, default_mesh_dir
     from msens.magnetics.steel_law import law_for_steel
     from msens.magnetics.transducer import cache_key
     from msens.params.materials import BEAD_STEEL
 
+    store = Store.default() if store is None else store
     tkey = cache_key(geometry, options, stress_force=geometry.beads.contact_load,
                      law=law_for_steel(geometry.steel), material=BEAD_STEEL, approach=True)
     grid = offset_grid(RESPONSE_OFFSET_STEP).tolist() if offsets else None
     name = f"dynamic-{dynamic_key(tkey, frequencies, steel, magnets, grid)}.json"
-    if cache_dir is not None:
-        directory, search = Path(cache_dir), [Path(cache_dir)]
-    else:
-        directory = default_mesh_dir()
-        search = [*committed_mesh_dirs(), directory]
-    if not refresh:
-        for d in search:
-            if (d / name).is_file():
-                return report_from_json(json.loads((d / name).read_text()))
+    data = None if refresh else store.read_json(name)
+    if data is not None:
+        return report_from_json(data)
     freqs = [float(f) for f in frequencies]
     if scheduler is None:
-        rep = _report_task((geometry, options, mesh_dir, freqs, steel, magnets, grid, start))
+        rep = _report_task((geometry, options, store, freqs, steel, magnets, grid, start))
     else:
         from msens.parallel import run_tasks
 
-        meshes = str(Path(mesh_dir or default_mesh_dir()).resolve())
         chunks = [c for c in np.array_split(np.asarray(freqs[1:]), _workers(scheduler))
                   if c.size]
-        tasks = [(geometry, options, meshes, [0.0, *c.tolist()], steel, magnets, grid, None)
+        tasks = [(geometry, options, store, [0.0, *c.tolist()], steel, magnets, grid, None)
                  for c in chunks]
         parts = dict(run_tasks(_report_task, tasks, scheduler=scheduler))
         rep = join_reports([parts[i] for i in range(len(tasks))])
     rep.details["transducer_key"] = tkey
-    directory.mkdir(parents=True, exist_ok=True)
-    atomic_write_bytes(directory / name, json.dumps(report_to_json(rep), indent=1).encode(),
-                       overwrite=True)
+    store.write_json(name, report_to_json(rep))
     return rep
 
 
@@ -398,7 +386,7 @@ def _workers(scheduler: str) -> int:
 
 
 def eddy_bias_solution(geometry: SensorGeometry, options: MeshOptions | None, *,
-                       mesh_dir: str | Path | None = None,
+                       store: Store | None = None,
                        start: FieldSolution | None = None) -> FieldSolution:
     """The bias on the eddy-current mesh (``options``), Newton starting from the bias on the
     plain mesh (``options=None``), interpolated: a start close to the solution, and one that
@@ -410,8 +398,8 @@ def eddy_bias_solution(geometry: SensorGeometry, options: MeshOptions | None, *,
     if options is None or options == MeshOptions():
         start = None  # the plain mesh itself: a cold start, as the static transducer's
     elif start is None:
-        start, _ = bias_solution(geometry, mesh_dir=mesh_dir)
-    sol, _ = bias_solution(geometry, options=options, mesh_dir=mesh_dir, start=start)
+        start, _ = bias_solution(geometry, store=store)
+    sol, _ = bias_solution(geometry, options=options, store=store, start=start)
     return sol
 
 
@@ -420,9 +408,9 @@ def _report_task(args: tuple) -> DynamicReport:
     from msens.magnetics.mechanisms import mechanism_potentials
     from msens.magnetics.steel_law import law_for_steel
 
-    geometry, options, mesh_dir, freqs, steel, magnets, offsets, start = args
+    geometry, options, store, freqs, steel, magnets, offsets, start = args
     t0 = time.perf_counter()
-    sol = eddy_bias_solution(geometry, options, mesh_dir=mesh_dir, start=start)
+    sol = eddy_bias_solution(geometry, options, store=store, start=start)
     timings: dict[str, float] = {"mesh_and_bias_solve": time.perf_counter() - t0}
     model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
                                  law=law_for_steel(geometry.steel), timings=timings)

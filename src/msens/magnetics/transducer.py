@@ -52,7 +52,6 @@ from msens.field.sensor_model import (
 )
 from msens.field.solve import FieldSolution, solve
 from msens.io.hashing import canonical as _canonical
-from msens.io.hashing import content_hash
 from msens.magnetics.approach import hertz_approach_rate, hertz_stiffness
 from msens.magnetics.contact_map import ApproachMap
 from msens.magnetics.magnetoelastic import JilesAthertonSablik
@@ -65,6 +64,7 @@ from msens.magnetics.mechanisms import (
 from msens.magnetics.steel_law import law_for_steel
 from msens.mechanics.hertz import hertz_approach
 from msens.params.materials import BEAD_STEEL, ElasticMaterial
+from msens.store import Store, content_key
 
 _log = logging.getLogger(__name__)
 
@@ -270,19 +270,20 @@ class TransducerReport:
 
 
 def bias_solution(geometry: SensorGeometry, *, options: MeshOptions | None = None,
-                  mesh_dir: str | Path | None = None, max_iter: int = 40,
+                  store: Store | None = None, max_iter: int = 40,
                   start: FieldSolution | None = None) -> tuple[FieldSolution, Path]:
-    """Mesh (cached) and nonlinear bias solve of a geometry.
+    """Mesh (from ``store``, default :meth:`msens.store.Store.default`) and nonlinear bias
+    solve of a geometry.
 
     ``start``: the same geometry's bias on another mesh; Newton starts from it, interpolated
     (:func:`msens.magnetics.dynamic.eddy_bias_solution`).
     """
-    axi, path = load_mesh(geometry, options, mesh_dir)
+    axi, path = load_mesh(geometry, options, store)
     return solve(bias_problem(geometry, axi), max_iter=max_iter, start=start), path
 
 
 def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None = None,
-                        mesh_dir: str | Path | None = None, stress_force: float | None = None,
+                        store: Store | None = None, stress_force: float | None = None,
                         law: JilesAthertonSablik | None = None,
                         material: ElasticMaterial = BEAD_STEEL, approach: bool = True,
                         max_iter: int = 40) -> TransducerReport:
@@ -292,8 +293,8 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
     ----------
     geometry : SensorGeometry
     options : MeshOptions, optional
-    mesh_dir : str or Path, optional
-        Mesh cache directory.
+    store : Store, optional
+        Where the mesh is found or written (default :meth:`msens.store.Store.default`).
     stress_force : float, optional
         Force at which the bead stress is solved (the secant sensitivity's force), N; default
         the geometry's ``contact_load`` (the static load that sets the model's flats).
@@ -313,7 +314,7 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
     timings: dict[str, float] = {}
     _log.info("transducers: field mesh and nonlinear bias solve")
     t0 = time.perf_counter()
-    sol, path = bias_solution(geometry, options=options, mesh_dir=mesh_dir, max_iter=max_iter)
+    sol, path = bias_solution(geometry, options=options, store=store, max_iter=max_iter)
     timings["mesh_and_bias_solve"] = time.perf_counter() - t0
     _log.info("transducers: bead stress, Villari and contact-approach sources, their "
               "potentials (%d dofs)", sol.dofs)
@@ -378,7 +379,7 @@ def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
                                "h": _canonical(geometry.steel.h)}
     if geometry.reversibility != 1.0:
         payload["reversibility"] = repr(float(geometry.reversibility))
-    return content_hash(payload, 16)
+    return content_key(payload, 16)
 
 
 __all__ = [

@@ -1,27 +1,24 @@
-"""The on-disk cache of transducers: JSON keyed by a content hash of the geometry.
+"""Stored transducers: a JSON artifact of the store (:mod:`msens.store`) keyed by the content
+of the geometry, materials and model.
 
-:func:`transducer_report` returns a cached
-:class:`~msens.magnetics.transducer.TransducerReport` (from the user cache or the committed
-meshes) or computes and stores it; :func:`transducers_for` gives the transducers alone,
+:func:`transducer_report` returns a stored
+:class:`~msens.magnetics.transducer.TransducerReport` (committed, or from the user cache;
+verified) or computes and stores it; :func:`transducers_for` gives the transducers alone,
 keyed by particle.
 """
 
 from __future__ import annotations
 
-import json
 import logging
 from collections.abc import Sequence
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 
-from msens.errors import InputError, require
+from msens.errors import internal
 from msens.field.build import MeshOptions
-from msens.field.cache import committed_mesh_dirs, default_mesh_dir
 from msens.field.geometry import SensorGeometry
 from msens.field.probes import P2Field
-from msens.io._files import atomic_write_bytes
 from msens.magnetics.magnetoelastic import JilesAthertonSablik
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import (
@@ -31,6 +28,7 @@ from msens.magnetics.transducer import (
     compute_transducers,
 )
 from msens.params.materials import BEAD_STEEL, ElasticMaterial
+from msens.store import Store
 
 _log = logging.getLogger(__name__)
 
@@ -54,8 +52,8 @@ def _to_json(report: TransducerReport) -> dict:
 
 
 def _from_json(data: dict) -> TransducerReport:
-    require(data.get("schema") == "msens.transducers/3",
-            f"not a transducer cache file (schema {data.get('schema')!r})")
+    internal(data.get("schema") == "msens.transducers/3",
+             f"internal: not a transducer artifact (schema {data.get('schema')!r})")
     out = {}
     for v in data["transducers"].values():
         out[int(v["particle"])] = Transducer(
@@ -82,71 +80,57 @@ def _array(v: list | None) -> np.ndarray | None:
 
 
 def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None = None,
-                      cache_dir: str | Path | None = None, mesh_dir: str | Path | None = None,
-                      stress_force: float | None = None,
+                      store: Store | None = None, stress_force: float | None = None,
                       law: JilesAthertonSablik | None = None,
                       material: ElasticMaterial = BEAD_STEEL, approach: bool = True,
                       refresh: bool = False, contact_maps: bool = False,
                       map_particles: Sequence[int] | None = None) -> TransducerReport:
-    """Cached :func:`compute_transducers` (``transducer-<key>.json``).
+    """Stored :func:`compute_transducers` (artifact ``transducer-<key>.json``).
 
     With ``contact_maps`` every transducer also gets the nonlinear contact maps of its
-    contacts near the coils (:func:`msens.magnetics.contact_map.approach_maps`, cached
+    contacts near the coils (:func:`msens.magnetics.contact_map.approach_maps`, stored
     beside it as ``contact-map-<key>.json``); ``map_particles``: only the coils at those
     particles (the others keep the linear sources).
 
-    Lookup follows the mesh cache (:mod:`msens.field.cache`): with ``cache_dir`` only that
-    folder; otherwise the committed folders (:func:`msens.field.cache.committed_mesh_dirs`,
-    where the project commits the transducers of its default studies beside their meshes),
-    and new results go to :func:`msens.field.cache.default_mesh_dir` (the user cache, never
-    the committed ``meshes/``). ``refresh`` recomputes (with ``contact_maps`` the maps too).
+    ``store`` (default :meth:`msens.store.Store.default`) finds the transducers among the
+    committed artifacts (the project commits those of its default studies beside their
+    meshes) or in the user cache, verified against their checksum; new ones (and any that
+    fail the check) are computed and written to the user cache. ``refresh`` recomputes
+    (with ``contact_maps`` the maps too).
     """
+    store = Store.default() if store is None else store
     force = geometry.beads.contact_load if stress_force is None else float(stress_force)
     law = law_for_steel(geometry.steel) if law is None else law
     key = cache_key(geometry, options, stress_force=force, law=law, material=material,
                     approach=approach)
     name = f"transducer-{key}.json"
-    if cache_dir is not None:
-        directory = Path(cache_dir)
-        search = [directory]
-    else:
-        directory = default_mesh_dir()
-        search = [*committed_mesh_dirs(), directory]
     if contact_maps:
         from msens.magnetics.contact_map import approach_maps
 
-        report = transducer_report(geometry, options=options, cache_dir=cache_dir,
-                                   mesh_dir=mesh_dir, stress_force=force, law=law,
-                                   material=material, approach=approach, refresh=refresh)
+        report = transducer_report(geometry, options=options, store=store,
+                                   stress_force=force, law=law, material=material,
+                                   approach=approach, refresh=refresh)
         # the maps are full nonlinear solves: the small-signal permeability (the
         # reversibility) does not enter them, so every choice shares one table
         map_key = cache_key(replace(geometry, reversibility=1.0), options, stress_force=force,
                             law=law, material=material, approach=approach)
-        maps = approach_maps(geometry, map_key, options=options, mesh_dir=mesh_dir,
-                             cache_dir=cache_dir, particles=map_particles,
+        maps = approach_maps(geometry, map_key, options=options, store=store,
+                             particles=map_particles,
                              start=None if report.bias is None else P2Field.of(report.bias),
                              refresh=refresh)
         return TransducerReport({p: replace(tr, approach_map=maps.get(p))
                                  for p, tr in report.transducers.items()}, report.details,
                                 bias=report.bias)
-    if not refresh:
-        for d in search:
-            path = d / name
-            if path.is_file():
-                _log.info("transducers %s (cached: yes, %s)", key, path)
-                try:
-                    return _from_json(json.loads(path.read_text()))
-                except (ValueError, KeyError) as exc:
-                    raise InputError(f"transducer cache {path} is unreadable ({exc}); "
-                                     "delete it") from exc
+    data = None if refresh else store.read_json(name)
+    if data is not None:
+        _log.info("transducers %s (cached: yes)", key)
+        return _from_json(data)
     _log.info("transducers %s (cached: no): computing them, usually under a minute", key)
-    report = compute_transducers(geometry, options=options, mesh_dir=mesh_dir,
+    report = compute_transducers(geometry, options=options, store=store,
                                  stress_force=force, law=law, material=material,
                                  approach=approach)
-    directory.mkdir(parents=True, exist_ok=True)
-    atomic_write_bytes(directory / name, json.dumps(_to_json(report), indent=1).encode(),
-                       overwrite=True)
-    _log.info("transducers %s cached in %s", key, directory / name)
+    path = store.write_json(name, _to_json(report))
+    _log.info("transducers %s cached in %s", key, path)
     return report
 
 

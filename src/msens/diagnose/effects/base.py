@@ -10,7 +10,7 @@ lives in :mod:`msens.diagnose.predict`, so that many states are run in one batch
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.signal import lfilter
@@ -18,8 +18,7 @@ from scipy.signal import lfilter
 from msens.chain.model import Chain
 from msens.config.schema import SetupSpec
 from msens.config.study import Study
-from msens.field.parts import Coil
-from msens.readout.electronics import ElectronicsSpec
+from msens.diagnose.models import ModelBank, PhysicsMss
 from msens.readout.sensors import SensorKind
 
 #: A record operation: (records (..., nt), sample interval s) -> records (..., nt).
@@ -28,39 +27,13 @@ RecordOp = Callable[[np.ndarray, float], np.ndarray]
 
 @dataclass(frozen=True)
 class Context:
-    """The study and setup a diagnosis works on (read-only inputs of every effect)."""
+    """The study and setup a diagnosis works on (read-only inputs of every effect), and the
+    run's field models (:class:`~msens.diagnose.models.ModelBank`: each Context, i.e. each
+    diagnosis run, has its own)."""
 
     study: Study
     setup: SetupSpec
-
-
-@dataclass(frozen=True)
-class PhysicsMss:
-    """What a diagnosis may change about one physics MsS (see :mod:`msens.diagnose.physics`).
-
-    Attributes
-    ----------
-    model : str
-        Key of the sensor's field model in :mod:`msens.diagnose.physics` (its transducer
-        cache key).
-    particle : int
-        The coil's particle.
-    coil : Coil
-        The coil's geometry (winding capacitance of its circuit).
-    electronics : ElectronicsSpec
-        Cable and DAQ of its read-out.
-    offset_m : float
-        Axial offset of the coil from its nominal position, m (+ toward the striker).
-    remanence_factor : float
-        Remanence of every bias magnet over its nominal value.
-    """
-
-    model: str
-    particle: int
-    coil: Coil
-    electronics: ElectronicsSpec
-    offset_m: float = 0.0
-    remanence_factor: float = 1.0
+    models: ModelBank = field(default_factory=ModelBank, compare=False, repr=False)
 
 
 @dataclass(frozen=True)

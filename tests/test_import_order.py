@@ -19,7 +19,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "msens"
 
 #: Stage of every top-level unit, lowest first.
 STAGES = {
-    0: ("errors", "version", "parallel", "meshing", "_lazy"),
+    0: ("errors", "version", "parallel", "meshing", "vocabulary", "_lazy"),
     1: ("params", "io", "store"),
     2: ("mechanics", "readout", "signals"),
     3: ("chain", "field"),
@@ -27,7 +27,7 @@ STAGES = {
     5: ("magnetics",),
     6: ("config",),
     7: ("results",),
-    8: ("budget", "pipeline", "synth", "compare", "field_outputs"),
+    8: ("budget", "preflight", "pipeline", "synth", "compare", "field_outputs"),
     9: ("plots", "plots_mss"),
     10: ("design", "diagnose"),
     11: ("api",),

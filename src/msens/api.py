@@ -47,6 +47,11 @@ def replace(study: Study, changes: dict | None = None, /, **more) -> Study:
 def run(study: Study, *, scheduler: str | None = None) -> StudyResult:
     """Calibrate, simulate and observe every setup of ``study`` (the eddy-current frequency
     solves on the Dask cluster at ``scheduler`` when given)."""
+    from msens import preflight
+
+    # the address is checked even when no remote work turns out to be needed
+    preflight.study(study)
+    scheduler = preflight.check_scheduler(scheduler)
     return run_study(study, scheduler=scheduler)
 
 
@@ -116,7 +121,7 @@ def _figure_makers(result: StudyResult) -> dict:
     if any(s.setup.inserts or len(result.setups) > 1 for s in result.setups):
         makers["sensor_profiles.png"] = lambda: plots.sensor_profiles(result)
     if result.study.reference:
-        makers["table2.png"] = lambda: plots.table2(result.rows())
+        makers["table2.png"] = lambda: plots.table2(result.rows(), result.study.name)
     if any(s.transducers for s in result.setups):
         makers["mss_voltage.png"] = lambda: plots_mss.mss_voltages(result)
         makers["mss_integrated.png"] = lambda: plots_mss.mss_integrated(result)
@@ -180,14 +185,16 @@ def format_summary(result: StudyResult) -> str:
 def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
           noise: float = 0.01, seed: int = 0) -> Path:
     """Write synthetic measurements of one setup of ``study`` to ``out`` (never over a file)."""
+    from msens import preflight
     from msens.errors import InputError
     from msens.io.read import write_waveform
     from msens.synth import RigEffects, synthesize
 
-    if shots < 1 or shots > 10000:
-        raise InputError(f"--shots must be from 1 to 10000, got {shots}")
-    if not 0.0 <= noise <= 1.0:
-        raise InputError(f"--noise must be from 0 to 1 (fraction of the peak), got {noise}")
+    preflight.study(study)
+    out = preflight.output_file(out, "--out")
+    shots = preflight.count(shots, "--shots", 1, 10000)
+    noise = preflight.number(noise, "--noise", 0.0, 1.0, " (fraction of the peak)")
+    seed = preflight.count(seed, "--seed", 0, 2**63 - 1)
     if not 0 <= seed < 2**63:  # numpy's generators take non-negative seeds
         raise InputError(f"--seed must be from 0 to 2**63 - 1, got {seed}")
     names = [s.name for s in study.setups]
@@ -341,9 +348,13 @@ def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str |
            workers: int | None = None, progress: bool = True, fig_format: str = "png"):
     """Sweep coil/magnet designs of the study's MsS (:mod:`msens.design`); writes
     ``designs.csv``, ``pareto.<fig_format>`` and ``recommendation.json`` into ``out``."""
-    from msens import budget
+    from msens import budget, preflight
     from msens.design import load_sweep, run_design
 
+    preflight.study(study)
+    scheduler = preflight.check_scheduler(scheduler)
+    workers = preflight.check_workers(workers)
+    out = preflight.output_dir(out)
     budget.check(study)
     return run_design(study, load_sweep(sweep), out, scheduler=scheduler, workers=workers,
                       progress=progress, provenance=provenance(study),

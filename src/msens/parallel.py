@@ -20,13 +20,114 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import re
+import socket
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import contextmanager
 from contextvars import ContextVar
 from typing import Any
 
-from msens.errors import InputError
+from msens.errors import InputError, shorten
+
+#: Seconds to wait for a Dask scheduler to accept a connection when its address is checked.
+CONNECT_TIMEOUT_S = 5.0
+#: ``[tcp://]host:port``: a host name, an IPv4 address or a bracketed IPv6 address.
+_ADDRESS_RE = re.compile(r"(?:(?P<proto>[A-Za-z][A-Za-z0-9+.-]*)://)?"
+                         r"(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+)"
+                         r"(?::(?P<port>[0-9]{1,5}))?/?")
+_ADDRESS_HELP = ("a Dask scheduler address is tcp://host:port (e.g. tcp://10.0.0.5:8786, as "
+                 "'dask scheduler' prints it); leave --scheduler out to run on this machine")
+
+
+def check_scheduler(address: object, *, connect: bool = True) -> str | None:
+    """The Dask scheduler ``address`` checked before any work: its form, then that
+    dask.distributed is installed, then (``connect``) that something accepts a connection
+    there within :data:`CONNECT_TIMEOUT_S`.
+
+    Parameters
+    ----------
+    address : str or None
+        ``tcp://host:port`` or ``host:port``; None means local work (returned as is).
+    connect : bool
+        Also open (and close) a TCP connection to the address.
+
+    Returns
+    -------
+    str or None
+        The address with ``tcp://`` (None for None).
+
+    Raises
+    ------
+    InputError
+        Naming the address and what is wrong: malformed (empty, no port, another protocol:
+        ``inproc://`` exists only inside one process, ``tls://`` needs security settings msens
+        does not pass), dask missing, or nothing listening.
+    """
+    if address is None:
+        return None
+    if not isinstance(address, str):
+        raise InputError(f"--scheduler must be an address string, got "
+                         f"{type(address).__name__} {shorten(address)}; {_ADDRESS_HELP}")
+    text = address.strip()
+    if not text:
+        raise InputError(f"--scheduler is empty; {_ADDRESS_HELP}")
+    m = _ADDRESS_RE.fullmatch(text)
+    if m is None:
+        raise InputError(f"--scheduler {shorten(address)} is not an address; {_ADDRESS_HELP}")
+    proto, host, port = m.group("proto"), m.group("host"), m.group("port")
+    if proto is not None and proto.lower() != "tcp":
+        why = {"inproc": "an in-process address exists only inside the process that made it",
+               "tls": "TLS needs certificates msens does not pass",
+               "ucx": "UCX is not supported"}.get(proto.lower(), "an unknown protocol")
+        raise InputError(f"--scheduler {shorten(address)}: protocol {proto}:// is not "
+                         f"supported ({why}); {_ADDRESS_HELP}")
+    if port is None:
+        raise InputError(f"--scheduler {shorten(address)} has no port; {_ADDRESS_HELP}")
+    if not 1 <= int(port) <= 65535:
+        raise InputError(f"--scheduler {shorten(address)}: port {int(port)} is not from 1 to "
+                         f"65535; {_ADDRESS_HELP}")
+    _need_distributed()
+    canonical = f"tcp://{host}:{int(port)}"
+    if connect:
+        try:
+            with socket.create_connection((host.strip("[]"), int(port)),
+                                          timeout=CONNECT_TIMEOUT_S):
+                pass
+        except (OSError, UnicodeError) as exc:
+            reason = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
+            raise InputError(f"--scheduler {shorten(address)}: no Dask scheduler answers "
+                             f"there ({reason}); start one ('dask scheduler') or check the "
+                             "address") from None
+    return canonical
+
+
+def check_workers(workers: object) -> int | None:
+    """``workers`` (local worker processes) checked: None (all CPUs) or an integer >= 1.
+
+    Raises
+    ------
+    InputError
+        For 0, negative counts, fractions, booleans and non-numbers.
+    """
+    if workers is None:
+        return None
+    if isinstance(workers, bool) or not isinstance(workers, int):
+        raise InputError(f"--workers must be a whole number of processes >= 1, got "
+                         f"{shorten(workers)}")
+    if workers < 1:
+        raise InputError(f"--workers must be >= 1 (leave it out to use all "
+                         f"{default_workers()} CPUs), got {workers}")
+    return workers
+
+
+def _need_distributed() -> None:
+    """InputError if dask.distributed (an optional extra) is not installed."""
+    try:
+        import distributed  # noqa: F401
+    except ImportError as exc:
+        raise InputError('--scheduler needs dask.distributed, which is not installed: '
+                         'pip install "msens[cluster]"') from exc
 
 #: Whether a library call may start its own local process pool (see :func:`pools_allowed`).
 _POOLS_ALLOWED: ContextVar[bool] = ContextVar("msens_pools_allowed", default=False)
@@ -88,9 +189,7 @@ def run_tasks(fn: Callable[[Any], Any], args: Sequence[Any], *,
     if scheduler is not None:
         yield from _run_dask(fn, args, scheduler)
         return
-    n = default_workers() if workers is None else workers
-    if n < 1:
-        raise InputError(f"workers must be >= 1, got {n}")
+    n = default_workers() if workers is None else check_workers(workers)
     if n == 1 or len(args) == 1:
         for i, a in enumerate(args):
             yield i, fn(a)
@@ -125,16 +224,14 @@ def _share_cores(threads: int) -> None:
 
 def _run_dask(fn: Callable[[Any], Any], args: Sequence[Any],
               scheduler: str) -> Iterator[tuple[int, Any]]:
-    try:
-        from distributed import Client, as_completed
-    except ImportError as exc:  # an optional extra: the base install has no dask
-        raise InputError('--scheduler needs dask.distributed, which is not installed: '
-                         'pip install "msens[cluster]"') from exc
+    scheduler = check_scheduler(scheduler, connect=False)  # the form, then dask installed
+    from distributed import Client, as_completed
+
     try:
         client = Client(scheduler, timeout="10s")
-    except OSError as exc:
-        raise InputError(f"cannot connect to the Dask scheduler at {scheduler!r}: {exc}") \
-            from exc
+    except (OSError, ValueError, TypeError) as exc:  # distributed's parse errors are ValueError
+        raise InputError(f"cannot connect to the Dask scheduler at {shorten(scheduler)}: "
+                         f"{shorten(str(exc), 200)}") from None
     try:
         futures = [client.submit(fn, a, pure=False) for a in args]
         index = {f.key: i for i, f in enumerate(futures)}
@@ -144,4 +241,5 @@ def _run_dask(fn: Callable[[Any], Any], args: Sequence[Any],
         client.close()
 
 
-__all__ = ["allow_pools", "default_workers", "pools_allowed", "run_tasks"]
+__all__ = ["allow_pools", "check_scheduler", "check_workers", "default_workers",
+           "pools_allowed", "run_tasks"]

@@ -48,7 +48,7 @@ from msens.config.schema import (
     SimulationSpec,
     StrikerSpec,
 )
-from msens.errors import InputError
+from msens.errors import InputError, shorten
 from msens.io.tomlreader import Table, document_table, read_document
 from msens.readout.electronics import ElectronicsSpec
 
@@ -141,15 +141,18 @@ def load_study(path: str | Path) -> Study:
     InputError
         Missing or unreadable file, bad TOML, or any invalid key or value.
     """
+    from msens.io._files import read_text
+
+    if not isinstance(path, str | os.PathLike):
+        raise InputError(f"a study is loaded from a path (str or pathlib.Path) to a .toml file, "
+                         f"got {type(path).__name__} {shorten(path)}")
+    if str(path) == "":
+        raise InputError("study file path is empty: give a .toml file")
     path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except FileNotFoundError:
-        raise InputError(f"study file '{path}' does not exist") from None
-    except IsADirectoryError:
-        raise InputError(f"study file '{path}' is a directory, expected a .toml file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"study file '{path}' cannot be read: {exc}") from None
+    if not path.exists():
+        raise InputError(f"study file '{path}' does not exist")
+    # a regular file of bounded size: /dev/zero or a pipe would be read forever
+    text = read_text(path, what="study file")
     return parse_study(text, source=str(path), base_dir=path.parent)
 
 

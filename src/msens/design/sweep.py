@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -166,13 +167,11 @@ class SweepSpec:
 
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and validate a sweep file (raises :class:`InputError`)."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"sweep file '{path}' does not exist") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"sweep file '{path}' cannot be read: {exc}") from None
+    from msens.io._files import read_text
+
+    if isinstance(path, str | os.PathLike) and str(path) and not Path(path).exists():
+        raise InputError(f"sweep file '{path}' does not exist")
+    text = read_text(path, what="sweep file")  # a regular file of bounded size
     return parse_sweep(text, source=str(path))
 
 

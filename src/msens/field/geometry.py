@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from msens.errors import InputError, require
+from msens.errors import InputError, require, shorten
 from msens.field.parts import (
     BiasMagnet,
     Coil,
@@ -78,6 +78,27 @@ def hertz_flat_radius(load: float, radius: float = BEAD_DIAMETER / 2,
 DEFAULT_CONTACT_LOAD = 12 * BEAD_MASS * G0 + PAPER_MAGNETIC_FORCE
 
 
+def _is_int(value: object) -> bool:
+    return isinstance(value, int | np.integer) and not isinstance(value, bool)
+
+
+def _is_real(value: object) -> bool:
+    return (isinstance(value, int | float | np.integer | np.floating)
+            and not isinstance(value, bool) and math.isfinite(value))
+
+
+def _require_types(record: object, *, ints: tuple[str, ...] = (),
+                   reals: tuple[str, ...] = ()) -> None:
+    """InputError naming the first field of ``record`` that is not an integer (``ints``) or a
+    finite real number (``reals``): a record built from Python gets the same one message as a
+    study key, not a TypeError from a comparison."""
+    for names, ok, kind in ((ints, _is_int, "an integer"), (reals, _is_real, "a finite number")):
+        for name in names:
+            value = getattr(record, name)
+            require(ok(value), f"{type(record).__name__}.{name} must be {kind}, got "
+                               f"{type(value).__name__} {shorten(value)}")
+
+
 @dataclass(frozen=True)
 class BeadChain:
     """The modelled part of the chain.
@@ -118,6 +139,14 @@ class BeadChain:
                                                      metadata={"omit_if_default": True})
 
     def __post_init__(self) -> None:
+        _require_types(self, ints=("first", "last", "count"),
+                       reals=("diameter", "contact_load", "min_flat_radius", "contact_gap"))
+        if self.contact_layer is not None:
+            layer = self.contact_layer
+            require(isinstance(layer, tuple | list) and len(layer) == 2
+                    and _is_int(layer[0]) and _is_real(layer[1]),
+                    "contact_layer must be None or (upper particle: int, thickness in m: "
+                    f"float), got {shorten(layer)}")
         require(self.count >= 2, f"chain count must be >= 2 particles, got {self.count}")
         require(2 <= self.first <= self.last <= self.count,
                 f"modelled beads must satisfy 2 <= first <= last <= count={self.count}, got "

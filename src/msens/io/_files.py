@@ -5,21 +5,71 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from msens.errors import InputError
+from msens.errors import InputError, shorten
 from msens.io.atomic import atomic_write_bytes as _atomic_bytes
 
 
-def read_bytes(path: str | os.PathLike[str]) -> bytes:
-    """Whole content of ``path``; InputError if it is missing or unreadable."""
+#: Largest waveform file msens reads, bytes (a 1 ms record of 8 channels at 10 MHz as CSV
+#: is about 2 MB; a larger file is a mistake or would not fit in memory once parsed).
+MAX_DATA_BYTES = 1 << 30
+#: Largest study, sweep or column-map file msens reads, bytes (the shipped studies are a
+#: few kB; tabulated B-H curves add a few kB more).
+MAX_TEXT_BYTES = 4 << 20
+
+
+def read_bytes(path: str | os.PathLike[str], *, limit: int = MAX_DATA_BYTES,
+               what: str = "file") -> bytes:
+    """Whole content of the regular file ``path``.
+
+    Devices, pipes and folders are refused (``/dev/zero`` would be read forever), and so is
+    a file larger than ``limit`` bytes (checked while reading, so a file that grows is also
+    bounded).
+
+    Parameters
+    ----------
+    path : path-like
+        File to read.
+    limit : int
+        Largest size accepted, bytes.
+    what : str
+        What the file is, for messages ("study file", "waveform file").
+
+    Raises
+    ------
+    InputError
+        Missing, not a regular file, too large, or unreadable (naming the path and reason).
+    """
+    if not isinstance(path, str | os.PathLike):
+        raise InputError(f"{what} must be a path (str or pathlib.Path), got "
+                         f"{type(path).__name__} {shorten(path)}")
     p = Path(path)
+    if str(path) == "":
+        raise InputError(f"{what} path is empty")
     if not p.exists():
-        raise InputError(f"{p}: file not found")
+        raise InputError(f"{p}: {what} not found")
     if not p.is_file():
-        raise InputError(f"{p}: not a regular file")
+        kind = "a folder" if p.is_dir() else "a device, pipe or socket"
+        raise InputError(f"{p}: not a regular file ({kind}); give a {what} msens can read")
     try:
-        return p.read_bytes()
+        with open(p, "rb") as fh:
+            data = fh.read(limit + 1)
     except OSError as exc:
         raise InputError(f"{p}: cannot read ({exc.strerror or exc})") from None
+    if len(data) > limit:
+        raise InputError(f"{p}: {what} larger than {limit / 2**20:g} MiB; msens reads at most "
+                         "that much (is it the right file?)")
+    return data
+
+
+def read_text(path: str | os.PathLike[str], *, what: str,
+              limit: int = MAX_TEXT_BYTES) -> str:
+    """:func:`read_bytes` of a UTF-8 text file (a leading byte-order mark kept)."""
+    raw = read_bytes(path, limit=limit, what=what)
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: {what} is not UTF-8 text (byte {exc.start}: "
+                         f"{shorten(raw[exc.start:exc.start + 4])})") from None
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], content: bytes, overwrite: bool) -> Path:

@@ -66,9 +66,23 @@ def atomic_write(path: str | os.PathLike[str], write: Callable[[Path], None], *,
     Raises
     ------
     InputError
-        ``overwrite`` is False and ``path`` exists, or the folder cannot be created.
+        ``overwrite`` is False and ``path`` exists, or the file cannot be written (full
+        disk, read-only file system, no permission, a path under ``/proc``...): one message
+        naming ``path`` and the reason. No partial file is left.
     """
     p = Path(path)
+    try:
+        return _atomic_write(p, write, overwrite)
+    except InputError:
+        raise
+    except OSError as exc:  # full disk, read-only file system, no permission, /proc, ...
+        # one message naming the path and the reason, whichever step failed
+        raise InputError(f"{p}: cannot write ({exc.strerror or type(exc).__name__}); nothing "
+                         "was written there (an existing file is unchanged)") from None
+
+
+def _atomic_write(p: Path, write: Callable[[Path], None], overwrite: bool) -> Path:
+    """:func:`atomic_write` without the mapping of OS errors."""
     try:
         p.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -90,8 +104,12 @@ def atomic_write(path: str | os.PathLike[str], write: Callable[[Path], None], *,
             _link_new(tmp, p)
         _fsync_dir(p.parent)
     finally:
-        if os.path.exists(tmp):
+        try:
             os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        except OSError:  # pragma: no cover - a folder that became read-only meanwhile
+            pass
     return p
 
 

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from msens.errors import InputError
-from msens.io._files import read_bytes
+from msens.io._files import MAX_TEXT_BYTES, read_bytes
 from msens.io.waveform import (
     Channel,
 )
@@ -230,7 +230,7 @@ def load_column_map(path: str | os.PathLike[str]) -> ColumnMap:
 
     source = str(path)
     try:
-        text = read_bytes(path).decode("utf-8-sig")
+        text = read_bytes(path, limit=MAX_TEXT_BYTES, what="column map file").decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InputError(f"{source}: not UTF-8 text (byte {exc.start})") from None
     root = read_document(text, source=source, schema=SCHEMA)

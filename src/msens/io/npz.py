@@ -14,7 +14,7 @@ import os
 
 import numpy as np
 
-from msens.errors import InputError
+from msens.errors import InputError, shorten
 from msens.io._files import atomic_write_bytes, read_bytes
 from msens.io.waveform import (
     CHANNEL_FORMAT_HELP,
@@ -93,7 +93,14 @@ def _load_arrays(raw: bytes, source: str) -> dict[str, np.ndarray]:
                 f"{source}: a single .npy array, not an NPZ archive of {TIME_NAME} and channels"
             )
         with loaded:
-            return {name: loaded[name] for name in loaded.files}
+            arrays = {}
+            for name in loaded.files:
+                value = loaded[name]
+                if not isinstance(value, np.ndarray):  # numpy returns a non-.npy member as bytes
+                    raise InputError(f"{source}: member {shorten(name)} of the archive is not "
+                                     "a .npy array; an NPZ waveform holds only .npy arrays")
+                arrays[name] = value
+            return arrays
     except InputError:
         raise
     except Exception as exc:

@@ -12,7 +12,7 @@ import tomllib
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from msens.errors import InputError
+from msens.errors import InputError, shorten
 
 _TYPE_NAMES = {bool: "a boolean", int: "an integer", float: "a number", str: "a string"}
 
@@ -74,15 +74,20 @@ class Table:
         if value is None and allow_none:
             return None  # type: ignore[return-value]
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.error(name, f"must be a number, got {value!r}")
-        value = float(value)
+            raise self.error(name, f"must be a number, got {shorten(value)}")
+        given = value
+        try:
+            value = float(value)
+        except OverflowError:  # an integer beyond float range (TOML integers are unbounded)
+            value = math.inf if given > 0 else -math.inf
         if not math.isfinite(value):
-            raise self.error(name, f"must be finite, got {value!r}")
+            raise self.error(name, f"must be finite, got {shorten(given)}")
+        # the value exactly as given (repr): "<= 1, got 1.0000001", never a rounded "got 1"
         if low is not None and (value <= low if low_open else value < low):
             rel = ">" if low_open else ">="
-            raise self.error(name, f"must be {rel} {low:g}, got {value:g}")
+            raise self.error(name, f"must be {rel} {low:g}, got {shorten(given)}")
         if high is not None and value > high:
-            raise self.error(name, f"must be <= {high:g}, got {value:g}")
+            raise self.error(name, f"must be <= {high:g}, got {shorten(given)}")
         return value
 
     def integer(self, name: str, default: int | None = None, *, required: bool = False,
@@ -90,11 +95,11 @@ class Table:
         """An integer within ``[low, high]``."""
         value = self._raw(name, default, required)
         if isinstance(value, bool) or not isinstance(value, int):
-            raise self.error(name, f"must be an integer, got {value!r}")
+            raise self.error(name, f"must be an integer, got {shorten(value)}")
         if low is not None and value < low:
-            raise self.error(name, f"must be >= {low}, got {value}")
+            raise self.error(name, f"must be >= {low}, got {shorten(value)}")
         if high is not None and value > high:
-            raise self.error(name, f"must be <= {high}, got {value}")
+            raise self.error(name, f"must be <= {high}, got {shorten(value)}")
         return value
 
     def string(self, name: str, default: str | None = None, *, required: bool = False,
@@ -104,16 +109,16 @@ class Table:
         if value is None and default is None and not required:
             return None  # type: ignore[return-value]
         if not isinstance(value, str):
-            raise self.error(name, f"must be a string, got {value!r}")
+            raise self.error(name, f"must be a string, got {shorten(value)}")
         if choices is not None and value not in choices:
             allowed = ", ".join(repr(c) for c in choices)
-            raise self.error(name, f"must be one of {allowed}, got {value!r}")
+            raise self.error(name, f"must be one of {allowed}, got {shorten(value)}")
         return value
 
     def boolean(self, name: str, default: bool | None = None, *, required: bool = False) -> bool:
         value = self._raw(name, default, required)
         if not isinstance(value, bool):
-            raise self.error(name, f"must be true or false, got {value!r}")
+            raise self.error(name, f"must be true or false, got {shorten(value)}")
         return value
 
     def table(self, name: str, *, required: bool = False) -> Table | None:
@@ -174,5 +179,5 @@ def document_table(data: Mapping[str, Any], *, source: str, schema: str) -> Tabl
     root = Table(data, "", source)
     found = root.string("schema", required=True)
     if found != schema:
-        raise root.error("schema", f"must be {schema!r}, got {found!r}")
+        raise root.error("schema", f"must be {schema!r}, got {shorten(found)}")
     return root

@@ -21,7 +21,7 @@ from typing import Literal, get_args
 
 import numpy as np
 
-from msens.errors import InputError
+from msens.errors import InputError, shorten
 
 Kind = Literal["bead", "rod", "mss"]
 KINDS: tuple[str, ...] = get_args(Kind)
@@ -53,13 +53,18 @@ METADATA_KEY_HELP = (
 )
 
 
+#: Largest particle or repeat number of a channel: far above any chain's particles (a study
+#: has at most 1000 beads) and shots, and within every format's integer (TDMS stores int32).
+MAX_CHANNEL_INDEX = 1_000_000
+
+
 def _default_locate(index: int) -> str:
     return f"sample {index}"
 
 
 @dataclass(frozen=True, order=True)
 class Channel:
-    """One recorded signal.
+    """One recorded signal (particle and repeat at most :data:`MAX_CHANNEL_INDEX`).
 
     Parameters
     ----------
@@ -80,7 +85,11 @@ class Channel:
             raise InputError(f"channel kind {self.kind!r} is not one of {', '.join(KINDS)}")
         for label, value in (("particle", self.particle), ("repeat", self.repeat)):
             if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-                raise InputError(f"channel {label} must be a positive integer, got {value!r}")
+                raise InputError(f"channel {label} must be a positive integer, got "
+                                 f"{shorten(value)}")
+            if value > MAX_CHANNEL_INDEX:  # one rule for every reader and writer
+                raise InputError(f"channel {label} must be <= {MAX_CHANNEL_INDEX:,} (chains "
+                                 f"have at most a thousand beads), got {shorten(value)}")
 
     @property
     def name(self) -> str:
@@ -100,10 +109,10 @@ class Channel:
             If ``name`` does not follow the grammar; the message says what is allowed.
         """
         if not isinstance(name, str):
-            raise InputError(f"channel name must be a string, got {name!r}")
+            raise InputError(f"channel name must be a string, got {shorten(name)}")
         match = _CHANNEL_RE.fullmatch(name.strip())
         if match is None:
-            raise InputError(f"unknown channel name {name!r}: {CHANNEL_FORMAT_HELP}")
+            raise InputError(f"unknown channel name {shorten(name)}: {CHANNEL_FORMAT_HELP}")
         kind, particle, repeat = match.groups()
         return cls(kind, int(particle), int(repeat) if repeat else 1)  # type: ignore[arg-type]
 

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from msens.errors import InputError
+from msens.errors import InputError, InternalError
 from msens.field.build import MeshOptions
 from msens.field.geometry import AirBox, BeadChain, SensorGeometry
 from msens.field.parts import BiasMagnet, Coil, SensorUnit
@@ -49,7 +49,7 @@ def test_contact_rule_averages_neighbour_beads():
     # leading axes (coil designs) are kept
     _, many = contact_sensitivity(np.array([4, 5, 6]), np.array([[1.0, 2.0, 4.0]] * 2), 30)
     assert many.tolist() == [[0.5, 1.5, 3.0, 2.0]] * 2
-    with pytest.raises(InputError, match="consecutive"):
+    with pytest.raises(InternalError, match="consecutive"):  # msens picks the particles
         contact_sensitivity(np.array([4, 6]), np.array([1.0, 2.0]), 30)
 
 

@@ -27,7 +27,7 @@ import numpy as np
 from scipy import fft
 from scipy.ndimage import uniform_filter1d
 
-from msens.errors import InputError
+from msens.errors import InputError, internal
 from msens.io.waveform import Waveform
 
 #: Fewest pre-trigger samples for a noise estimate.
@@ -177,8 +177,8 @@ def ensemble(waveform: Waveform, order: list[tuple[str, int]],
     if shifts is None:
         shifts = [0] + [_lag(data[0], data[i], limit) for i in range(1, k)]
     shifts = np.asarray(shifts, dtype=int)
-    if shifts.shape != (k,) or np.any(np.abs(shifts) >= tau.size // 2):
-        raise ValueError(f"internal: bad shot shifts {shifts} for {k} shots")
+    internal(shifts.shape == (k,) and not np.any(np.abs(shifts) >= tau.size // 2),
+             f"internal: bad shot shifts {shifts} for {k} shots")
     # shot i at sample j + shift_i is the first shot at sample j, for j in [lo, hi)
     lo, hi = int(max(0, -shifts.min())), int(tau.size - max(0, shifts.max()))
     aligned = np.stack([data[i, :, lo + s:hi + s] for i, s in enumerate(shifts)])

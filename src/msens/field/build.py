@@ -27,7 +27,7 @@ from pathlib import Path
 
 import gmsh
 
-from msens.errors import require
+from msens.errors import internal, require
 from msens.field.geometry import Rect, SensorGeometry
 
 _log = logging.getLogger(__name__)
@@ -115,8 +115,7 @@ def _bead_surface(occ, r: float, zc: float, h: float) -> int:
     disk = occ.addDisk(0.0, zc, 0.0, r, r)
     box = occ.addRectangle(0.0, zc - h, 0.0, r, 2 * h)
     out, _ = occ.intersect([(2, disk)], [(2, box)])
-    if len(out) != 1:
-        raise RuntimeError("internal: bead truncation gave more than one surface")
+    internal(len(out) == 1, "internal: bead truncation gave more than one surface")
     return out[0][1]
 
 
@@ -276,12 +275,10 @@ def build_mesh(geometry: SensorGeometry, path: str | Path,
                          for i, (name, _) in enumerate(named)}
         taken = {t for ts in part_children.values() for t in ts}
         air = [t for d, t in out_map[0] if d == 2 and t not in taken]
-        if not air:
-            raise RuntimeError("internal: no air left after fragmenting the model")
+        internal(bool(air), "internal: no air left after fragmenting the model")
 
         for name, tags in part_children.items():
-            if not tags:
-                raise RuntimeError(f"internal: part {name} vanished in fragmenting")
+            internal(bool(tags), f"internal: part {name} vanished in fragmenting")
             gmsh.model.addPhysicalGroup(2, tags, name=name)
         gmsh.model.addPhysicalGroup(2, air, name="air")
 
@@ -305,8 +302,7 @@ def build_mesh(geometry: SensorGeometry, path: str | Path,
                 z = MM * b.contact_z(upper)
                 flat = [t for _, t in gmsh.model.getEntitiesInBoundingBox(
                     -eps, z - eps, -1, a + eps, z + eps, 1, dim=1)]
-                if len(flat) != 1:
-                    raise RuntimeError(f"internal: contact {upper}-{lower} flat not found")
+                internal(len(flat) == 1, f"internal: contact {upper}-{lower} flat not found")
                 gmsh.model.addPhysicalGroup(1, flat, name=f"contact_{upper}_{lower}")
 
         _set_sizes(geometry, options, part_rects)

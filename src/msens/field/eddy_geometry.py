@@ -162,8 +162,8 @@ def layered_sphere_mesh(radius: float, layer: SkinLayer, r_out: float,
         sphere_s = {s for _, s in child[1]}
         layer_s = sorted(sphere_s - core_s)
         air_s = sorted({s for _, s in child[0]} - sphere_s)
-        require(len(layer_s) == 1 and len(core_s) == 1 and len(air_s) == 1,
-                "internal: unexpected gmsh fragments of the layered sphere")
+        internal(len(layer_s) == 1 and len(core_s) == 1 and len(air_s) == 1,
+                 "internal: unexpected gmsh fragments of the layered sphere")
         arcs = {}
         for _, c in gmsh.model.getBoundary([(2, layer_s[0])], combined=False, oriented=False):
             com = occ.getCenterOfMass(1, abs(c))
@@ -174,8 +174,8 @@ def layered_sphere_mesh(radius: float, layer: SkinLayer, r_out: float,
             com = occ.getCenterOfMass(1, abs(c))
             if math.hypot(com[0], com[1]) > 0.5 * (radius + r_out) and com[0] > 1e-9 * r_out:
                 outer.append(abs(c))
-        require(len(arcs) == 2 and len(outer) == 1,
-                "internal: could not identify the layer arcs and the outer boundary")
+        internal(len(arcs) == 2 and len(outer) == 1,
+                 "internal: could not identify the layer arcs and the outer boundary")
         for c in arcs.values():
             gmsh.model.mesh.setTransfiniteCurve(c, n_arc + 1)
         occ.remove([(2, layer_s[0])])  # filled below; its bounding curves stay
@@ -204,8 +204,8 @@ def layered_sphere_mesh(radius: float, layer: SkinLayer, r_out: float,
 
         tri_core, tri_air = triangles(next(iter(core_s))), triangles(air_s[0])
         ring_out, ring_in = arc_nodes(arcs["outer"]), arc_nodes(arcs["inner"])
-        require(ring_out.size == n_arc + 1 and ring_in.size == n_arc + 1,
-                "internal: the layer arcs do not have arc_segments + 1 nodes")
+        internal(ring_out.size == n_arc + 1 and ring_in.size == n_arc + 1,
+                 "internal: the layer arcs do not have arc_segments + 1 nodes")
         _, _, lines = gmsh.model.mesh.getElements(1, outer[0])
         outer_lines = np.array([index[int(g)] for g in lines[0]], dtype=np.int64).reshape(-1, 2)
     finally:

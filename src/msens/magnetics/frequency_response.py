@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
-from msens.errors import require
+from msens.errors import internal, require
 from msens.params.units import TWO_PI
 
 
@@ -92,15 +92,15 @@ class FrequencyResponse:
         n_f, n_c = f.size, np.asarray(self.contacts).size
         require(n_f >= 2 and f[0] == 0.0 and bool(np.all(np.diff(f) > 0)),
                 "FrequencyResponse needs increasing frequencies starting at 0 Hz (>= 2)")
-        require(np.shape(self.villari) == (n_f, n_c) and np.shape(self.approach) == (n_f, n_c)
-                and np.shape(self.impedance) == (n_f,),
-                "internal: FrequencyResponse arrays must have shapes (n_f, n_c) and (n_f,)")
+        internal(np.shape(self.villari) == (n_f, n_c) and np.shape(self.approach) == (n_f, n_c)
+                 and np.shape(self.impedance) == (n_f,),
+                 "internal: FrequencyResponse arrays must have shapes (n_f, n_c) and (n_f,)")
         if self.offsets is not None:
             n_o = np.asarray(self.offsets).size
-            require(np.shape(self.villari_by_offset) == (n_o, n_f, n_c)
-                    and np.shape(self.approach_by_offset) == (n_o, n_f, n_c),
-                    "internal: FrequencyResponse offset profiles must have shape "
-                    "(n_o, n_f, n_c)")
+            internal(np.shape(self.villari_by_offset) == (n_o, n_f, n_c)
+                     and np.shape(self.approach_by_offset) == (n_o, n_f, n_c),
+                     "internal: FrequencyResponse offset profiles must have shape "
+                     "(n_o, n_f, n_c)")
 
     @property
     def inductance(self) -> np.ndarray:

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from msens.errors import internal, require
+from msens.errors import internal
 from msens.field.assembly import assemble_matrix, assemble_vector
 from msens.field.constitutive import reluctivities, small_signal_tangent, tangent
 from msens.field.forms import element_stiffness, flux_density_qp
@@ -302,8 +302,8 @@ def linkage_table(sol: FieldSolution, potentials: np.ndarray, r_range: tuple[flo
 def _interp_weights(grid: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     h = grid[1] - grid[0]
     t = (np.asarray(x, dtype=float) - grid[0]) / h
-    require(bool(np.all((t >= -1e-9) & (t <= grid.size - 1 + 1e-9))),
-            f"internal: coil edge outside the linkage table {grid[0]:.4g}..{grid[-1]:.4g} m")
+    internal(bool(np.all((t >= -1e-9) & (t <= grid.size - 1 + 1e-9))),
+             f"internal: coil edge outside the linkage table {grid[0]:.4g}..{grid[-1]:.4g} m")
     i = np.clip(np.floor(t).astype(int), 0, grid.size - 2)
     return i, np.clip(t - i, 0.0, 1.0)
 

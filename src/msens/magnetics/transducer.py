@@ -135,9 +135,9 @@ class Transducer:
 
     def __post_init__(self) -> None:
         n = np.asarray(self.contacts).shape
-        require(np.asarray(self.sensitivity_villari).shape == n
-                and np.asarray(self.dlambda_dapproach).shape == n,
-                "internal: Transducer sensitivities must have one value per contact")
+        internal(np.asarray(self.sensitivity_villari).shape == n
+                 and np.asarray(self.dlambda_dapproach).shape == n,
+                 "internal: Transducer sensitivities must have one value per contact")
 
     @property
     def sensitivity_approach(self) -> np.ndarray:

@@ -17,7 +17,7 @@ from itertools import pairwise
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from msens.errors import require
+from msens.errors import internal, require
 from msens.field.geometry import SensorGeometry
 from msens.magnetics.transducer import Transducer, magnetic_precompression
 from msens.magnetics.transducer_cache import transducers_for
@@ -95,8 +95,8 @@ def remanence_family(geometry: SensorGeometry, nodes: tuple[float, ...] = NODES,
 
     Keyword arguments go to :func:`msens.magnetics.transducer_cache.transducers_for`.
     """
-    require(all(a < b for a, b in pairwise(nodes)) and len(nodes) >= 2,
-            "internal: remanence nodes must increase")
+    internal(all(a < b for a, b in pairwise(nodes)) and len(nodes) >= 2,
+             "internal: remanence nodes must increase")
     members = tuple(transducers_for(scaled_geometry(geometry, f), **kwargs) for f in nodes)
     return RemanenceFamily(geometry=geometry, nodes=tuple(nodes), members=members)
 

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from matplotlib.tri import Triangulation
 
-from msens.errors import require
+from msens.errors import internal
 from msens.field.geometry import SensorGeometry
 from msens.field.parts import Coil
 from msens.field.regions import Winding
@@ -194,10 +194,10 @@ def contact_sensitivity(particles: np.ndarray, bead_sensitivity: np.ndarray,
         Wb/N; unmodelled neighbours (and the wall) contribute nothing.
     """
     particles = np.asarray(particles, dtype=int)
-    require(particles.size > 0 and bool(np.all(np.diff(particles) == 1)),
-            "internal: modelled particles must be consecutive")
-    require(particles[-1] <= count,
-            f"internal: particle {particles[-1]} beyond the chain of {count}")
+    internal(particles.size > 0 and bool(np.all(np.diff(particles) == 1)),
+             "internal: modelled particles must be consecutive")
+    internal(particles[-1] <= count,
+             f"internal: particle {particles[-1]} beyond the chain of {count}")
     s = np.asarray(bead_sensitivity, dtype=float)
     pad = [(0, 0)] * (s.ndim - 1) + [(1, 1)]
     padded = np.pad(s, pad)

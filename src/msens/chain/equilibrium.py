@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from msens.chain.model import Chain
+from msens.errors import InputError
 from msens.mechanics.hertz import hertz_approach
 
 
@@ -30,8 +31,9 @@ def static_contact_forces(chain: Chain) -> np.ndarray:
 
     Raises
     ------
-    ValueError
-        If the loads would put a contact in tension (the chain would come apart).
+    InputError
+        If the loads would put a contact in tension (the chain would come apart): the
+        static forces given cannot hold the chain together, a property of the input.
     """
     return contact_forces_from_loads(chain.load())
 
@@ -53,10 +55,11 @@ def contact_forces_from_loads(load: np.ndarray) -> np.ndarray:
         what = "the wall" if k == n - 1 else f"particle {k + 2}"
         pos = (*(int(i) for i in idx[:-1]), k)
         run = f" in run {pos[:-1]}" if load.ndim > 1 else ""
-        raise ValueError(
+        raise InputError(
             f"static loads put contact c_{k + 1} (particle {k + 1} on {what}){run} in tension "
-            f"({force[pos]:.6g} N): the chain cannot be in static "
-            "equilibrium")
+            f"({force[pos]:.6g} N): the chain cannot be in static equilibrium (a static "
+            "force pulls its beads apart more than their weight and the forces above hold "
+            "them together)")
     return np.maximum(force, 0.0)
 
 

@@ -12,6 +12,7 @@ import math
 from msens.chain.model import DampingLaw as Damping
 from msens.config import plausible as P
 from msens.config.schema import ChainSpec, InsertSpec, PrecompressionSpec, StrikerSpec, WallSpec
+from msens.errors import shorten
 from msens.io.tomlreader import Table
 from msens.params.units import G0
 
@@ -132,7 +133,11 @@ def _precompression(t: Table, chain: ChainSpec) -> PrecompressionSpec:
           and all(isinstance(c, int) and not isinstance(c, bool) for c in contacts))
     if not ok or not 1 <= contacts[0] <= contacts[1] <= n - 1:
         raise t.error("contacts", f"must be [first, last] contact numbers with "
-                                  f"1 <= first <= last <= {n - 1}, got {contacts!r}")
+                                  f"2 <= first <= last <= {n - 1}, got {shorten(contacts)}")
+    if contacts[0] == 1:  # +F on the striker, which is in flight: -F alone pulls the chain
+        raise t.error("contacts", f"must start at contact 2 or later, got {contacts!r}: "
+                                  "contact 1 is the striker's, which touches the chain only "
+                                  "at impact and carries no static force")
     force = t.number("force_N", required=True, low=0.0, high=1e6)  # 1 MN crushes any bead
     _check_static_load(t, "force_N", force, chain)
     t.finish()

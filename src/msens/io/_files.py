@@ -8,7 +8,6 @@ from pathlib import Path
 from msens.errors import InputError, shorten
 from msens.io.atomic import atomic_write_bytes as _atomic_bytes
 
-
 #: Largest waveform file msens reads, bytes (a 1 ms record of 8 channels at 10 MHz as CSV
 #: is about 2 MB; a larger file is a mistake or would not fit in memory once parsed).
 MAX_DATA_BYTES = 1 << 30

@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from tests.test_mss_roundtrip import diagnose_hidden
+from tests.integration.test_mss_roundtrip import diagnose_hidden
 
 from msens.cli import main
 from msens.config.study import default_study_path

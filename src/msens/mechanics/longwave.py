@@ -9,7 +9,7 @@ Sen, Hong, Bang, Avalos & Doney, Phys. Rep. 462 (2008) 21, Eq. 20-22): ``F_m`` i
 **maximum total contact force** in the wave, i.e. static precompression plus dynamic part,
 and ``f_r = F_m / F0 >= 1``. With ``F0 -> 0`` the precompressed speed tends to the
 uncompressed one, and with ``f_r -> 1`` it tends to the sound speed ``c0`` (both checked
-in tests/test_longwave.py).
+in tests/mechanics/test_longwave.py).
 
 The numerical prefactors 0.6802 and 0.9314 are those of the paper (its Eq. 3-5); the exact
 values are sqrt(8/15) (81/pi^3)^(1/6) / 2^(1/3) = 0.68015... and (81/(4 pi^3))^(1/6) =

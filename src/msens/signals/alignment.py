@@ -99,7 +99,7 @@ def xcorr_delay(
     toward integer lags instead. Broadband noise enters through its own correlation
     over the whole record; low-pass both records first (e.g. :func:`lowpass` a few times
     above the pulse band), after which the error reaches the Cramér–Rao bound
-    ``sqrt(2) noise / sqrt(sum(ds/dn ** 2))`` samples (tests/test_processing.py).
+    ``sqrt(2) noise / sqrt(sum(ds/dn ** 2))`` samples (tests/signals/test_processing.py).
     """
     a = np.asarray(reference, dtype=np.float64)
     b = np.asarray(values, dtype=np.float64)

@@ -148,7 +148,7 @@ def test_scheduler_without_dask_is_an_input_error(monkeypatch):
 
 def test_design_scheduler_without_dask_exits_2(tmp_path, monkeypatch, capsys):
     study, sweep = tmp_path / "study.toml", tmp_path / "sweep.toml"
-    study.write_text((Path(__file__).parent / "data" / "tiny-mss.toml").read_text())
+    study.write_text((Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text())
     sweep.write_text("""
 schema = "msens.sweep/1"
 name = "tiny-magnet"

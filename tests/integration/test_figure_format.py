@@ -79,7 +79,7 @@ def test_design_writes_the_chosen_format(tmp_path):
 
     assert files("svg") == ("designs.csv", "pareto.svg", "recommendation.json")
     study = tmp_path / "study.toml"
-    study.write_text((Path(__file__).parent / "data" / "tiny-mss.toml").read_text())
+    study.write_text((Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text())
     sweep = tmp_path / "sweep.toml"
     sweep.write_text('schema = "msens.sweep/1"\nname = "t"\n[coil]\nturns = [600, 1100]\n')
     out = tmp_path / "o"

@@ -9,6 +9,7 @@ its output layout, and refuses the study naming the keys, with the numbers.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from msens.config import plausible as P
@@ -20,6 +21,13 @@ from msens.errors import InputError
 _BYTES_PER_SAMPLE = 2 * 8
 #: Contacts each run of the Eq. 10 calibration batch samples (two sensors' contacts).
 _CALIBRATION_CONTACTS = 8
+#: Largest count of mesh elements the eddy-current model's skin refinement may add
+#: (``[field] skin_size_m``). Measured on the one-coil tiny study (9 beads refined):
+#: 40 µm gives 38,600 elements in 3.6 s of meshing, 20 µm 71,500 in 7 s, 10 µm 139,000 in
+#: 17 s (the finest size of the convergence study, benchmarks/dynamic_mesh_convergence.py);
+#: 1 µm would be about 1.3 million, meshed for minutes and solved at every frequency.
+MAX_SKIN_ELEMENTS = 150_000
+
 #: Records of nt float64 samples each sensor adds (force, features' work arrays, and for a
 #: physics MsS its flux, EMF, voltage and circuit states), a generous count.
 _ARRAYS_PER_SENSOR = 16
@@ -87,9 +95,61 @@ def estimate(study: Study) -> Budget:
                   memory_bytes=float(memory), dt_s=dt)
 
 
+def skin_elements(study: Study) -> tuple[float, float]:
+    """Mesh elements the eddy-current model's skin refinement adds, and the ``skin_size_m``
+    that would add :data:`MAX_SKIN_ELEMENTS` (0, 0 without eddy currents or an MsS).
+
+    The refinement (:class:`msens.field.build.MeshOptions`) grades triangles of size
+    ``s + g d`` at distance ``d`` on both sides of each refined bead's surface (a half circle
+    of length pi R in the axisymmetric section), until a coarser size takes over, so a bead
+    adds about ``2 pi R / ((sqrt(3)/4) g s)`` triangles; within 10 % of the measured
+    counts (see :data:`MAX_SKIN_ELEMENTS`).
+
+    Returns
+    -------
+    (float, float)
+        Estimated elements (the setup that refines most beads) and the smallest allowed
+        skin size, m.
+    """
+    from msens.config.fieldsetup import eddy_settings, geometry_from_study
+    from msens.config.schema import MssModel
+
+    if not study.field.eddy_currents:
+        return 0.0, 0.0
+    options = eddy_settings(study).options
+    per_bead_times_size = 2.0 * math.pi * 0.5 * study.chain.bead_diameter_m / (
+        math.sqrt(3.0) / 4.0 * options.skin_growth)
+    most = 0
+    for setup in study.setups:
+        if not any(s.model is MssModel.PHYSICS for s in setup.sensors):
+            continue
+        geometry = geometry_from_study(study, setup)
+        coils = [u.coil.particle for u in geometry.sensors]
+        reach = max(options.near_contacts, 1)  # the beads msens.field.build refines
+        refined = [p for p in geometry.beads.particles
+                   if min(abs(p - q) for q in coils) <= reach]
+        most = max(most, len(refined))
+    scale = most * per_bead_times_size
+    smallest = scale / MAX_SKIN_ELEMENTS
+    if smallest > 0.0:  # rounded up to two significant digits, so the value quoted passes
+        step = 10.0 ** (math.floor(math.log10(smallest)) - 1)
+        smallest = math.ceil(smallest / step) * step
+    return scale / options.skin_size, smallest
+
+
 def check(study: Study) -> Budget:
     """Refuse ``study`` (InputError naming the keys) if its chain runs exceed the memory or
-    step budget of :mod:`msens.config.plausible`; returns the estimate otherwise."""
+    step budget of :mod:`msens.config.plausible`, or its eddy-current mesh the element
+    bound :data:`MAX_SKIN_ELEMENTS`, or if its records cannot resolve the pulse
+    (:func:`msens.resolvability.check_study`); returns the chain estimate otherwise."""
+    elements, smallest = skin_elements(study)
+    if elements > MAX_SKIN_ELEMENTS:
+        raise InputError(
+            f"{study.source}: 'field.skin_size_m' = {study.field.skin_size_m!r} m refines the "
+            f"bead surfaces near the coils into about {elements:,.0f} mesh elements; the bound "
+            f"is {MAX_SKIN_ELEMENTS:,} (minutes of meshing and of solving at every frequency "
+            f"beyond it): the smallest skin_size_m for this study is {smallest:.2g} m "
+            "(default 4e-05 m)")
     b = estimate(study)
     sim = study.simulation
     if b.memory_bytes > P.MEMORY_BUDGET_BYTES:

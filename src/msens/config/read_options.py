@@ -116,8 +116,10 @@ def _field(t: Table | None, chain: ChainSpec, source: str) -> FieldSpec:
                      skin_size_m=t.number("skin_size_m", None, low=1e-6, high=1e-3,
                                           allow_none=True),
                      contact_map=t.boolean("contact_map", False))
-    if spec.skin_size_m is not None and not spec.eddy_currents:
-        raise t.error("skin_size_m", "applies only with eddy_currents = true")
+    for key, value in (("skin_size_m", spec.skin_size_m),
+                       ("steel_conductivity_S_per_m", spec.steel_conductivity_s_per_m)):
+        if value is not None and not spec.eddy_currents:  # would be silently unused
+            raise t.error(key, "applies only with eddy_currents = true")
     if spec.reversibility is not None and spec.small_signal_permeability != "reversible":
         raise t.error("reversibility", "applies only with small_signal_permeability = "
                                        "\"reversible\"")

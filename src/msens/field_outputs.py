@@ -27,6 +27,7 @@ import numpy as np
 from msens.field.forms import flux_density_qp
 from msens.field.sensor_model import FieldReport
 from msens.io.atomic import atomic_write
+from msens.vocabulary import coil_name
 
 SCHEMA = "msens.field/1"
 
@@ -125,35 +126,86 @@ def write_vtu(report: FieldReport, path: str | Path) -> Path:
     return _atomic(Path(path), lambda tmp: meshio.write(tmp, out, file_format="vtu"))
 
 
-def _refined_psi(report: FieldReport) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """ψ = r A_φ on the mesh split into four triangles per element (vertices and edge
-    midpoints, where the P2 potential has its nodal values), for smooth field lines.
+#: Sub-triangles per element edge on which the flux function is contoured.
+FLUX_SUBDIVISION = 4
+
+
+def _lattice(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Barycentric points and sub-triangles of a triangle split ``n`` times per edge.
+
+    Returns
+    -------
+    lam : ndarray, shape ((n+1)(n+2)/2, 3)
+        Barycentric coordinates (λ0, λ1, λ2) of the lattice points.
+    tri : ndarray, shape (n², 3)
+        Sub-triangles, indices into ``lam``.
+    """
+    index = {}
+    lam = []
+    for i in range(n + 1):
+        for j in range(n + 1 - i):
+            index[i, j] = len(lam)
+            lam.append((1.0 - (i + j) / n, i / n, j / n))
+    tri = []
+    for i in range(n):
+        for j in range(n - i):
+            tri.append((index[i, j], index[i + 1, j], index[i, j + 1]))
+            if i + j < n - 1:
+                tri.append((index[i + 1, j], index[i + 1, j + 1], index[i, j + 1]))
+    return np.array(lam), np.array(tri)
+
+
+def _refined_psi(report: FieldReport, keep: np.ndarray | None = None,
+                 n: int = FLUX_SUBDIVISION) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                     np.ndarray]:
+    """ψ = r A_φ evaluated exactly from the P2 potential on every element split ``n`` times
+    per edge, for smooth field lines.
+
+    The P2 potential of an element is Σ a_k λ_k (2 λ_k − 1) + 4 Σ m_ij λ_i λ_j (vertex
+    values a_k, edge-midpoint values m_ij) and r is linear, so ψ is exact at the lattice
+    points; contours of the piecewise-linear interpolant between them follow the curved
+    field lines within elements instead of cutting across them in straight segments. A P1
+    potential is linear per element: its vertices are all there is.
+
+    Parameters
+    ----------
+    report : FieldReport
+    keep : ndarray of bool, shape (n_elements,), optional
+        Elements to evaluate (default all).
+    n : int
+        Subdivisions per element edge.
 
     Returns
     -------
     r, z : ndarray
-        Node coordinates, m.
-    triangles : ndarray, shape (4 n_elements, 3)
+        Point coordinates, m (each element has its own points).
+    triangles : ndarray, shape (n² n_kept, 3)
     psi : ndarray
-        r A_φ at the nodes, T m² (Wb per radian).
+        r A_φ at the points, T m² (Wb per radian).
     """
     sol = report.solution
     mesh = sol.basis.mesh
     p, t = mesh.p, mesh.t
+    if keep is not None:
+        t = t[:, keep]
     a = sol.a[sol.basis.nodal_dofs[0]]
     if sol.basis.facet_dofs.size == 0:  # P1: the vertices are all there is
         return p[0], p[1], t.T, a * p[0]
-    mid = 0.5 * (p[:, mesh.facets[0]] + p[:, mesh.facets[1]])
-    r = np.concatenate([p[0], mid[0]])
-    z = np.concatenate([p[1], mid[1]])
-    psi = r * np.concatenate([a, sol.a[sol.basis.facet_dofs[0]]])
-    n = p.shape[1]
-    v0, v1, v2 = t
+    t2f = mesh.t2f if keep is None else mesh.t2f[:, keep]
+    lam, sub = _lattice(n)
+    av = a[t]  # (3, ne): vertex values
     # skfem's edge order of a triangle: (0, 1), (1, 2), (0, 2)
-    m01, m12, m02 = n + mesh.t2f
-    tri = np.concatenate([np.stack([v0, m01, m02]), np.stack([v1, m12, m01]),
-                          np.stack([v2, m02, m12]), np.stack([m01, m12, m02])], axis=1)
-    return r, z, tri.T, psi
+    am = sol.a[sol.basis.facet_dofs[0]][t2f]  # (3, ne): edge-midpoint values
+    l0, l1, l2 = lam[:, 0, None], lam[:, 1, None], lam[:, 2, None]
+    pot = (av[0] * l0 * (2 * l0 - 1) + av[1] * l1 * (2 * l1 - 1) + av[2] * l2 * (2 * l2 - 1)
+           + 4 * (am[0] * l0 * l1 + am[1] * l1 * l2 + am[2] * l0 * l2))  # (points, ne)
+    r = lam @ p[0, t]
+    z = lam @ p[1, t]
+    ne = t.shape[1]
+    k = lam.shape[0]
+    tri = (sub[None, :, :] + k * np.arange(ne)[:, None, None]).reshape(-1, 3)
+    # element-major point order: element e's points are e*k .. e*k + k-1
+    return r.T.ravel(), z.T.ravel(), tri, (r * pot).T.ravel()
 
 
 def _smooth_bmag(ax, report: FieldReport, b_elem: np.ndarray, norm, cmap, scale: float,
@@ -212,7 +264,8 @@ def _outline(ax, report: FieldReport, scale: float, z_view: tuple[float, float])
             if not inside(q.z0, q.z1):
                 continue
             kind = q.name.split("_")[0]
-            text = f"coil @{u.coil.particle}" if kind == "coil" else names[kind]
+            text = (coil_name(u.coil.particle).replace(" at ", " at\n") if kind == "coil"
+                    else names[kind])
             ax.text(scale * 0.5 * (q.r0 + q.r1), scale * 0.5 * (q.z0 + q.z1), text,
                     ha="center", va="center", fontsize=6.5, bbox=box,
                     rotation=90 if kind != "pole" else 0)
@@ -240,6 +293,35 @@ def _sensor_z_span(report: FieldReport) -> tuple[float, float]:
 
 #: Number of flux lines (contours of ψ = r A_φ) in the field map: each carries the same flux.
 FLUX_LINES = 20
+
+
+def _flux_levels(report: FieldReport, psi: np.ndarray, keep: np.ndarray,
+                 bmag: np.ndarray) -> np.ndarray:
+    """:data:`FLUX_LINES` equally spaced values of ψ over the view's range ``psi``, placed
+    so that the weakest-field point of the air outside the tube (the null between opposed
+    magnets, a saddle of ψ) falls midway between two lines.
+
+    Near such a null the computed field is weakest and least accurate (coarse air
+    elements): a line through it would show the mesh's kinks rather than the field.
+    ``keep`` and ``bmag`` are the view's elements and the per-element |B|, T.
+    """
+    lo, hi = float(psi.min()), float(psi.max())
+    step = (hi - lo) / (FLUX_LINES + 1)
+    levels = np.linspace(lo, hi, FLUX_LINES + 2)[1:-1]
+    sol = report.solution
+    mesh = sol.basis.mesh
+    air = np.zeros(keep.size, dtype=bool)
+    air[sol.problem.mesh.subdomains.get("air", [])] = True
+    centre = mesh.p[:, mesh.t].mean(axis=1)
+    outside = air & keep & (centre[0] > report.geometry.tube.outer_radius)
+    if step <= 0 or not outside.any():
+        return levels
+    e = np.flatnonzero(outside)[np.argmin(bmag[outside])]
+    a = sol.a[sol.basis.nodal_dofs[0]]
+    null = float(np.mean(a[mesh.t[:, e]] * mesh.p[0, mesh.t[:, e]]))
+    shift = (null - lo) / step % 1.0 - 0.5  # null's place between two lines, -0.5 .. 0.5
+    shifted = levels + shift * step
+    return shifted[(shifted > lo) & (shifted < hi)]
 
 
 def field_map_figure(report: FieldReport):
@@ -273,10 +355,10 @@ def field_map_figure(report: FieldReport):
     fig, ax = plt.subplots(figsize=(5.6, 7.6), constrained_layout=True)
     norm = LogNorm(vmin=1e-2, vmax=2.5)  # the view holds 0.01 .. 2 T
     pc = _smooth_bmag(ax, report, bmag, norm, "magma", mm, keep)
-    r, z, tri, psi = _refined_psi(report)
+    r, z, tri, psi = _refined_psi(report, keep)
     view = (r <= r1) & (z >= z0) & (z <= z1)
-    lo, hi = psi[view].min(), psi[view].max()
-    ax.tricontour(mm * r, mm * z, tri, psi, levels=np.linspace(lo, hi, FLUX_LINES + 2)[1:-1],
+    ax.tricontour(mm * r, mm * z, tri, psi, levels=_flux_levels(report, psi[view], keep,
+                                                                bmag),
                   colors="#7fd3ff", linewidths=0.5, linestyles="solid")
     _outline(ax, report, mm, (z0, z1))
     ax.set_xlim(0, mm * r1)
@@ -284,8 +366,8 @@ def field_map_figure(report: FieldReport):
     ax.set_aspect("equal")
     ax.set_xlabel("r (mm)")
     ax.set_ylabel("z above the wall (mm)")
-    ax.set_title("Bias flux density |B| and flux lines (contours of r·A_φ)\n"
-                 "magnet: axisymmetric equivalent", fontsize=9)
+    ax.set_title(r"Bias flux density $|B|$ and flux lines (contours of $r\,A_\varphi$)"
+                 "\nmagnet: axisymmetric equivalent", fontsize=9)
     fig.colorbar(pc, ax=ax, label="|B| (T)", shrink=0.6)
     return fig
 
@@ -318,12 +400,53 @@ def plot_field_map(report: FieldReport, path: str | Path, fmt: str | None = None
         plt.close(fig)
 
 
-#: Scalar-bar title of the 3-D view ("|B| (T)" through VTK's mathtext, see plot_field_3d).
-_BAR_TITLE = r"$\mathrm{\vert B\vert}$ (T)"
+def _solid_triangles(report: FieldReport, z0: float, z1: float, r_max: float) -> np.ndarray:
+    """Triangles of the 3-D view: the solid parts (beads, magnets, pole pieces, coils) in
+    ``z0 .. z1`` (m) and ``r <= r_max``, every bead whole (a bead whose centre lies in the
+    range, never a half-shell cut at its edge), no air. Boolean mask over the elements."""
+    mesh = report.solution.problem.mesh.mesh
+    subdomains = report.solution.problem.mesh.subdomains
+    beads = report.geometry.beads
+    px, pz = mesh.p[0, mesh.t], mesh.p[1, mesh.t]
+    keep = np.all((px <= r_max) & (pz >= z0) & (pz <= z1), axis=0)
+    for name, elements in subdomains.items():
+        kind, _, index = name.partition("_")
+        if name == "air":
+            keep[elements] = False
+        elif kind == "bead" and index.isdigit():
+            keep[elements] = z0 <= beads.center(int(index)) <= z1
+    return keep
 
 
-def plot_field_3d(report: FieldReport, path: str | Path) -> Path:
-    """Meridian |B| revolved through 270° around the axis, rendered off-screen (PNG)."""
+def _crop_white(img: np.ndarray, margin: int) -> np.ndarray:
+    """``img`` (rows, columns, channels) cut to its non-white content plus ``margin``
+    pixels."""
+    content = np.any(img[..., :3] < 250, axis=2)
+    rows, cols = np.flatnonzero(content.any(axis=1)), np.flatnonzero(content.any(axis=0))
+    if rows.size == 0:
+        return img
+    r0, r1 = max(rows[0] - margin, 0), min(rows[-1] + margin + 1, img.shape[0])
+    c0, c1 = max(cols[0] - margin, 0), min(cols[-1] + margin + 1, img.shape[1])
+    return img[r0:r1, c0:c1]
+
+
+def field_3d_figure(report: FieldReport):
+    """The bias |B| on the solid parts revolved through 270° around the axis (pyvista,
+    off-screen), cut to the parts, with its colour bar and title (matplotlib).
+
+    The view spans the sensors' coils and magnets with 10 mm above and below, every bead in
+    it whole. The colour scale is the field map's (:func:`field_map_figure`): log, 0.01 ..
+    2.5 T.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    ImportError
+        pyvista is not installed (an optional extra), with the command that installs it.
+    """
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     try:
         import pyvista as pv
@@ -333,6 +456,12 @@ def plot_field_3d(report: FieldReport, path: str | Path) -> Path:
         hint = 'pyvista is not installed: pip install "msens[viz]" for this figure'
         logging.getLogger(__name__).info("field_3d.png skipped: %s", hint)
         raise ImportError(hint) from exc
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import LogNorm
 
     pv.OFF_SCREEN = True
     mesh = report.solution.problem.mesh.mesh
@@ -341,35 +470,64 @@ def plot_field_3d(report: FieldReport, path: str | Path) -> Path:
     z0, z1 = _sensor_z_span(report)
     z0, z1 = z0 - 0.01, z1 + 0.01
     r_max = max(q.r1 for q in g.rectangles()) * 1.15
-    # revolve the solid parts only (beads, magnets, pole pieces, coils): air would hide them
-    air = report.solution.problem.mesh.subdomains["air"]
-    keep = np.all((mesh.p[0, mesh.t] <= r_max) & (mesh.p[1, mesh.t] >= z0 - 2e-3)
-                  & (mesh.p[1, mesh.t] <= z1 + 2e-3), axis=0)
-    keep[air] = False
+    keep = _solid_triangles(report, z0, z1, r_max)
     t = mesh.t[:, keep]
     used, inv = np.unique(t, return_inverse=True)
     mm = 1e3
     pts = np.column_stack([mm * mesh.p[0, used], np.zeros(used.size), mm * mesh.p[1, used]])
     faces = np.column_stack([np.full(t.shape[1], 3), inv.reshape(3, -1).T]).ravel()
     surf = pv.PolyData(pts, faces)
-    # VTK's text renderer takes "|" for a column separator and drops it: a mathtext \vert
-    surf.cell_data[_BAR_TITLE] = np.linalg.norm(b_mean[keep], axis=1)
+    surf.cell_data["B_magnitude"] = np.linalg.norm(b_mean[keep], axis=1)
     vol = surf.extrude_rotate(resolution=54, angle=270.0, capping=True)
-    plotter = pv.Plotter(off_screen=True, window_size=(900, 1100))
-    plotter.add_mesh(vol, scalars=_BAR_TITLE, cmap="magma", log_scale=True,
-                     clim=(1e-2, 2.5), show_scalar_bar=True)
-    plotter.add_text(r"bias $\mathrm{\vert B\vert}$, 270° revolved (magnet: equivalent)",
-                     font_size=10)
+    lo, hi = 1e-2, 2.5  # the field map's scale
+    plotter = pv.Plotter(off_screen=True, window_size=(1300, 1700))
+    plotter.set_background("white")
+    plotter.add_mesh(vol, scalars="B_magnitude", cmap="magma", log_scale=True,
+                     clim=(lo, hi), show_scalar_bar=False)
     plotter.camera_position = "xz"
     plotter.camera.azimuth = 45
     plotter.camera.elevation = 25
-    path = Path(path)
-
-    def shot(tmp: str) -> None:
-        plotter.screenshot(tmp)
+    plotter.reset_camera()
+    plotter.camera.zoom(1.35)
+    try:
+        img = _crop_white(np.asarray(plotter.screenshot(return_img=True)), margin=12)
+    finally:
         plotter.close()
+    height, width = img.shape[:2]
+    dpi = 260.0  # rendered pixels per inch of the figure
+    fig = plt.figure(figsize=(width / dpi + 1.3, height / dpi + 0.5))
+    ax = fig.add_axes((0.0, 0.0, width / dpi / fig.get_figwidth(),
+                       height / dpi / fig.get_figheight()))
+    ax.imshow(img)
+    ax.set_axis_off()
+    cax = fig.add_axes((1.0 - 0.85 / fig.get_figwidth(), 0.2, 0.15 / fig.get_figwidth(), 0.55))
+    bar = fig.colorbar(ScalarMappable(LogNorm(lo, hi), "magma"), cax=cax)
+    bar.set_label("|B| (T)", fontsize=9)
+    bar.ax.tick_params(labelsize=8)
+    fig.suptitle("Bias flux density |B| on the beads, magnets, pole pieces and coils\n"
+                 "(meridian solution revolved through 270°; magnet: axisymmetric "
+                 "equivalent)", fontsize=8, y=1.0 - 0.05 / fig.get_figheight(), va="top")
+    return fig
 
-    return _atomic(path, shot)
+
+def plot_field_3d(report: FieldReport, path: str | Path) -> Path:
+    """Write :func:`field_3d_figure` as PNG to ``path``
+    (at :data:`msens.io.output.DPI`).
+
+    Raises
+    ------
+    ImportError
+        pyvista is not installed, with the command that installs it.
+    """
+    import matplotlib.pyplot as plt
+
+    from msens.io.output import DPI
+
+    fig = field_3d_figure(report)
+    try:
+        return _atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=DPI, format="png"))
+    finally:
+        plt.close(fig)
 
 
 def write_field_outputs(report: FieldReport, out_dir: str | Path,

@@ -30,6 +30,7 @@ from msens.design.sweep import design_geometry, parse_sweep
 from msens.errors import InputError
 from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.transducer import compute_transducers
+from msens.store import Store
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID = """
@@ -69,11 +70,10 @@ def main(eddy: bool = False) -> dict:
     best = min(t2 - t1, t3 - t2)
     with tempfile.TemporaryDirectory() as tmp:
         t4 = time.perf_counter()
-        compute_transducers(geometry, mesh_dir=tmp)
+        compute_transducers(geometry, store=Store.at(tmp))
         if eddy:
             e = eddy_settings(study)
-            dynamic_report(geometry, options=e.options, steel=e.steel, mesh_dir=tmp,
-                           cache_dir=tmp)
+            dynamic_report(geometry, options=e.options, steel=e.steel, store=Store.at(tmp))
         per_design = time.perf_counter() - t4
     return {"study": "paper-mss" + (" with eddy currents" if eddy else ""), "sensor": 13,
             "designs": len(designs),

@@ -24,6 +24,7 @@ from msens.magnetics.dynamic import frequency_responses
 from msens.magnetics.mechanisms import mechanism_potentials
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import bias_solution
+from msens.store import Store
 
 FREQS = (0.0, 1e4, 3e4, 1e5, 2e5)
 
@@ -38,7 +39,7 @@ def run(skin_um: float | None, mesh_dir: str) -> dict:
     g = one_sensor()
     opts = MeshOptions(skin_size=None if skin_um is None else skin_um * 1e-6)
     t0 = time.perf_counter()
-    sol, _ = bias_solution(g, options=opts, mesh_dir=mesh_dir)
+    sol, _ = bias_solution(g, options=opts, store=Store.at(mesh_dir))
     t1 = time.perf_counter()
     m = mechanism_potentials(sol, g, stress_force=g.beads.contact_load,
                              law=law_for_steel(g.steel))

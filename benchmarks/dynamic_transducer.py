@@ -24,12 +24,13 @@ import time
 from pathlib import Path
 
 import numpy as np
+from msens.magnetics.mss import readout
 
 from msens.config.fieldsetup import eddy_settings, geometry_from_study
 from msens.config.study import load_study
 from msens.magnetics.dynamic import dynamic_report
-from msens.magnetics.mss import readout
 from msens.readout.electronics import coil_transfer_function, transfer_function
+from msens.store import Store
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -54,7 +55,7 @@ def rebuild(geometry, eddy) -> dict:
         with tempfile.TemporaryDirectory() as tmp:
             t0 = time.perf_counter()
             rep = dynamic_report(geometry, options=eddy.options, steel=eddy.steel,
-                                 cache_dir=tmp, offsets=offsets)
+                                 store=Store.at(tmp), offsets=offsets)
             out["with_offsets" if offsets else "plain"] = {
                 "seconds": round(time.perf_counter() - t0, 1),
                 "stages_s": {k: round(v, 2) for k, v in rep.details["timings_s"].items()},

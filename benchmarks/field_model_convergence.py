@@ -32,6 +32,7 @@ import numpy as np
 from msens.field import sensor_model as sm
 from msens.field.build import MeshOptions
 from msens.field.geometry import AirBox, SensorGeometry
+from msens.store import Store
 
 SENSOR_BEADS = tuple(range(11, 21))
 SENSOR_CONTACTS = tuple((p, p + 1) for p in range(11, 20))
@@ -42,7 +43,7 @@ FOUR_18 = ((16, 17), (17, 18), (18, 19), (19, 20))
 def run(geometry: SensorGeometry, mesh_dir: str, options: MeshOptions | None = None) -> dict:
     """Bias solve and the compared quantities of one model."""
     t0 = time.perf_counter()
-    axi, _ = sm.load_mesh(geometry, options, mesh_dir)
+    axi, _ = sm.load_mesh(geometry, options, Store.at(mesh_dir))
     t1 = time.perf_counter()
     sol = sm.solve(sm.bias_problem(geometry, axi), max_iter=40)
     t2 = time.perf_counter()

@@ -49,6 +49,7 @@ def single_design(study, offset: float, mesh_dir: Path) -> dict:
     from msens.config.fieldsetup import geometry_from_study
     from msens.design.magnet_sweep import MagnetTask, evaluate_design
     from msens.design.sweep import design_geometry, parse_sweep
+    from msens.store import Store
 
     spec = parse_sweep(f'schema = "msens.sweep/1"\nname = "one"\nsensor = 13\n[magnet]\n'
                        f'axial_offset_m = [{offset!r}]\n')
@@ -57,7 +58,7 @@ def single_design(study, offset: float, mesh_dir: Path) -> dict:
 
     t0 = time.perf_counter()
     with allow_pools():  # as `msens design` runs a one-design sweep: maps on the local cores
-        row = evaluate_design(MagnetTask(study, geometry, 13, str(mesh_dir)))
+        row = evaluate_design(MagnetTask(study, geometry, 13, Store.at(mesh_dir)))
     seconds = time.perf_counter() - t0
     name = next(mesh_dir.glob("dynamic-*.json"))
     timings = json.loads(name.read_text())["details"]["timings_s"]
@@ -93,9 +94,10 @@ def lu_comparison(study, geometry, mesh_dir: Path) -> dict:
     from msens.field.linsolve import factorize
     from msens.magnetics.dynamic import sensor_conductivity
     from msens.magnetics.transducer import bias_solution
+    from msens.store import Store
 
     eddy = eddy_settings(study)
-    sol, _ = bias_solution(geometry, options=eddy.options, mesh_dir=mesh_dir)
+    sol, _ = bias_solution(geometry, options=eddy.options, store=Store.at(mesh_dir))
     op = HarmonicOperator(sol, sensor_conductivity(sol.problem.mesh, geometry,
                                                    steel=eddy.steel))
     a = op.matrix(30e3)

@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 
 from msens import api
-from msens.compare import compare
+from msens.compare import compare, model_record, processing_line
 from msens.errors import InputError
 from msens.io.read import read_waveform, write_waveform
 from msens.io.waveform import Waveform
+from msens.signals.features import FEATURE_CUTOFF_HZ, model_features
 from msens.synth import UNITS, UNITS_KEY, RigEffects, synthesize, truth_gain_key
 
 STUDY = Path(__file__).resolve().parents[1] / "studies" / "paper-mss.toml"
@@ -72,9 +73,38 @@ def test_synth_compare_round_trip(result, setup, seed, noise, shots):
         assert measured["gain"]["mean"] * truth == pytest.approx(1.0, abs=0.01)
     speed = report["speed"]
     assert speed["measured_m_per_s"]["mean"] == pytest.approx(speed["model_m_per_s"], rel=0.01)
-    # the model's features are those of its integrated voltage, next to the chain's
-    assert speed["model_chain_m_per_s"] == setup.speed_incident
-    assert "chain_ar" in report["channels"][0]["model"]
+    # the model's features are those of msens run, low-passed as the measured records
+    assert speed["run_m_per_s"] == setup.speed_incident
+    assert report["model_processing"]["lowpass_hz"] == FEATURE_CUTOFF_HZ
+
+
+def test_run_and_compare_report_the_same_model_features(result, setup):
+    """One feature pipeline: compare's model column is what msens run reports for the same
+    study, up to the low-pass that compare names (its ``model_processing`` and table line);
+    before, run read the coil's flux before the read-out circuit (coil 13: TOF 287.1 us,
+    speed 646.7 m/s) and compare the integrated DAQ voltage (287.8 us, 634.7 m/s)."""
+    clean = RigEffects(noise=0.0, offset=0.0, jitter_s=0.0)
+    report = compare(result, synthesize(setup, clean))
+    rows = {r["particle"]: r for r in result.rows()}
+    t = setup.history.t
+    for ch, sensor in zip(report["channels"], setup.sensors, strict=True):
+        row = rows[ch["particle"]]
+        assert ch["run"]["tof_us"] == row["tof_us"] and ch["run"]["ar"] == row["ar"]
+        # the named difference: the 250 kHz zero-phase low-pass moves no TOF by 0.02 us
+        assert ch["model"]["tof_us"] == pytest.approx(row["tof_us"], abs=0.02)
+        assert ch["model"]["ar"] == pytest.approx(row["ar"], abs=1e-4)
+        # without it, compare's model record gives run's features (V s against N: one scale)
+        same = model_features(model_record(sensor, t), t)
+        assert float(same.tof) * 1e6 == pytest.approx(row["tof_us"], abs=1e-9)
+        assert float(same.ar) == pytest.approx(row["ar"], rel=1e-12)
+        # and they are the DAQ's, not those of the flux before the read-out circuit
+        flux = model_features(sensor.mss.weighted_force, t)
+        assert abs(float(flux.t_incident - same.t_incident)) > 1e-7
+    speed = report["speed"]
+    assert speed["run_m_per_s"] == rows[13]["speed_m_per_s"]
+    assert speed["model_m_per_s"] == pytest.approx(speed["run_m_per_s"], rel=1e-4)
+    assert processing_line(report) in api.format_comparison(report)
+    assert "250 kHz" in processing_line(report)
 
 
 def _with_data(waveform: Waveform, data: np.ndarray, n: int | None = None) -> Waveform:

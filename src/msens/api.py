@@ -295,6 +295,10 @@ def format_comparison(report: dict) -> str:
             f"{s['ar']['mean']:>6.3f} ({m['ar']:>5.3f}) {s['nrmse']['mean']:>7.4f} "
             f"{s['correlation']['mean']:>6.3f}")
     lines.append("(model values in parentheses)")
+    if "model_processing" in report:
+        from msens.compare import processing_line
+
+        lines.append(processing_line(report))
     return "\n".join(lines)
 
 

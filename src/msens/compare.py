@@ -36,28 +36,31 @@ from msens.io.waveform import Channel, Waveform
 from msens.readout.sensors import SensorKind
 from msens.results import SensorResult, SetupResult, StudyResult
 from msens.signals.alignment import xcorr_delay
-from msens.signals.features import PulseFeatures, centre_distance, pulse_features, wave_speed
-from msens.signals.processing import integrate_drift_corrected, lowpass
+from msens.signals.features import (
+    FEATURE_CUTOFF_HZ,
+    PulseFeatures,
+    centre_distance,
+    integrated,
+    model_features,
+    pulse_features,
+    smooth,
+    wave_speed,
+)
+from msens.signals.processing import integrate_drift_corrected
 from msens.synth import UNITS, UNITS_KEY, is_physics_mss
 
-#: Peaks and times are read from records low-passed at this frequency, Hz — the model's too,
-#: so the filter biases neither side. Solitary pulses here last ~20 µs (content < 100 kHz);
-#: the filter removes the noise that would otherwise bias a peak's maximum upward.
-FEATURE_CUTOFF_HZ = 250e3
+
+def lowpassed_features(records: np.ndarray, t: np.ndarray) -> PulseFeatures:
+    """The model's features as compare reads them: :func:`msens.signals.features.model_features`
+    (the pipeline of ``msens run``) after the low-pass the measured records get."""
+    return model_features(records, t, lowpass_records=True)
 
 
-def smooth(record: np.ndarray, dt: float) -> np.ndarray:
-    """Zero-phase low-pass used before feature extraction (see FEATURE_CUTOFF_HZ)."""
-    return lowpass(record, dt, min(FEATURE_CUTOFF_HZ, 0.4 / dt), order=4)
-
-
-def smoothed_features(force: np.ndarray, t: np.ndarray) -> PulseFeatures:
-    """Features of records (..., nt) after the smoothing measurements get (:func:`smooth`)."""
-    dt = float(t[1] - t[0])
-    force = np.asarray(force, dtype=float)
-    flat = force.reshape(-1, force.shape[-1])
-    smoothed = np.array([smooth(f, dt) for f in flat]).reshape(force.shape)
-    return pulse_features(smoothed, t)
+#: What ``compare`` does to the model's records that ``msens run`` does not (the
+#: ``model_processing`` of ``compare.json`` and the last line of its table).
+MODEL_PROCESSING = ("model features as msens run reads them, after the "
+                    f"{FEATURE_CUTOFF_HZ / 1e3:g} kHz zero-phase low-pass the measured records "
+                    "get")
 
 
 #: A physics MsS record holds a pulse when its voltage correlates with the model's at least
@@ -159,10 +162,11 @@ def model_record(sensor: SensorResult, t: np.ndarray) -> np.ndarray:
     """The model record a calibrated measurement is compared with, shape (nt,).
 
     The sensor's force (N) for bead, rod and four-contact MsS; for a physics MsS the running
-    integral of its DAQ voltage from impact (``t`` = 0), V s.
+    integral of its DAQ voltage from impact (``t`` = 0), V s: the record ``msens run`` reads
+    its features from (there in newtons, :attr:`msens.readout.mss.MssRecord.daq_force`).
     """
     if is_physics_mss(sensor):
-        return cumulative_trapezoid(sensor.voltage_shape, t, initial=0.0)
+        return integrated(sensor.voltage_shape, t)
     return sensor.force
 
 
@@ -274,7 +278,7 @@ def _physics_record(setup: SetupResult, sensor: SensorResult, waveform: Waveform
 def shot_records(setup: SetupResult, waveform: Waveform) -> list[list[ShotRecord]]:
     """Aligned and calibrated records, per shot and channel."""
     t = setup.history.t
-    model_peak = {id(s): float(smoothed_features(_model_force(setup, s), t).f_incident)
+    model_peak = {id(s): float(lowpassed_features(_model_force(setup, s), t).f_incident)
                   for s in setup.sensors}
     out = []
     for channels in _shots(waveform):
@@ -376,12 +380,16 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
     Returns
     -------
     dict
-        ``{"setup", "shots", "channels": [{"channel", "kind", "particle", "model": {...},
-        "measured": {metric: {"mean", "std"}}, "gain_unit", "record"}], "speed": {...}}``
-        — the content of ``compare.json``. Gains are N/V (bead, rod), N/(V s) (four-contact
-        MsS) or V/V (physics MsS); the features of a physics MsS are those of its integrated
-        DAQ voltage (peaks in V s), model and measured alike, and the model's chain
-        features (sensitivity-weighted force, N) are added as ``model.chain_*``.
+        ``{"setup", "shots", "model_processing", "channels": [{"channel", "kind",
+        "particle", "model": {...}, "run": {...}, "measured": {metric: {"mean", "std"}},
+        "gain_unit", "record"}], "speed": {...}}`` — the content of ``compare.json``. Gains
+        are N/V (bead, rod), N/(V s) (four-contact MsS) or V/V (physics MsS). The model's
+        features come from the pipeline of ``msens run``
+        (:func:`msens.signals.features.model_features`) with one difference, named in
+        ``model_processing``: the records are low-passed as the measured ones are
+        (:data:`MODEL_PROCESSING`); ``run`` holds the unfiltered values ``msens run``
+        reports (a physics MsS's peaks there in newtons of sensitivity-weighted force, here
+        in V s of integrated DAQ voltage) and ``speed.run_m_per_s`` its speed.
 
     Raises
     ------
@@ -396,7 +404,7 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
     channels = []
     model_feats = {}
     for sensor in setup.sensors:
-        m = smoothed_features(_model_force(setup, sensor), t)
+        m = lowpassed_features(_model_force(setup, sensor), t)
         model_feats[sensor.sensor.particle] = m
         per_shot = [
             _metrics(r, setup, sensor, m) for recs in shots for r in recs
@@ -407,21 +415,24 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
         model = {"tof_us": float(m.tof) * 1e6, "ar": float(m.ar),
                  "width_us": float(m.width) * 1e6,
                  f"incident_peak_{unit}": float(m.f_incident)}
+        f = sensor.features
         entry = {
             "channel": f"{sensor.sensor.kind.value}@{sensor.sensor.particle}",
             "kind": sensor.sensor.kind.value,
             "particle": sensor.sensor.particle,
             "model": model,
+            "run": {"tof_us": float(f.tof) * 1e6, "ar": float(f.ar),
+                    "width_us": float(f.width) * 1e6},
             "measured": _stats(per_shot),
             "gain_unit": gain_unit(sensor),
         }
         if is_physics_mss(sensor):
-            f = sensor.features
-            model.update({"chain_tof_us": float(f.tof) * 1e6, "chain_ar": float(f.ar),
-                          "chain_incident_peak_N": float(f.f_incident)})
             entry["record"] = "integrated DAQ voltage, V s"
         channels.append(entry)
-    out = {"setup": setup.setup.name, "shots": len(shots), "channels": channels}
+    out = {"setup": setup.setup.name, "shots": len(shots),
+           "model_processing": {"lowpass_hz": FEATURE_CUTOFF_HZ,
+                                "description": MODEL_PROCESSING},
+           "channels": channels}
     parts = sorted(s.sensor.particle for s in setup.sensors)
     if len(parts) >= 2:
         d = centre_distance(setup.chain.length, parts[0], parts[-1])
@@ -431,15 +442,24 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
             if parts[0] in by_p and parts[-1] in by_p:
                 speeds.append(float(wave_speed(d, by_p[parts[0]].features.t_incident,
                                                by_p[parts[-1]].features.t_incident)))
-        model_speed = setup.speed_incident
-        if any(is_physics_mss(s) for s in setup.sensors):
-            # the measured speed comes from integrated voltages: so must the model's
-            model_speed = float(wave_speed(d, model_feats[parts[0]].t_incident,
-                                           model_feats[parts[-1]].t_incident))
-        out["speed"] = {"model_m_per_s": model_speed,
+        # the measured speed comes from low-passed records: so does the model's
+        model_speed = float(wave_speed(d, model_feats[parts[0]].t_incident,
+                                       model_feats[parts[-1]].t_incident))
+        out["speed"] = {"model_m_per_s": model_speed, "run_m_per_s": setup.speed_incident,
                         "measured_m_per_s": {"mean": float(np.mean(speeds)),
                                              "std": float(np.std(speeds, ddof=1))
                                              if len(speeds) > 1 else 0.0}}
-        if model_speed != setup.speed_incident:
-            out["speed"]["model_chain_m_per_s"] = setup.speed_incident
     return out
+
+
+def processing_line(report: dict) -> str:
+    """The table line naming what compare does to the model that ``msens run`` does not,
+    with the largest change it makes to a TOF and to the speed."""
+    tof = max((abs(ch["model"]["tof_us"] - ch["run"]["tof_us"]) for ch in report["channels"]),
+              default=0.0)
+    text = f"{report['model_processing']['description']} (changes a TOF by {tof:.2g} us"
+    speed = report.get("speed")
+    if speed is not None:
+        text += (f", the speed by {abs(speed['model_m_per_s'] - speed['run_m_per_s']):.2g} "
+                 "m/s")
+    return text + ")"

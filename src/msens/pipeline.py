@@ -24,7 +24,7 @@ from msens.config.study import Study
 from msens.errors import InputError
 from msens.readout.sensors import SensorKind, observe, time_derivative
 from msens.results import SensorResult, SetupResult, StudyResult
-from msens.signals.features import centre_distance, pulse_features, wave_speed
+from msens.signals.features import centre_distance, model_features, wave_speed
 
 _log = logging.getLogger(__name__)
 
@@ -66,9 +66,11 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
         rec = mss_record(tr, circuit, history.t, history.force, study.electronics,
                          approach=history.approach, static=static, seed_offset=index)
     voltage = voltage_on(rec)
+    # features of what the DAQ records (integrated, in newtons), as compare and diagnose read
+    # them: the read-out circuit reshapes the pulse that ``weighted_force`` has before it
     return SensorResult(sensor=sensor, position=position, force=rec.weighted_force,
                         voltage_shape=voltage,
-                        features=pulse_features(rec.weighted_force, history.t), mss=rec)
+                        features=model_features(rec.daq_force, history.t), mss=rec)
 
 
 def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
@@ -94,7 +96,7 @@ def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
         force = observe(sensor.kind, history.force, sensor.particle)
         shape = time_derivative(force, t) if sensor.kind is SensorKind.MSS else None
         results.append(SensorResult(sensor=sensor, position=position, force=force,
-                                    voltage_shape=shape, features=pulse_features(force, t)))
+                                    voltage_shape=shape, features=model_features(force, t)))
     speed_in = speed_out = float("nan")
     by_pos = {r.position: r for r in results}
     if "top" in by_pos and "bottom" in by_pos:

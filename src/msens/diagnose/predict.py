@@ -14,18 +14,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import cumulative_trapezoid
 
 from msens.chain.equilibrium import static_contact_forces
 from msens.chain.integrate import ChainResult, simulate_batch
-from msens.compare import smoothed_features as model_features_of
 from msens.config.assemble import build_chain
 from msens.diagnose import physics
 from msens.diagnose.effects.base import Context, ModelState
 from msens.magnetics.mss import voltage_on
 from msens.readout.sensors import SensorKind, observe, read_contacts, time_derivative
 from msens.results import SensorResult, SetupResult
-from msens.signals.features import pulse_features
+from msens.signals.features import PulseFeatures, integrated, model_features
 
 #: Nodes (in standard deviations) and weights of the 3-point Gauss-Hermite rule for the mean
 #: over a normal distribution.
@@ -204,8 +202,15 @@ def feature_records(records: np.ndarray, physics: Sequence[bool], t: np.ndarray
     out = np.array(records, dtype=float, copy=True)
     for j, ph in enumerate(physics):
         if ph:
-            out[..., j, :] = cumulative_trapezoid(records[..., j, :], t, initial=0.0, axis=-1)
+            out[..., j, :] = integrated(records[..., j, :], t)
     return out
+
+
+def model_features_of(records: np.ndarray, t: np.ndarray) -> PulseFeatures:
+    """Features of feature records (..., nt) as diagnose reads them: the pipeline of
+    ``msens run`` (:func:`msens.signals.features.model_features`) after the low-pass the
+    measured records get, as ``compare`` reads them."""
+    return model_features(records, t, lowpass_records=True)
 
 
 def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> SetupResult:
@@ -227,12 +232,11 @@ def setup_result(ctx: Context, state: ModelState, predictor: Predictor) -> Setup
             mss = physics.signals(ph, t, res, approach=approach, static=static)
             sensors.append(SensorResult(sensor=spec, position=pos, force=mss.weighted_force,
                                         voltage_shape=rec,
-                                        features=pulse_features(mss.weighted_force, t),
-                                        mss=mss))
+                                        features=model_features(mss.daq_force, t), mss=mss))
             continue
         shape = time_derivative(rec, t) if spec.kind is SensorKind.MSS else None
         sensors.append(SensorResult(sensor=spec, position=pos, force=rec, voltage_shape=shape,
-                                    features=model_features_of(rec, t)))
+                                    features=model_features(rec, t)))
     return SetupResult(setup=ctx.setup, chain=state.chain,
                        history=ChainResult(t=t, force=res, approach=approach),
                        static_force=static, sensors=tuple(sensors),

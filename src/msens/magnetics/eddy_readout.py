@@ -174,7 +174,7 @@ def dynamic_signals(transducer: Transducer, response: FrequencyResponse,
         voltage = add_readout_noise(voltage, circuit, noise, sample_rate, rng=rng,
                                     coil_impedance=response.impedance_at)
     return MssRecord(t=t, flux=flux, weighted_force=flux / total if total else flux * np.nan,
-                     emf=e, t_daq=t_daq, voltage=voltage, circuit=circuit)
+                     emf=e, t_daq=t_daq, voltage=voltage, circuit=circuit, sensitivity=total)
 
 
 __all__ = ["PAD", "dynamic_signals", "emf_spectra", "emf_spectrum", "mechanism_emfs"]

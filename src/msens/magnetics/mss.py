@@ -24,6 +24,7 @@ from msens.readout.coil import Winding, winding_capacitance, winding_from_coil
 from msens.readout.daq import daq_voltage
 from msens.readout.electronics import ElectronicsSpec, ReadoutCircuit
 from msens.readout.noise import NoiseModel, noise_rms
+from msens.signals.features import integrated
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,9 @@ class MssRecord:
     t_daq, voltage : ndarray, shape (m,)
         DAQ sampling instants (s) and the voltage recorded there (V).
     circuit : ReadoutCircuit
+    sensitivity : float
+        Σ_c ∂Λ/∂F_c of both mechanisms at the reference load, Wb/N: the scale of
+        ``weighted_force`` and :attr:`daq_force`.
     """
 
     t: np.ndarray
@@ -52,6 +56,23 @@ class MssRecord:
     t_daq: np.ndarray
     voltage: np.ndarray
     circuit: ReadoutCircuit
+    sensitivity: float = float("nan")
+
+    @property
+    def integrated_voltage(self) -> np.ndarray:
+        """Running integral of the DAQ voltage from ``t[0]`` on the chain's grid, V s,
+        shape (nt,): the record a measured physics MsS gives its features from."""
+        return integrated(voltage_on(self), self.t)
+
+    @property
+    def daq_force(self) -> np.ndarray:
+        """The integrated DAQ voltage in newtons of sensitivity-weighted contact force,
+        −∫V dt / Σ_c ∂Λ/∂F_c, shape (nt,): ``weighted_force`` as the read-out circuit
+        delivers it (the coil's resonance reshapes the pulse); the physics MsS's feature
+        record in ``msens run``."""
+        if not self.sensitivity:
+            return np.full(self.t.shape, np.nan)
+        return -self.integrated_voltage / self.sensitivity
 
 
 def winding_of(coil: Coil) -> Winding:
@@ -154,7 +175,8 @@ def mss_signals(sensor: MssSensor, t: np.ndarray, force: np.ndarray, sample_rate
     e = emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach)
     t_daq, v = daq_voltage(sensor.circuit, t, e, sample_rate, noise=noise, rng=rng)
     return MssRecord(t=t, flux=flux, weighted_force=flux / total if total else flux * np.nan,
-                     emf=e, t_daq=t_daq, voltage=v, circuit=sensor.circuit)
+                     emf=e, t_daq=t_daq, voltage=v, circuit=sensor.circuit,
+                     sensitivity=total)
 
 
 def voltage_on(record: MssRecord) -> np.ndarray:

@@ -25,6 +25,12 @@ Peak-picking rule (robust to the secondary pulses a piezo rod makes, paper §4.2
 
 A feature that cannot be found (no decay, no local maximum in the window, non-positive
 signal) is NaN for that record.
+
+The model's features (:func:`model_features`) are read by this one pipeline in every
+workflow (``msens run``, ``compare``, ``diagnose``): a sensor's feature record (its force, or
+for a physics MsS its integrated DAQ voltage, :func:`integrated`) and, where a workflow
+reads the model as it reads measured records, the zero-phase low-pass of
+:data:`FEATURE_CUTOFF_HZ` (:func:`smooth`) before the peaks are picked.
 """
 
 from __future__ import annotations
@@ -33,8 +39,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.integrate import cumulative_trapezoid
 
 from msens.errors import require
+from msens.signals.processing import lowpass
 
 
 @dataclass(frozen=True)
@@ -270,3 +278,53 @@ def wave_speed(distance: float | ArrayLike, t_first: ArrayLike,
     """
     return np.asarray(distance, dtype=float) / (np.asarray(t_second, dtype=float)
                                                  - np.asarray(t_first, dtype=float))
+
+
+#: Measured records (and the model records compared with them) are low-passed at this
+#: frequency before their features are read, Hz. Solitary pulses here last ~20 µs (content
+#: < 100 kHz); the filter removes the noise that would otherwise bias a peak's maximum
+#: upward, and it is zero-phase, so it moves no peak time by itself.
+FEATURE_CUTOFF_HZ = 250e3
+
+
+def smooth(record: ArrayLike, dt: float) -> np.ndarray:
+    """Zero-phase low-pass of a record (nt,) before feature extraction, at
+    :data:`FEATURE_CUTOFF_HZ` (or 0.4 of the sampling rate 1/``dt``, s, if that is lower)."""
+    return lowpass(np.asarray(record, dtype=float), dt, min(FEATURE_CUTOFF_HZ, 0.4 / dt),
+                   order=4)
+
+
+def integrated(voltage: ArrayLike, t: ArrayLike) -> np.ndarray:
+    """Running integral of voltage records (..., nt) from ``t[0]`` (trapezoids), V s: the
+    record whose features a physics MsS gives (its coil voltage is a flux rate)."""
+    return cumulative_trapezoid(np.asarray(voltage, dtype=float), np.asarray(t, dtype=float),
+                                initial=0.0, axis=-1)
+
+
+def model_features(records: ArrayLike, t: ArrayLike, *, lowpass_records: bool = False
+                   ) -> PulseFeatures:
+    """Features of feature records (..., nt): the one pipeline of the model's features.
+
+    Parameters
+    ----------
+    records : array_like, shape (..., nt)
+        Feature records: forces (N), or integrated physics MsS voltages (V s, or converted
+        to newtons of sensitivity-weighted force).
+    t : array_like, shape (nt,)
+        Uniform sample times, s.
+    lowpass_records : bool
+        Low-pass every record first (:func:`smooth`), as measured records are: for the
+        workflows that compare the model with measurements (``compare``, ``diagnose``);
+        ``msens run`` reads the records as they are.
+
+    Returns
+    -------
+    PulseFeatures
+    """
+    records = np.asarray(records, dtype=float)
+    if lowpass_records:
+        t = np.asarray(t, dtype=float)
+        dt = float(t[1] - t[0])
+        flat = records.reshape(-1, records.shape[-1])
+        records = np.array([smooth(r, dt) for r in flat]).reshape(records.shape)
+    return pulse_features(records, t)

@@ -30,8 +30,6 @@ from msens.config import schema, study
 from msens.io.tomlreader import Table
 from msens.readout.electronics import ElectronicsSpec
 
-_UNSET = object()
-
 
 @dataclass
 class Key:
@@ -127,9 +125,6 @@ class _RecordingTable(Table):
     def raw(self, name, default=None):
         self._rec.add(self._path, name, "value", default=default)
         return super().raw(name, default)
-
-    def has(self, name):
-        return super().has(name)
 
     def table(self, name, *, required=False):
         self._rec.add(self._path, name, "table", required=required)
@@ -287,7 +282,7 @@ def _describe(key: Key) -> None:
             break
     if match is None:
         return
-    names, typ, text = match
+    names, _typ, text = match
     unit = _suffix_unit(key.name)
     found = _UNIT_SENTENCE.search(text)
     if found:
@@ -318,6 +313,38 @@ def reference(root: str | Path) -> list[Key]:
     for key in keys:
         _describe(key)
     return keys
+
+
+def missing(keys: list[Key]) -> list[str]:
+    """The dotted names of ``keys`` that lack a unit or a description."""
+    return [k.dotted + (" (no unit)" if not k.unit else "")
+            + (" (no description)" if not k.description else "")
+            for k in keys if not k.unit or not k.description]
+
+
+def reader_keys() -> set[str]:
+    """Every key name the readers ask a :class:`Table` for, found in their source: the
+    string literals passed to ``number``, ``integer``, ``string``, ``boolean``, ``raw``,
+    ``has``, ``table`` and ``tables`` (and the keys of a loop over a literal tuple of names)."""
+    import ast
+
+    from msens.config import read_chain, read_options, read_setups
+
+    names: set[str] = set()
+    methods = {"number", "integer", "string", "boolean", "raw", "table", "tables"}
+    for module in (read_chain, read_options, read_setups, study):
+        tree = ast.parse(inspect.getsource(module))
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                    and node.func.attr in methods and node.args
+                    and isinstance(node.args[0], ast.Constant)
+                    and isinstance(node.args[0].value, str)):
+                names.add(node.args[0].value)
+            if (isinstance(node, ast.For) and isinstance(node.iter, ast.Tuple)
+                    and all(isinstance(e, ast.Constant) and isinstance(e.value, str)
+                            for e in node.iter.elts)):
+                names.update(e.value for e in node.iter.elts)
+    return names
 
 
 def tables(root: str | Path) -> list[Key]:

@@ -35,7 +35,9 @@ print(columns.read_text())
 # Read the export through the map: time in seconds, channels in volts.
 
 waveform = msens.read_waveform(scope, columns=columns)
-print(waveform)
+print(f"{waveform.time.size} samples, {waveform.time[0] * 1e6:.0f} to "
+      f"{waveform.time[-1] * 1e6:.0f} us after the trigger; channels: "
+      + ", ".join(f"{c.kind}@{c.particle}" for c in waveform.channels))
 
 # %%
 # Compare it with the main study. ``compare`` writes ``compare.json`` and ``overlay.png``
@@ -51,9 +53,13 @@ for ch in report["channels"]:
           f"correlation {s['correlation']['mean']:.4f}")
 
 # %%
-# The overlay: the measured record after alignment and calibration against the model's.
-# The incident pulses arrive together (the same TOF); the reflected pulses have the same
-# height relative to the incident ones (the same AR); what is left is the noise.
+# The overlay: the measured record after alignment and calibration against the model's,
+# and the residual below each. Where the incident pulses arrive together the TOFs agree;
+# where the reflected pulse has the same height relative to the incident one the ARs agree.
+# A residual that is only noise says the model explains that channel; a residual with a
+# shape (a pulse of its own) says where model and measurement part, which is what
+# ``msens diagnose`` then tries to name. (This export was synthesised by an earlier version
+# of the model, so any difference between the two is the model's own change since.)
 
 image = mpimg.imread(out / "overlay.png")
 fig, ax = plt.subplots(figsize=(8, 8 * image.shape[0] / image.shape[1]), layout="constrained")

@@ -312,3 +312,18 @@ def test_each_diagnosis_context_owns_its_field_models(monkeypatch):
 def test_mesh_options_enter_the_key():
     g = _small()
     assert field_cache.mesh_name(g) != field_cache.mesh_name(g, MeshOptions(bead_size=3e-4))
+
+
+def test_a_cache_that_cannot_be_written(tmp_path, caplog):
+    """A read-only cache: an optional write (a value the caller holds) warns, a required one
+    names the file and the folder."""
+    from msens.errors import InputError
+
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    s = Store.at(blocker / "cache")
+    with caplog.at_level("WARNING", logger=LOG):
+        assert s.write_json("a.json", {"v": 1}, optional=True) is None
+    assert "used but not kept" in caplog.text
+    with pytest.raises(InputError, match="a.json.*make that folder writable"):
+        s.write_json("a.json", {"v": 1})

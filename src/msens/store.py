@@ -229,16 +229,26 @@ class Store:
                 return payload
         return None
 
-    def write_json(self, name: str, payload: dict, *, indent: int | None = 1) -> Path:
+    def write_json(self, name: str, payload: dict, *, indent: int | None = 1,
+                   optional: bool = False) -> Path | None:
         """Write ``payload`` (a dict of JSON values) with its checksum as artifact ``name``
-        in :attr:`directory` (atomically), then trim the cache. Returns the path."""
+        in :attr:`directory` (atomically), then trim the cache. Returns the path.
+
+        ``optional``: the caller holds the value and only wants it kept, so a write that
+        fails (read-only or full disk) is a warning and None is returned; otherwise it
+        raises :class:`~msens.errors.InputError` naming the file and the reason.
+        """
         internal(isinstance(payload, dict) and CHECKSUM not in payload,
                  f"internal: a JSON artifact is a dict without a {CHECKSUM!r} key")
         path = self.path(name)
         text = json.dumps({**payload, CHECKSUM: json_checksum(payload)}, indent=indent)
-        self._prepare()
-        atomic_write_bytes(path, text.encode())
-        self.evict(keep=(name,))
+        try:
+            self._write(path, lambda t: t.write_bytes(text.encode()))
+        except InputError as exc:
+            if not optional:
+                raise
+            _log.warning("%s; the result is used but not kept", exc)
+            return None
         return path
 
     # ------------------------------------------------------------------- file artifacts
@@ -274,13 +284,24 @@ class Store:
         internal(meta is None or FILE_CHECKSUM not in meta,
                  f"internal: {FILE_CHECKSUM!r} is the store's")
         path = self.path(name)
-        self._prepare()
-        atomic_write(path, write)
+        self._write(path, write, evict=False)
         side = {**(meta or {}), FILE_CHECKSUM: file_checksum(path)}
         text = json.dumps({**side, CHECKSUM: json_checksum(side)}, indent=1, sort_keys=True)
-        atomic_write_bytes(path.with_suffix(".json"), text.encode())
-        self.evict(keep=(name,))
+        self._write(path.with_suffix(".json"), lambda t: t.write_bytes(text.encode()))
         return path
+
+    def _write(self, path: Path, write: Callable[[Path], None], evict: bool = True) -> None:
+        """Atomic write into :attr:`directory`, then trim the cache (keeping ``path``)."""
+        clean_stale(self.directory)  # the temporary files of writers that were killed
+        try:
+            atomic_write(path, write)
+        except InputError as exc:
+            hint = (f" or set ${DIR_ENV} to a writable folder"
+                    if self.directory == user_cache_dir().resolve() else "")
+            raise InputError(f"{exc}; msens keeps computed results in {self.directory}: make "
+                             f"that folder writable{hint}") from None
+        if evict:
+            self.evict(keep=(path.name,))
 
     # ------------------------------------------------------------------- verification
 
@@ -325,9 +346,6 @@ class Store:
         _log.warning("%s %s: not used; it is computed again", path, reason)
 
     # ------------------------------------------------------------------- size bound
-
-    def _prepare(self) -> None:
-        clean_stale(self.directory)  # the temporary files of writers that were killed
 
     def _used(self, path: Path) -> None:
         """Mark an artifact of the user cache used now (its access time orders eviction)."""

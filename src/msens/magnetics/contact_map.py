@@ -518,7 +518,7 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
               for k, coil in enumerate(coils)}
     data = {"key": key, "version": MAP_VERSION, "transducer": transducer_key,
             "coils": {str(p): [_map_json(m) for m in ms] for p, ms in tables.items()}}
-    store.write_json(f"contact-map-{key}.json", data)
+    store.write_json(f"contact-map-{key}.json", data, optional=True)
     return {p: ApproachMap(tuple(ms)) for p, ms in tables.items()}
 
 

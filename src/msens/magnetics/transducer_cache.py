@@ -129,8 +129,9 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
     report = compute_transducers(geometry, options=options, store=store,
                                  stress_force=force, law=law, material=material,
                                  approach=approach)
-    path = store.write_json(name, _to_json(report))
-    _log.info("transducers %s cached in %s", key, path)
+    path = store.write_json(name, _to_json(report), optional=True)
+    if path is not None:
+        _log.info("transducers %s cached in %s", key, path)
     return report
 
 

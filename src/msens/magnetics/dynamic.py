@@ -373,7 +373,7 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, store: Store | Non
         parts = dict(run_tasks(_report_task, tasks, scheduler=scheduler))
         rep = join_reports([parts[i] for i in range(len(tasks))])
     rep.details["transducer_key"] = tkey
-    store.write_json(name, report_to_json(rep))
+    store.write_json(name, report_to_json(rep), optional=True)
     return rep
 
 

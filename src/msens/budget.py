@@ -150,6 +150,7 @@ def check(study: Study) -> Budget:
             f"is {MAX_SKIN_ELEMENTS:,} (minutes of meshing and of solving at every frequency "
             f"beyond it): the smallest skin_size_m for this study is {smallest:.2g} m "
             "(default 4e-05 m)")
+    check_resolvable(study)
     b = estimate(study)
     sim = study.simulation
     if b.memory_bytes > P.MEMORY_BUDGET_BYTES:
@@ -170,3 +171,140 @@ def check(study: Study) -> Budget:
             f"{b.particle_steps:.3g} particle-steps; the budget is {P.STEP_BUDGET:.3g} (about "
             "a minute): shorten t_end_s, or check those values")
     return b
+
+
+# ----------------------------------------------------------------- resolvability
+
+def _striker_key(study: Study) -> str:
+    return ("'striker.drop_height_m'" if study.striker.drop_height_m is not None
+            else "'striker.velocity_m_per_s'")
+
+
+def setup_scales(study: Study, setup, chain=None):
+    """Pulse bounds of one setup (:func:`msens.signals.resolvability.pulse_scales`) and the
+    particle lengths the pulse crosses (rods as 0: sound crosses them faster than the
+    pulse crosses beads).
+
+    Parameters
+    ----------
+    study : Study
+    setup : SetupSpec
+    chain : Chain, optional
+        The setup's chain as simulated (with its magnets' static forces); default: built
+        from the study (declared precompression only).
+
+    Returns
+    -------
+    (PulseScales, ndarray)
+    """
+    import numpy as np
+
+    from msens.chain.equilibrium import static_contact_forces
+    from msens.config.assemble import build_chain
+    from msens.signals.resolvability import pulse_scales
+
+    chain = build_chain(study, setup) if chain is None else chain
+    c = study.chain
+    scales = pulse_scales(mass_kg=c.bead_mass_kg, diameter_m=c.bead_diameter_m,
+                          youngs_modulus_pa=c.youngs_modulus_pa,
+                          poisson_ratio=c.poisson_ratio,
+                          velocity_m_per_s=study.striker.velocity_m_per_s,
+                          static_force_n=float(np.max(static_contact_forces(chain))))
+    length = np.array(chain.length, dtype=float)
+    for ins in setup.inserts:
+        length[ins.particle - 1] = 0.0
+    return scales, length
+
+
+def check_resolvable(study: Study) -> None:
+    """Refuse (InputError naming the key) a study whose records cannot resolve the pulse or
+    cannot hold its reflection from the wall, or whose impact yields the beads.
+
+    - ``simulation.sample_rate_hz`` (the chain's output) and, with a physics MsS,
+      ``electronics.sample_rate_hz`` (the DAQ's) must take
+      :data:`~msens.signals.resolvability.MIN_SAMPLES_PER_PULSE` samples within the shortest
+      plausible pulse;
+    - ``simulation.t_end_s`` must reach the earliest time the wall's reflection can arrive
+      at every sensor (TOF and AR need it);
+    - the striker's Hertz impact pressure must stay below
+      :data:`msens.config.plausible.MAX_CONTACT_PRESSURE_PA`, where steels yield.
+
+    The bounds lean towards accepting (:mod:`msens.signals.resolvability`); a record that
+    passes but still holds no reflection gets its features flagged after the run
+    (:func:`flag_unresolved`).
+    """
+    from msens.config.schema import MssModel
+    from msens.signals.resolvability import MIN_SAMPLES_PER_PULSE, arrival_bounds
+
+    sim = study.simulation
+    for setup in study.setups:
+        scales, length = setup_scales(study, setup)
+        if not scales.impact_pressure_pa <= P.MAX_CONTACT_PRESSURE_PA:
+            ratio = P.MAX_CONTACT_PRESSURE_PA / scales.impact_pressure_pa
+            v_max = study.striker.velocity_m_per_s * ratio**2.5  # p0 grows as v^(2/5)
+            limit = (f"a drop of at most {v_max**2 / (2.0 * 9.80665):.3g} m"
+                     if study.striker.drop_height_m is not None
+                     else f"at most {v_max:.3g} m/s")
+            raise InputError(
+                f"{study.source}: {_striker_key(study)}: the striker hits at "
+                f"{study.striker.velocity_m_per_s:.4g} m/s with a peak Hertz pressure of "
+                f"{scales.impact_pressure_pa / 1e9:.3g} GPa on the first contact, above the "
+                f"{P.MAX_CONTACT_PRESSURE_PA / 1e9:g} GPa where steels yield (the contact is "
+                f"plastic; the Hertz law the chain model uses no longer holds): {limit} here")
+        rates = [("simulation.sample_rate_hz", sim.sample_rate_hz)]
+        if any(s.model is MssModel.PHYSICS for s in setup.sensors):
+            rates.append(("electronics.sample_rate_hz", study.electronics.sample_rate_hz))
+        need = scales.min_sample_rate_hz()
+        for key, rate in rates:
+            if rate < need:
+                raise InputError(
+                    f"{study.source}: '{key}' = {rate!r} Hz cannot resolve the pulse: it "
+                    f"lasts at least {scales.duration_s * 1e6:.3g} us (a solitary wave of "
+                    f"about five {study.chain.bead_diameter_m:g} m beads), which needs "
+                    f"{MIN_SAMPLES_PER_PULSE} samples, so at least {need:.3g} Hz")
+        for sensor in setup.sensors:
+            _, earliest = arrival_bounds(length, sensor.particle, scales.speed_m_per_s)
+            if sim.t_end_s < earliest:
+                raise InputError(
+                    f"{study.source}: 'simulation.t_end_s' = {sim.t_end_s!r} s holds no "
+                    f"reflected pulse at the {sensor.kind.value}@{sensor.particle} sensor of "
+                    f"setup {setup.name!r}: the wave reaches the wall and comes back there "
+                    f"at the earliest at {earliest * 1e6:.4g} us (TOF and AR need that "
+                    f"reflection); lengthen t_end_s beyond {earliest:.3g} s (the modelled "
+                    "wave is usually about 1.7 times slower than this bound)")
+
+
+def flag_unresolved(study: Study, result):
+    """``result`` (a :class:`msens.results.SetupResult`) with the reflected features of
+    every sensor whose record holds no wall reflection set to NaN (null in JSON) and the
+    reason in the sensor's ``note``; each reason is also logged as a warning. A peak found
+    before the reflection can arrive, or after the record ends, is not the reflection."""
+    import dataclasses
+    import logging
+
+    import numpy as np
+
+    from msens.signals.resolvability import arrival_bounds, reflection_note
+
+    scales, length = setup_scales(study, result.setup, result.chain)
+    t_end = float(result.history.t[-1])
+    sensors = []
+    changed = False
+    for r in result.sensors:
+        _, earliest = arrival_bounds(length, r.sensor.particle, scales.speed_m_per_s)
+        note = reflection_note(float(r.features.t_reflected), t_end, earliest)
+        if note is None:
+            sensors.append(r)
+            continue
+        changed = True
+        nan = np.full_like(np.asarray(r.features.t_reflected, dtype=float), np.nan)
+        features = dataclasses.replace(r.features, t_reflected=nan, f_reflected=nan.copy())
+        note = f"{r.sensor.kind.value}@{r.sensor.particle}: {note}"
+        logging.getLogger("msens.budget").warning("setup %s: %s", result.setup.name, note)
+        sensors.append(dataclasses.replace(r, features=features, note=note))
+    if not changed:
+        return result
+    nan = float("nan")
+    return dataclasses.replace(result, sensors=tuple(sensors),
+                               speed_reflected=nan if any(s.note for s in sensors)
+                               else result.speed_reflected)

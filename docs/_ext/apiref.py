@@ -27,14 +27,21 @@ def _names(module) -> list[str]:
     return [n for n in getattr(module, "__all__", []) if not n.startswith("__")]
 
 
+#: Objects already documented on an earlier page (the face first): later pages list them in
+#: their tables but document them with ``:no-index:`` (one canonical entry per object).
+_DOCUMENTED: set[int] = set()
+
+
 def _entry(public: str, obj) -> list[str]:
     if inspect.ismodule(obj):
         return []  # a submodule in __all__: its names are reached through it
+    options = ["   :no-index:"] if id(obj) in _DOCUMENTED else []
+    _DOCUMENTED.add(id(obj))
     if inspect.isclass(obj):
-        return [f".. autoclass:: {public}", "   :members:", ""]
+        return [f".. autoclass:: {public}", "   :members:", *options, ""]
     if callable(obj):
-        return [f".. autofunction:: {public}", ""]
-    return [f".. autodata:: {public}", "   :annotation:", ""]
+        return [f".. autofunction:: {public}", *options, ""]
+    return [f".. autodata:: {public}", "   :annotation:", *options, ""]
 
 
 def _page(title: str, modname: str, module, intro: list[str]) -> str:
@@ -57,6 +64,7 @@ def write_api(target_dir: str | Path) -> list[str]:
     """Write ``api-<name>.rst`` pages into ``target_dir``; return their document names."""
     target_dir = Path(target_dir)
     target_dir.mkdir(parents=True, exist_ok=True)
+    _DOCUMENTED.clear()
     import msens
 
     pages = {"api-msens": _page(

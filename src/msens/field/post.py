@@ -139,7 +139,7 @@ def energy(sol: FieldSolution) -> float:
     """Stored magnetic energy ∫ w(B) dV, J.
 
     w = ∫_0^B H·dB' in air, windings, linear and nonlinear soft parts; in magnets the
-    recoil-line energy |B − B_r|²/(2 μ0 μ_rec). For an incremental solution the quadratic
+    recoil-line energy ``|B − B_r|²/(2 μ0 μ_rec)``. For an incremental solution the quadratic
     small-signal energy ½ B·(dH/dB)·B. For a linear current-driven problem energy = ½ L I².
     """
     q = sol.disc.quad

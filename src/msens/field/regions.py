@@ -35,7 +35,7 @@ class LinearMagnetic:
 
 @dataclass(frozen=True)
 class NonlinearSoft:
-    """Nonlinear isotropic soft magnetic material: H = H(|B|) B/|B| from a B–H table.
+    """Nonlinear isotropic soft magnetic material: ``H = H(|B|) B/|B|`` from a B–H table.
 
     Attributes
     ----------

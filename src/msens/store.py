@@ -343,7 +343,9 @@ class Store:
 
     @staticmethod
     def _reject(path: Path, reason: str) -> None:
-        _log.warning("%s %s: not used; it is computed again", path, reason)
+        hint = (f" (to trust it as it is instead: python -m msens.store stamp {path})"
+                if "written before" in reason else "")
+        _log.warning("%s %s: not used; it is computed again%s", path, reason, hint)
 
     # ------------------------------------------------------------------- size bound
 

@@ -194,7 +194,8 @@ class Store:
     @classmethod
     def at(cls, directory: str | os.PathLike[str], max_bytes: int | None = None,
            committed: Iterable[str | os.PathLike[str]] = ()) -> Store:
-        """A store in ``directory`` alone (absolute), unbounded unless ``max_bytes``."""
+        """A store that writes to ``directory`` (made absolute) and reads ``committed``
+        first; unbounded unless ``max_bytes``."""
         return cls(Path(directory).resolve(), tuple(Path(d) for d in committed), max_bytes)
 
     @property

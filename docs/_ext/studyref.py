@@ -374,8 +374,9 @@ def _range(key: Key) -> str:
     if key.low is None and key.high is None:
         return ""
     lo = "−∞" if key.low is None else f"{key.low:g}"
-    hi = "∞" if key.high is None or math.isinf(key.high) else f"{key.high:g}"
-    return f"{'(' if key.low_open else '['}{lo}, {hi}]"
+    infinite = key.high is None or math.isinf(key.high)
+    hi = "∞)" if infinite else f"{key.high:g}]"
+    return f"{'(' if key.low_open or key.low is None else '['}{lo}, {hi}"
 
 
 def _toml_table(table: str) -> str:

@@ -184,7 +184,7 @@ def _synth(args: argparse.Namespace) -> int:
     from msens import api
 
     study = api.load(args.study)
-    path = api.synth(study, Path(args.out), setup=args.setup, shots=args.shots,
+    path = api.synth(study, args.out, setup=args.setup, shots=args.shots,
                      noise=args.noise, seed=args.seed)
     print(f"wrote {path}")
     return 0

@@ -58,8 +58,8 @@ for ch in report["channels"]:
 # where the reflected pulse has the same height relative to the incident one the ARs agree.
 # A residual that is only noise says the model explains that channel; a residual with a
 # shape (a pulse of its own) says where model and measurement part, which is what
-# ``msens diagnose`` then tries to name. (This export was synthesised by an earlier version
-# of the model, so any difference between the two is the model's own change since.)
+# ``msens diagnose`` then tries to name. A residual of the integrated voltage that drifts
+# steadily is a small offset of the voltage record, integrated.
 
 image = mpimg.imread(out / "overlay.png")
 fig, ax = plt.subplots(figsize=(8, 8 * image.shape[0] / image.shape[1]), layout="constrained")

@@ -28,8 +28,10 @@ METRICS = ("outer_radius_m", "resistance_ohm", "inductance_H", "winding_capacita
 #: Axis labels of the metrics a recommendation can rank on.
 LABELS = {"snr": "SNR (peak DAQ voltage / noise rms)", "peak_emf_V": "peak EMF (V)",
           "peak_voltage_V": "peak DAQ voltage (V)", "bandwidth_Hz": "bandwidth (Hz)",
-          "sensitivity_villari_Wb_per_N": "Σ ∂Λ/∂F_c, Villari (Wb/N)",
-          "dLambda_dapproach_Wb_per_m": "Σ ∂Λ/∂δ_c, contact approach (Wb/m)",
+          "sensitivity_villari_Wb_per_N":
+              r"$\Sigma_c\,\partial\Lambda/\partial F_c$, Villari (Wb/N)",
+          "dLambda_dapproach_Wb_per_m":
+              r"$\Sigma_c\,\partial\Lambda/\partial \delta_c$, contact approach (Wb/m)",
           "resonance_Hz": "resonance (Hz)"}
 
 
@@ -199,12 +201,87 @@ def range_edges(designs: Sequence[Design], best: int) -> list[tuple[str, float, 
     return out
 
 
+#: Objectives plotted in decibels: amplitude ratios (20 log10).
+DECIBELS = {"snr": "SNR (dB): peak DAQ voltage over noise rms"}
+#: Most groups a swept parameter may have to colour the designs by (see :func:`groups`).
+MAX_GROUPS = 8
+
+
+def plotted_objective(values: np.ndarray, objective: str) -> tuple[np.ndarray, str]:
+    """|objective| as plotted, and its axis label: 20 log10 for the ratios of
+    :data:`DECIBELS`, else as is."""
+    v = np.abs(np.asarray(values, dtype=float))
+    if objective in DECIBELS:
+        with np.errstate(divide="ignore"):
+            return 20.0 * np.log10(v), DECIBELS[objective]
+    return v, LABELS.get(objective, objective)
+
+
+_UNITS = (("_m", "mm", 1e3), ("_T", "T", 1.0), ("_N", "N", 1.0))
+
+
+def parameter_name(key: str) -> str:
+    """A swept parameter for a legend, without its SI suffix: ``coil.length_m`` ->
+    "coil length"."""
+    for suffix, _, _ in _UNITS:
+        if key.endswith(suffix):
+            key = key[: -len(suffix)]
+            break
+    return key.replace(".", " ").replace("_", " ")
+
+
+def parameter_text(key: str, value) -> str:
+    """A swept value for a legend: ``coil.turns`` 400 -> "coil turns = 400",
+    ``coil.length_m`` 0.007 -> "coil length = 7 mm"."""
+    name = parameter_name(key)
+    if isinstance(value, str):
+        return f"{name} = {value}"
+    for suffix, unit, scale in _UNITS:
+        if key.endswith(suffix):
+            return f"{name} = {value * scale:g} {unit}"
+    return f"{name} = {value:g}"
+
+
+def groups(designs: Sequence[Design], y: np.ndarray) -> tuple[str, list] | None:
+    """The swept parameter that best explains the spread of ``y`` (one value per design):
+    the one of 2 .. :data:`MAX_GROUPS` values whose groups hold the largest share of the
+    variance of ``y`` (between-group over total sum of squares). None for a sweep of one
+    parameter value or a constant ``y``.
+
+    Returns
+    -------
+    (parameter, values) or None
+        ``values``: the parameter's value per design, in ``designs``' order.
+    """
+    finite = np.isfinite(y)
+    total = float(np.sum((y[finite] - y[finite].mean()) ** 2)) if finite.any() else 0.0
+    if not designs or total <= 0:
+        return None
+    best, share = None, -1.0
+    for j, (key, _) in enumerate(designs[0].values):
+        vals = [d.values[j][1] for d in designs]
+        distinct = list(dict.fromkeys(vals))
+        if not 2 <= len(distinct) <= MAX_GROUPS:
+            continue
+        between = 0.0
+        for v in distinct:
+            g = y[[i for i, x in enumerate(vals) if x == v and finite[i]]]
+            if g.size:
+                between += g.size * (g.mean() - y[finite].mean()) ** 2
+        if between / total > share:
+            best, share = (key, vals), between / total
+    return best
+
+
 def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
                 best: int | None, objective: str = "snr",
                 verified: Sequence[int] | None = None) -> None:
     """The objective against precompression and against bandwidth, Pareto fronts marked
     (and the designs verified with the contact maps, positions ``verified``, ringed).
 
+    The designs are coloured by the swept parameter that explains most of the objective's
+    spread (:func:`groups`), named in the legend; a signal-to-noise ratio is plotted in dB.
+    The recommended design is an open star drawn over its own point, which stays visible.
     Written in the format of ``path``'s suffix (png, pdf or svg) at :data:`msens.io.output.DPI`.
     """
     import matplotlib
@@ -215,37 +292,53 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
     from msens.io.output import DPI
 
     ok = [i for i, r in enumerate(rows) if r["status"] == "ok"]
-    s = np.array([abs(rows[i][objective]) for i in ok])
+    s, y_label = plotted_objective([rows[i][objective] for i in ok], objective)
     # trade-offs worth showing: those that vary (a coil sweep leaves the precompression alone)
     axes_keys = [a for a in (("precompression_N", "min", "magnetic precompression (N)", 1.0),
                              ("bandwidth_Hz", "max", "bandwidth (kHz)", 1e-3),
                              ("resonance_Hz", "max", "read-out resonance (kHz)", 1e-3))
                  if len({rows[i][a[0]] for i in ok}) > 1][:2] or \
         [("bandwidth_Hz", "max", "bandwidth (kHz)", 1e-3)]
-    fig, axes = plt.subplots(1, len(axes_keys), figsize=(5 * len(axes_keys), 4.2),
-                             constrained_layout=True, squeeze=False)
+    split = groups([designs[i] for i in ok], s)
+    fig, axes = plt.subplots(1, len(axes_keys), figsize=(5 * len(axes_keys), 4.6),
+                             layout="constrained", squeeze=False)
     for ax, (key, better, label, unit) in zip(axes[0], axes_keys, strict=True):
         x = np.array([rows[i][key] for i in ok]) * unit
         if x.size:
             front = pareto_mask(x, s, better)
-            ax.scatter(x[~front], s[~front], s=8, c="0.6", label="design")
+            if split is None:
+                ax.scatter(x, s, s=9, c="0.6", lw=0, label="design", zorder=2)
+            else:
+                param, vals = split
+                for k, v in enumerate(dict.fromkeys(vals)):
+                    g = np.array([u == v for u in vals])
+                    ax.scatter(x[g], s[g], s=9, color=f"C{(k + 1) % 10}", lw=0, alpha=0.8,
+                               label=parameter_text(param, v), zorder=2)
             o = np.argsort(x[front])
-            ax.plot(x[front][o], s[front][o], "o-", c="C0", ms=4, label="Pareto front")
+            ax.plot(x[front][o], s[front][o], "-", c="k", lw=0.9, zorder=3)
+            ax.plot(x[front][o], s[front][o], "o", mfc="none", mec="k", ms=5, zorder=4,
+                    label="Pareto front")
             ring = [k for k, i in enumerate(ok) if verified is not None and i in verified]
             if ring:
-                ax.scatter(x[ring], s[ring], s=90, facecolors="none", edgecolors="k",
-                           label="verified with contact maps")
+                ax.scatter(x[ring], s[ring], s=110, facecolors="none", edgecolors="C3",
+                           lw=1.0, zorder=4, label="verified with contact maps")
             if best is not None and best in [designs[i].index for i in ok]:
                 k = [designs[i].index for i in ok].index(best)
-                ax.plot(x[k], s[k], "*", c="C3", ms=14, label=f"recommended ({best})")
+                ax.plot(x[k], s[k], "*", mfc="none", mec="C3", mew=1.4, ms=17, zorder=5,
+                        label=f"recommended (design {best})")
         ax.set_xlabel(label)
-        ax.set_ylabel(LABELS.get(objective, objective))
-        ax.legend(fontsize=8)
+        ax.set_ylabel(y_label)
+        ax.grid(alpha=0.3)
+    handles, names = axes[0, 0].get_legend_handles_labels()
+    if handles:
+        fig.legend(handles, names, loc="outside right upper", fontsize=8, frameon=False,
+                   title=f"designs by {parameter_name(split[0])}" if split else None,
+                   title_fontsize=8)
     title = f"{len(ok)} designs ({len(rows) - len(ok)} failed)"
     if verified:
         title += (f"; linear contact sources, the best {len(verified)} verified with their "
                   "own contact maps")
-    fig.suptitle(title)
+    fig.suptitle(title, fontsize=10)
     buf = io.BytesIO()
     fmt = Path(path).suffix.lstrip(".") or "png"
     # no version or date stamp: reruns write identical bytes
@@ -258,5 +351,6 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
     atomic_write_bytes(path, buf.getvalue())
 
 
-__all__ = ["LABELS", "METRICS", "column_name", "csv_text", "pareto_mask", "pareto_plot",
-           "range_edges", "ranked", "recommend", "verification"]
+__all__ = ["DECIBELS", "LABELS", "METRICS", "column_name", "csv_text", "groups",
+           "parameter_name", "parameter_text", "pareto_mask", "pareto_plot",
+           "plotted_objective", "range_edges", "ranked", "recommend", "verification"]

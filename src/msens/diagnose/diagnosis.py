@@ -93,8 +93,10 @@ class Diagnosis:
     before, after : ModelState
         The baseline and the model with the named effect (== before for none).
     overlay : list of dict
-        Per sensor, for the figure: ``channel``, ``t_us`` (record time), ``data``,
-        ``before``, ``after`` (V; the shots' mean), or for features mode the feature table.
+        Per sensor, for the figure: ``channel``, ``t_us`` (µs since striker impact: the
+        record time plus the baseline's fitted trigger delay), ``t_after_us`` (the same with
+        the corrected model's delay), ``data``, ``before``, ``after`` (V; the shots' mean),
+        or for features mode the feature table.
     """
 
     mode: str

@@ -212,9 +212,12 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
 def _overlay(objective: WaveformObjective, records0: np.ndarray, records1: np.ndarray,
              result) -> list[dict]:
     shot = objective.shots[0]
-    (_, _, m0), (_, _, m1) = objective.aligned(records0)[0], objective.aligned(records1)[0]
+    # on the time since striker impact (record time + each model's fitted trigger delay),
+    # the time axis of every other figure
+    (_, t0, m0), (_, t1, m1) = objective.aligned(records0)[0], objective.aligned(records1)[0]
     return [{"channel": f"{s.sensor.kind.value}@{s.sensor.particle}",
-             "t_us": shot.tau * 1e6, "data": shot.y[j], "before": m0[j], "after": m1[j]}
+             "t_us": t0 * 1e6, "t_after_us": t1 * 1e6, "data": shot.y[j], "before": m0[j],
+             "after": m1[j]}
             for j, s in enumerate(result.sensors)]
 
 

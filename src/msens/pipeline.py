@@ -49,22 +49,16 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
                  responses: dict | None = None) -> SensorResult:
     from msens.config.fieldsetup import coil_geometry
     from msens.config.schema import CoilSpec
-    from msens.magnetics.mss import mss_record, noise_model, readout, voltage_on
+    from msens.readout.mss import MssSensor, mss_signals, noise_model, readout, voltage_on
 
     tr = transducers[sensor.particle]
     coil = coil_geometry(sensor.coil or CoilSpec(), sensor.particle)
     circuit = readout(coil, tr.resistance_ohm, tr.inductance_H, study.electronics)
-    if responses:
-        from msens.magnetics.eddy_readout import dynamic_signals
-
-        rec = dynamic_signals(tr, responses[sensor.particle], circuit, history.t,
-                              history.force, study.electronics.sample_rate_hz,
-                              approach=history.approach,
-                              noise=noise_model(study.electronics),
-                              rng=study.electronics.seed + index)
-    else:
-        rec = mss_record(tr, circuit, history.t, history.force, study.electronics,
-                         approach=history.approach, static=static, seed_offset=index)
+    e = study.electronics
+    rec = mss_signals(MssSensor(tr, circuit), history.t, history.force, e.sample_rate_hz,
+                      response=responses[sensor.particle] if responses else None,
+                      approach=history.approach, static=static, noise=noise_model(e),
+                      rng=e.seed + index)
     voltage = voltage_on(rec)
     # features of what the DAQ records (integrated, in newtons), as compare and diagnose read
     # them: the read-out circuit reshapes the pulse that ``weighted_force`` has before it
@@ -299,7 +293,6 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
                                  study=study,
                                  responses=setup_responses(study, setup, scheduler=scheduler))
         check_arrivals(study, observed)
-        observed = budget.flag_unresolved(study, observed)  # no reflection: no TOF/AR
         check_speeds(study, observed)
         setups.append(observed)
     return StudyResult(study=study, gamma_contact=gc, gamma_wall=gw, fit=fit,

@@ -10,10 +10,10 @@ from msens.design.report import pareto_mask, range_edges
 from msens.design.sweep import Design
 from msens.field.parts import Coil
 from msens.magnetics.emf import contact_rates, emf_from_rates
-from msens.magnetics.mss import readout
 from msens.params.units import K_B
 from msens.readout.daq import daq_voltage
 from msens.readout.electronics import ElectronicsSpec
+from msens.readout.mss import readout
 
 
 def _wave() -> Wave:

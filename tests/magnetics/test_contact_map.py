@@ -223,7 +223,7 @@ def test_mapped_contact_flux_is_the_map():
     """With a map, the record's flux is (∂Λ/∂δ_c / Λ_c'(δ_s)) (Λ_c(δ_c(t)) − Λ_c(δ_c(0))) for
     the mapped contact and the linear source for the others (to round-off); the EMF is
     −dΛ/dt of the same."""
-    from msens.magnetics.mss import MssSensor, mss_signals
+    from msens.readout.mss import MssSensor, mss_signals
 
     tr, table = _wired(True)
     t, force, approach = _history()
@@ -245,8 +245,8 @@ def test_hammerstein_with_eddy_currents():
     """With a frequency response, the map acts first (Hammerstein): the mapped transducer
     equals the linear one fed with the equivalent approaches, and at σ = 0 (a flat
     response) its flux is the static map's."""
-    from msens.magnetics.eddy_readout import dynamic_signals
     from msens.magnetics.frequency_response import FrequencyResponse
+    from msens.readout.mss import MssSensor, mss_signals
 
     tr, table = _wired(True)
     lin, _ = _wired(False)
@@ -258,10 +258,11 @@ def test_hammerstein_with_eddy_currents():
                              impedance=np.array([100.0, 100 + 2j * np.pi * 1e3 * 0.03,
                                                  100 + 2j * np.pi * 1e6 * 0.03]),
                              resistance_ohm=100.0, static_inductance_H=0.03)
-    rec = dynamic_signals(tr, flat, _circuit(), t, force, 10e6, approach=approach)
+    rec = mss_signals(MssSensor(tr, _circuit()), t, force, 10e6, response=flat,
+                      approach=approach)
     eq = approach.copy()
     eq[:, 9:11] = tr.equivalent_approach(approach[:, 9:11])
-    ref = dynamic_signals(lin, flat, _circuit(), t, force, 10e6, approach=eq)
+    ref = mss_signals(MssSensor(lin, _circuit()), t, force, 10e6, response=flat, approach=eq)
     assert np.array_equal(rec.emf, ref.emf)
     d10 = approach[:, 9]
     villari = (force[:, 9:11] - force[0, 9:11]) @ tr.sensitivity_villari

@@ -28,12 +28,11 @@ from msens.magnetics.dynamic import (
     report_to_json,
     sensor_conductivity,
 )
-from msens.magnetics.eddy_readout import dynamic_signals
 from msens.magnetics.mechanisms import adjoint_check, coil_linkage, mechanism_potentials
-from msens.magnetics.mss import MssSensor, mss_signals
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import Transducer, bias_solution
 from msens.readout.electronics import coil_transfer_function, readout_circuit, transfer_function
+from msens.readout.mss import MssSensor, mss_signals
 from msens.store import Store
 
 #: The coarse model of test_transducer (~4k elements, ~2 s with its sources).
@@ -179,7 +178,7 @@ def test_zero_conductivity_reproduces_mss_signals(model, static):
     circuit = readout_circuit(static.resistance_ohm, static.inductance_H, 15e-12)
     t, force = _history()
     ref = mss_signals(MssSensor(static, circuit), t, force, 10e6)
-    dyn = dynamic_signals(static, r, circuit, t, force, 10e6)
+    dyn = mss_signals(MssSensor(static, circuit), t, force, 10e6, response=r)
     scale = np.max(np.abs(ref.voltage))
     assert np.max(np.abs(dyn.emf - ref.emf)) < 1e-9 * np.max(np.abs(ref.emf))
     # FFT (band-limited EMF) against the exact first-order-hold response: 7.4e-4 here,
@@ -193,7 +192,7 @@ def test_eddy_currents_lower_the_signal(model, static, report):
     circuit = readout_circuit(static.resistance_ohm, static.inductance_H, 15e-12)
     r = report.responses[13]
     ref = mss_signals(MssSensor(static, circuit), t, force, 10e6)
-    dyn = dynamic_signals(static, r, circuit, t, force, 10e6)
+    dyn = mss_signals(MssSensor(static, circuit), t, force, 10e6, response=r)
     assert np.max(np.abs(dyn.voltage)) < np.max(np.abs(ref.voltage))
     assert np.all(np.isfinite(dyn.voltage))
 

@@ -48,13 +48,13 @@ from msens.magnetics.dynamic import dynamic_report, eddy_bias_solution
 from msens.magnetics.emf import ContactRates
 from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables
 from msens.magnetics.mechanisms import contact_profiles, mechanism_potentials
-from msens.magnetics.mss import winding_of
 from msens.magnetics.potentials import LinkageTable, linkage_table, rect_integral
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import bias_solution
 from msens.magnetics.transducer_cache import transducers_for
 from msens.readout.coil import wheeler_inductance
 from msens.readout.electronics import ElectronicsSpec
+from msens.readout.mss import winding_of
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm
 #: gives < 1e-4 relative error against exact mesh quadrature for the paper's coil, tests).

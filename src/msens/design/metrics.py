@@ -3,7 +3,7 @@
 A design's coil signal is computed exactly as ``msens run`` computes it: the open-circuit EMF
 V = -Σ_c [(∂Λ/∂F_c) dF_c/dt + (∂Λ/∂δ_c) dδ_c/dt] of both mechanisms
 (:func:`msens.magnetics.emf.emf_from_rates`) for the study's wave, and the read-out
-circuit of :func:`msens.magnetics.mss.readout` (coil R and bias-point L, winding, cable and
+circuit of :func:`msens.readout.mss.readout` (coil R and bias-point L, winding, cable and
 DAQ input capacitances, DAQ input resistance). From them:
 
 - ``peak_emf_V``: max |EMF| (the figure ``summary.json`` reports per coil);
@@ -11,7 +11,7 @@ DAQ input capacitances, DAQ input resistance). From them:
   circuit's transfer function (:func:`msens.readout.electronics.transfer_function`, by FFT on a grid
   padded by 14 decay times of the circuit's slowest pole, so the ringing of a resonance
   inside the band counts and does not wrap around);
-- ``noise_rms_V``: :func:`msens.magnetics.mss.figure_noise_rms` (Johnson noise of the circuit,
+- ``noise_rms_V``: :func:`msens.readout.mss.figure_noise_rms` (Johnson noise of the circuit,
   DAQ noise, quantisation); ``snr`` = peak_voltage_V / noise_rms_V;
 - resonance, Q, DC gain and -3 dB bandwidth of the circuit (:mod:`msens.readout.electronics`).
 """
@@ -29,7 +29,6 @@ from msens.field.parts import Coil
 from msens.magnetics.eddy_readout import PAD, emf_spectra
 from msens.magnetics.emf import ContactRates, emf_from_rates
 from msens.magnetics.frequency_response import coil_impedance
-from msens.magnetics.mss import figure_noise_rms, readout
 from msens.readout.electronics import (
     ElectronicsSpec,
     bandwidth,
@@ -38,6 +37,7 @@ from msens.readout.electronics import (
     resonance,
     transfer_function,
 )
+from msens.readout.mss import figure_noise_rms, readout
 
 #: Designs whose EMF records are formed at once (bounds memory: chunk × nt doubles).
 EMF_CHUNK = 256
@@ -163,11 +163,11 @@ def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductanc
     """Metrics of coil designs with eddy currents, one dict per design.
 
     The EMF and the DAQ voltage are those of ``msens run`` with eddy currents
-    (:func:`msens.magnetics.eddy_readout.dynamic_signals`): the contact rates' spectra times the
+    (:func:`msens.readout.mss.mss_signals`): the contact rates' spectra times the
     complex sensitivities (:func:`msens.magnetics.eddy_readout.emf_spectra`), then the read-out
     circuit with the coil's series impedance Z(ω) = R + jωL(ω)
     (:func:`msens.readout.electronics.coil_transfer_function`), on the run's FFT length
-    (:data:`msens.magnetics.eddy_readout.PAD`). Resonance, Q, bandwidth and noise are the static
+    (:data:`msens.readout.mss.PAD`). Resonance, Q, bandwidth and noise are the static
     circuit's (R, bias-point L), as ``summary.json`` reports them.
 
     Parameters

@@ -20,13 +20,13 @@ from msens.field.geometry import SensorGeometry
 from msens.field.parts import Coil
 from msens.magnetics.dynamic import dynamic_report
 from msens.magnetics.frequency_response import FrequencyResponse
-from msens.magnetics.mss import MssSensor, readout
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import Transducer, cache_key
 from msens.magnetics.transducer_cache import transducers_for
 from msens.magnetics.variants import RemanenceFamily, remanence_family
 from msens.params.materials import BEAD_STEEL
 from msens.readout.electronics import ElectronicsSpec
+from msens.readout.mss import MssSensor, readout
 from msens.store import Store
 
 #: Sensors and responses a model keeps (the most recently used): a search over coil offsets

@@ -4,12 +4,12 @@ A :class:`~msens.diagnose.models.PhysicsMss` in a model state carries its field 
 what effects may change (coil offset, magnet remanence, cable). The field models (the
 study's transducers, and on demand their :class:`~msens.magnetics.variants.RemanenceFamily`)
 belong to the diagnosis run (:class:`~msens.diagnose.models.ModelBank` in its context); this
-module turns a ``PhysicsMss`` into the :class:`~msens.magnetics.mss.MssSensor` whose DAQ
+module turns a ``PhysicsMss`` into the :class:`~msens.readout.mss.MssSensor` whose DAQ
 voltage is the sensor's record — the same functions ``msens run`` uses, so an undisturbed
 diagnosis reproduces the run exactly. With eddy currents (``[field] eddy_currents = true``)
 a model also holds each coil's frequency response (the run's
 :func:`msens.magnetics.dynamic.dynamic_report`) and :func:`signals` is the frequency-domain
-read-out of :func:`msens.magnetics.eddy_readout.dynamic_signals`; the effects that need
+read-out of :func:`msens.readout.mss.mss_signals`; the effects that need
 field-model variants (coil offset, magnet remanence) are then not searched.
 """
 
@@ -24,10 +24,9 @@ from msens.config.schema import CoilSpec, MssModel
 from msens.diagnose.effects.base import Context
 from msens.diagnose.models import FieldModel, PhysicsMss
 from msens.errors import internal
-from msens.magnetics.eddy_readout import dynamic_signals
 from msens.magnetics.frequency_response import FrequencyResponse
-from msens.magnetics.mss import MssRecord, MssSensor, mss_signals
 from msens.magnetics.transducer import Transducer, magnetic_precompression
+from msens.readout.mss import MssRecord, MssSensor, mss_signals
 
 
 def transducers(model: FieldModel) -> dict[int, Transducer]:
@@ -70,15 +69,11 @@ def signals(spec: PhysicsMss, t: np.ndarray, force: np.ndarray, *,
             approach: np.ndarray | None = None, columns: np.ndarray | None = None,
             static: np.ndarray | None = None) -> MssRecord:
     """The noise-free coil signals of a physics MsS for a chain's contact forces (and
-    approaches), as ``msens run`` forms them: :func:`msens.magnetics.mss.mss_signals`, or with
-    eddy currents :func:`msens.magnetics.eddy_readout.dynamic_signals` (arguments as those)."""
-    mss = sensor(spec)
-    rate = spec.electronics.sample_rate_hz
-    if not spec.model.eddy_currents:
-        return mss_signals(mss, t, force, rate, approach=approach, columns=columns,
-                           static=static)
-    return dynamic_signals(mss.transducer, response(spec), mss.circuit, t, force, rate,
-                           approach=approach, columns=columns)
+    approaches), by the read-out ``msens run`` uses: :func:`msens.readout.mss.mss_signals`
+    (with eddy currents with the coil's frequency response; arguments as that)."""
+    return mss_signals(sensor(spec), t, force, spec.electronics.sample_rate_hz,
+                       response=response(spec) if spec.model.eddy_currents else None,
+                       approach=approach, columns=columns, static=static)
 
 
 def response(spec: PhysicsMss) -> FrequencyResponse:

@@ -20,7 +20,7 @@ from msens.chain.integrate import ChainResult, simulate_batch
 from msens.config.assemble import build_chain
 from msens.diagnose import physics
 from msens.diagnose.effects.base import Context, ModelState
-from msens.magnetics.mss import voltage_on
+from msens.readout.mss import voltage_on
 from msens.readout.sensors import SensorKind, observe, read_contacts, time_derivative
 from msens.results import SensorResult, SetupResult
 from msens.signals.features import PulseFeatures, integrated, model_features

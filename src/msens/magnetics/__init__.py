@@ -12,9 +12,10 @@
   beads, coil R and L; :mod:`.transducer_cache` — their stored artifacts;
   :mod:`.variants` — transducers as a function of the magnets' remanence.
 - :mod:`.dynamic`, :mod:`.frequency_response`, :mod:`.eddy_readout` — eddy currents:
-  sensitivities and impedance per frequency, and the signals through them.
-- :mod:`.emf` — the EMF from the chain's contact states.
-- :mod:`.mss` — the read-out circuit of a coil and the physics MsS record of one chain run.
+  sensitivities and impedance per frequency, and the EMF spectra through them.
+- :mod:`.emf` — a transducer's EMF from the chain's contact states and its parts (rigid
+  translation, open contacts). The physics MsS's read-out, EMF to DAQ record, is
+  :mod:`msens.readout.mss`.
 
 The names below load with their module on first use. The functions named like their modules
 (``emf``, ``contact_map``, ``harmonic_tables``) are not listed here: an attribute of the
@@ -28,11 +29,10 @@ _HOMES = {
                    "magnetic_precompression", "particle_forces"),
     "transducer_cache": ("transducer_report", "transducers_for"),
     "variants": ("RemanenceFamily", "remanence_family"),
-    "emf": ("ContactRates", "contact_rates", "emf_from_rates"),
-    "mss": ("MssRecord", "MssSensor", "mss_record", "mss_signals"),
+    "emf": ("open_contact_emf", "rigid_translation_emf"),
     "dynamic": ("DynamicReport", "dynamic_report", "frequency_responses"),
     "frequency_response": ("FrequencyResponse", "coil_impedance"),
-    "eddy_readout": ("dynamic_signals", "mechanism_emfs"),
+    "eddy_readout": ("emf_spectra", "mechanism_emfs"),
     "magnetoelastic": ("PiezomagneticCoefficient", "anhysteretic_magnetisation",
                        "differential_susceptibility", "magnetostriction",
                        "piezomagnetic_coefficient", "stress_sensitivity"),

@@ -26,7 +26,7 @@ Approximations (say so wherever the numbers are used):
   curve, or its reversible part; the README shows how much it matters;
 * the winding itself is non-conducting (fine wire); its R is the DC resistance.
 
-In time (:func:`dynamic_signals`) the contact force and approach rates are Fourier
+In time (:func:`msens.readout.mss.mss_signals`) the contact force and approach rates are Fourier
 transformed, multiplied by −S_c(ω) and −D_c(ω) (interpolated between the solved
 frequencies, :meth:`FrequencyResponse.villari_at`) and by the read-out circuit's transfer
 function with the coil's series impedance Z(ω)

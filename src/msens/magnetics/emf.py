@@ -1,145 +1,21 @@
 """The EMF of a physics MsS from the chain's contact states (sign conventions: see
 :mod:`msens.magnetics.transducer`).
 
-The chain gives contact forces; :func:`contact_rates` turns them into the rates of both
-mechanisms' states (force for Villari, Hertz approach for the contact approach), and
-:func:`emf` weights them with the sensitivities of a
-:class:`~msens.magnetics.transducer.Transducer`: V = -dΛ/dt. Rigid translation of the chain
-and open contacts have their own terms (:func:`rigid_translation_emf`,
+The chain gives contact forces; :func:`msens.readout.mss.contact_rates` turns them into the
+rates of both mechanisms' states (force for Villari, Hertz approach for the contact
+approach), and :func:`emf` weights them with the sensitivities of a
+:class:`~msens.magnetics.transducer.Transducer`: V = -dΛ/dt (the physics MsS's whole
+read-out, EMF to DAQ record, is :func:`msens.readout.mss.mss_signals`). Rigid translation of
+the chain and open contacts have their own terms (:func:`rigid_translation_emf`,
 :func:`open_contact_emf`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
-
 import numpy as np
 
-from msens.errors import require
-from msens.magnetics.transducer import Mechanism, Transducer, _check_mechanism
-from msens.mechanics.hertz import hertz_approach
-
-
-@dataclass(frozen=True)
-class ContactRates:
-    """Rates of the contacts a transducer reads, for one chain history.
-
-    Attributes
-    ----------
-    t : ndarray, shape (nt,)
-        s.
-    force : ndarray, shape (nt, n_c)
-        dF_c/dt, N/s (zero for contacts beyond the chain's columns).
-    approach : ndarray, shape (nt, n_c)
-        dδ_c/dt of the Hertz approach δ_c = ([F_c]_+/A)^{2/3}, m/s.
-    """
-
-    t: np.ndarray
-    force: np.ndarray
-    approach: np.ndarray
-
-
-def contact_forces_of(force: np.ndarray, contacts: np.ndarray,
-                      columns: np.ndarray | None = None) -> np.ndarray:
-    """The columns of ``contacts`` from a chain's contact forces, zeros where absent.
-
-    Parameters
-    ----------
-    force : ndarray, shape (nt, m)
-        Contact forces, N.
-    contacts : ndarray of int, shape (n_c,)
-        1-based contact numbers wanted.
-    columns : ndarray of int, shape (m,), optional
-        Contact number of each column of ``force`` (sorted); default column k is contact
-        k + 1 (as in :mod:`msens.chain`).
-
-    Returns
-    -------
-    ndarray, shape (nt, n_c)
-    """
-    f = np.asarray(force, dtype=float)
-    contacts = np.asarray(contacts, dtype=int)
-    if columns is None:
-        columns = np.arange(1, f.shape[1] + 1)
-    columns = np.asarray(columns, dtype=int)
-    k = np.clip(np.searchsorted(columns, contacts), 0, max(columns.size - 1, 0))
-    use = (columns.size > 0) & (columns[k] == contacts)
-    out = np.zeros((f.shape[0], contacts.size))
-    out[:, use] = f[:, k[use]]
-    return out
-
-
-def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
-                  stiffness: float, columns: np.ndarray | None = None,
-                  approach: np.ndarray | None = None,
-                  equivalent: Callable[[np.ndarray], np.ndarray] | None = None
-                  ) -> ContactRates:
-    """Force and approach rates of ``contacts`` from a chain's contact states.
-
-    Parameters
-    ----------
-    t : ndarray, shape (nt,)
-        Strictly increasing times, s.
-    force : ndarray, shape (nt, m)
-        Contact forces, N.
-    contacts : ndarray of int, shape (n_c,)
-        1-based contact numbers.
-    stiffness : float
-        Hertz prefactor A, N/m^1.5.
-    columns : ndarray of int, shape (m,), optional
-        Contact number of each column of ``force`` (see :func:`contact_forces_of`).
-    approach : ndarray, shape (nt, m), optional
-        The chain's contact approaches δ_c(t), m (negative: open), same columns as
-        ``force``. Without it δ_c = ([F_c]_+/A)^{2/3}, whose slope in F is infinite at
-        F = 0: a contact that unloads or opens between two samples then gives a spike.
-    equivalent : callable, optional
-        Maps the approaches (nt, n_c) of ``contacts`` to those the linear sources read:
-        :meth:`Transducer.equivalent_approach` (the nonlinear contact maps). Every reading of
-        a chain history passes its transducer's here.
-
-    Notes
-    -----
-    Rates are :func:`numpy.gradient` (second order, also on non-uniform times).
-    """
-    t = np.asarray(t, dtype=float)
-    require(t.ndim == 1 and t.size >= 2, "t must be 1-D with at least 2 samples")
-    require(bool(np.all(np.diff(t) > 0)), "t must be strictly increasing")
-    require(np.ndim(force) == 2 and np.shape(force)[0] == t.size,
-            f"force must have shape (nt={t.size}, n_contacts), got "
-            f"{np.shape(force)}")
-    fc = contact_forces_of(force, contacts, columns)
-    delta = hertz_approach(fc, stiffness) if approach is None else \
-        contact_forces_of(approach, contacts, columns)
-    if equivalent is not None:
-        delta = equivalent(delta)
-    return ContactRates(t=t, force=np.gradient(fc, t, axis=0),
-                        approach=np.gradient(delta, t, axis=0))
-
-
-def emf_from_rates(rates: ContactRates, sensitivity_villari: np.ndarray,
-                   dlambda_dapproach: np.ndarray, mechanism: Mechanism = "both"
-                   ) -> np.ndarray:
-    """Open-circuit EMF V = -Σ_c [(∂Λ/∂F_c) dF_c/dt + (∂Λ/∂δ_c) dδ_c/dt], V.
-
-    Parameters
-    ----------
-    rates : ContactRates
-    sensitivity_villari, dlambda_dapproach : ndarray, shape (..., n_c)
-        Wb/N and Wb/m; leading axes (e.g. coil designs) broadcast.
-    mechanism : {"villari", "approach", "both"}
-
-    Returns
-    -------
-    ndarray, shape (..., nt)
-    """
-    _check_mechanism(mechanism)
-    out = 0.0
-    if mechanism in ("villari", "both"):
-        out = out - np.asarray(sensitivity_villari) @ rates.force.T
-    if mechanism in ("approach", "both"):
-        out = out - np.asarray(dlambda_dapproach) @ rates.approach.T
-    return out
+from msens.magnetics.transducer import Mechanism, Transducer
+from msens.readout.mss import ContactRates, contact_forces_of, contact_rates, emf_from_rates
 
 
 def rigid_translation_emf(transducer: Transducer, rates: ContactRates) -> np.ndarray:
@@ -226,4 +102,4 @@ __all__ = [
     "emf_from_rates",
     "open_contact_emf",
     "rigid_translation_emf",
-]
+]  # the first four from msens.readout.mss, where they live

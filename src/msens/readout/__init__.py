@@ -6,6 +6,8 @@
 - :mod:`.electronics` — the read-out circuit from the EMF to the DAQ input.
 - :mod:`.daq` — the voltage the DAQ records, sampled.
 - :mod:`.noise` — the circuit's noise at the DAQ.
+- :mod:`.mss` — the physics MsS's read-out: contact states -> EMF -> circuit -> DAQ record,
+  one function (:func:`~msens.readout.mss.mss_signals`) for run, synth and diagnose.
 """
 
 from msens._lazy import attribute, names
@@ -22,6 +24,8 @@ _HOMES = {
     "daq": ("daq_voltage",),
     "noise": ("NoiseModel", "add_readout_noise", "noise_rms", "thermal_covariance",
               "thermal_noise_psd"),
+    "mss": ("ContactRates", "MssRecord", "MssSensor", "contact_forces_of", "contact_rates",
+            "emf_from_rates", "mss_signals", "noise_model", "readout", "voltage_on"),
 }
 
 __all__ = names(_HOMES)

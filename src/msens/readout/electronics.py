@@ -45,7 +45,7 @@ class ElectronicsSpec:
 
     Capacitances in F, resistance in Ohm, rate in Hz. Defaults: 1 m of RG-58 coaxial cable
     into a 1 MOhm || 20 pF DAQ input sampled at the paper's 10 MHz; noise off unless asked
-    for. :func:`msens.magnetics.mss.readout` maps them onto a :class:`ReadoutCircuit`.
+    for. :func:`msens.readout.mss.readout` maps them onto a :class:`ReadoutCircuit`.
 
     Attributes
     ----------

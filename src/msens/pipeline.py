@@ -293,6 +293,7 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
                                  study=study,
                                  responses=setup_responses(study, setup, scheduler=scheduler))
         check_arrivals(study, observed)
+        observed = budget.flag_unresolved(study, observed)  # no reflection: no TOF/AR
         check_speeds(study, observed)
         setups.append(observed)
     return StudyResult(study=study, gamma_contact=gc, gamma_wall=gw, fit=fit,

@@ -42,6 +42,9 @@ class SensorResult:
         Scalar features of ``force``.
     mss : MssRecord or None
         For a physics MsS: flux change, EMF and DAQ voltage (:mod:`msens.readout.mss`).
+    note : str or None
+        Why the record's TOF and AR are missing (NaN), when they are: e.g. the record ends
+        before the wall's reflection can arrive (:func:`msens.budget.flag_unresolved`).
     """
 
     sensor: SensorSpec
@@ -50,6 +53,7 @@ class SensorResult:
     voltage_shape: np.ndarray | None
     features: PulseFeatures
     mss: object | None = None
+    note: str | None = None
 
     def __repr__(self) -> str:
         # the arrays' full reprs (thousands of samples) bury what a notebook user looks for
@@ -209,6 +213,8 @@ class StudyResult:
                     "speed_m_per_s": s.speed_incident,
                     "speed_reflected_m_per_s": s.speed_reflected,
                 }
+                if sr.note is not None:  # features missing: say why (null in JSON)
+                    row["note"] = sr.note
                 ref = refs.get((s.setup.name, sr.position))
                 if ref is not None:
                     row["reference"] = _compare(row, ref)

@@ -52,7 +52,7 @@ for label, result in runs.items():
     record = result.setups[0].sensors[0].mss   # the physics-MsS record of coil 13
     ax.plot(record.t_daq * 1e6, record.voltage * 1e3, label=label)
 ax.set_xlim(0, 200)
-ax.set_xlabel("time since impact (µs)")
+ax.set_xlabel("time since striker impact (µs)")
 ax.set_ylabel("DAQ voltage, coil 13 (mV)")
 ax.legend(fontsize=8)
 ax.grid(alpha=0.3)

@@ -2,7 +2,7 @@
 
     python benchmarks/eddy_sphere.py [--convergence]
 
-Sphere R = 2.38 mm (the paper's bead), σ = 6 MS/m (1018 steel, msens.field.eddy.SIGMA_1018),
+Sphere R = 2.38 mm (the paper's bead), σ = 6 MS/m (1018 steel, msens.params.materials.SIGMA_1018),
 μ_r = 100 and 1000, f = 0, 1, 10, 100 kHz; H0 = 1 A/m imposed as A_φ = μ0 H0 r/2 on a half
 circle of 10 R, truncation removed exactly (msens.field.eddy_sphere.truncation_factor).
 Mesh: a graded skin layer (first row 2.5 µm, ×1.3 per row) under the surface, 96 cells on the
@@ -70,9 +70,9 @@ def table() -> dict:
 
 
 def convergence(levels: int = 5) -> dict:
-    from msens.field.eddy import SIGMA_1018
     from msens.field.eddy_geometry import SkinLayer, layered_sphere_mesh
     from msens.field.eddy_sphere import conducting_sphere, sphere_check
+    from msens.params.materials import SIGMA_1018
 
     exact = conducting_sphere(RADIUS, 1000.0, SIGMA_1018, 1e5)[0]
     out, m = [], []

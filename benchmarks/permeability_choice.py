@@ -25,9 +25,9 @@ import numpy as np
 
 from msens import api
 from msens.config.study import default_study_path
-from msens.field.eddy import SIGMA_1018
 from msens.field.eddy_sphere import conducting_sphere
 from msens.field.geometry import BEAD_DIAMETER
+from msens.params.materials import SIGMA_1018
 
 VARIANTS = {
     "differential": {},

@@ -24,7 +24,7 @@ from msens.field.forms import element_mass, flux_density_qp, potential_qp, quadr
 from msens.field.regions import Air, LinearMagnetic, NonlinearSoft, PermanentMagnet, Winding
 from msens.field.solve import MagnetostaticProblem, incremental, solve
 from msens.field.verification_geometry import Part, build_mesh
-from msens.params.materials import STEEL_1018_BH
+from msens.params.materials import SIGMA_1018, STEEL_1018_BH
 from msens.params.units import MU0
 
 RADIUS = 2.38e-3
@@ -121,7 +121,7 @@ def test_element_mass_matches_skfem_form(sphere_mesh):
 
 # ----------------------------------------------------------------------------- exact
 
-def _exact_mp(mu_r, frequency, sigma=eddy.SIGMA_1018):
+def _exact_mp(mu_r, frequency, sigma=SIGMA_1018):
     x = mpmath.mpc(RADIUS / eddy.skin_depth(frequency, mu_r, sigma)) * (1 - 1j)
     j0 = mpmath.sin(x) / x
     j1 = mpmath.sin(x) / x**2 - mpmath.cos(x) / x
@@ -134,7 +134,7 @@ def _exact_mp(mu_r, frequency, sigma=eddy.SIGMA_1018):
 @pytest.mark.parametrize("frequency", [0.3, 30.0, 1e3, 1e5, 1e8])
 def test_closed_form_against_mpmath(mu_r, frequency):
     mpmath.mp.dps = 40
-    m, h = eddy_sphere.conducting_sphere(RADIUS, mu_r, eddy.SIGMA_1018, frequency)
+    m, h = eddy_sphere.conducting_sphere(RADIUS, mu_r, SIGMA_1018, frequency)
     m_ref, h_ref = _exact_mp(mu_r, frequency)
     assert abs(m - m_ref) <= 1e-9 * abs(m_ref) + 1e-12 * RADIUS**3
     assert abs(h - h_ref) <= 1e-9 * abs(h_ref) + 1e-15
@@ -183,7 +183,7 @@ def test_sphere_power_balance_and_sign(sphere_mesh):
     """Time-average loss (ω²/2)∫σ|A|²dV = −(ωμ0/2) Im(m H0*) (1 % required; it also holds
     for the discrete solution, to round-off), and the eddy currents make m lag H0."""
     prob = _sphere_problem(sphere_mesh, 1000.0)
-    sigma = eddy.conductivity(sphere_mesh, {"sphere": eddy.SIGMA_1018})
+    sigma = eddy.conductivity(sphere_mesh, {"sphere": SIGMA_1018})
     for sol in eddy.solve_harmonic(prob, sigma, [1e3, 1e4]):
         m = eddy.dipole_moment(sol, "sphere")
         power = eddy.dissipated_power(sol, "sphere")
@@ -199,7 +199,7 @@ def test_sphere_far_field_is_the_moment(sphere_mesh):
     """A_φ in the air at 3R is μ0[(H0 + c) ρ/2 + m/(4πρ²)] sin θ with the moment of
     dipole_moment (c = −m/(2π r_out³), the outer boundary's reflection)."""
     prob = _sphere_problem(sphere_mesh, 1000.0)
-    sigma = eddy.conductivity(sphere_mesh, {"sphere": eddy.SIGMA_1018})
+    sigma = eddy.conductivity(sphere_mesh, {"sphere": SIGMA_1018})
     (sol,) = eddy.solve_harmonic(prob, sigma, [1e4])
     m = eddy.dipole_moment(sol, "sphere")
     theta, rho = np.linspace(0.3, 2.8, 6), 3 * RADIUS
@@ -219,7 +219,7 @@ def test_truncation_correction():
             (c,) = eddy_sphere.sphere_check(mesh, RADIUS, k * RADIUS, 1000.0, [1e4],
                                      correct_truncation=corr)
             store[k] = c.moment
-    exact = eddy_sphere.conducting_sphere(RADIUS, 1000.0, eddy.SIGMA_1018, 1e4)[0]
+    exact = eddy_sphere.conducting_sphere(RADIUS, 1000.0, SIGMA_1018, 1e4)[0]
     assert abs(raw[5] / exact - 1) == pytest.approx(2 / 5**3, rel=0.1)
     assert abs(corrected[5] / corrected[10] - 1) < 1e-4
 
@@ -228,7 +228,7 @@ def test_truncation_correction():
 
 def test_zero_frequency_is_the_static_solution(sphere_mesh):
     prob = _sphere_problem(sphere_mesh, 100.0)
-    sigma = eddy.conductivity(sphere_mesh, {"sphere": eddy.SIGMA_1018})
+    sigma = eddy.conductivity(sphere_mesh, {"sphere": SIGMA_1018})
     (sol,) = eddy.solve_harmonic(prob, sigma, [0.0])
     static = solve(prob).a
     np.testing.assert_array_equal(sol.a.imag, 0.0)
@@ -242,7 +242,7 @@ def test_bias_state_uses_the_tangent(rod_bias):
     """At f = 0 the harmonic solve at a bias state is the incremental (tangent) solve."""
     j = 1e6
     inc = incremental(rod_bias, {"coil": Winding(j)})
-    sigma = eddy.conductivity(rod_bias.problem.mesh, {"rod": eddy.SIGMA_1018})
+    sigma = eddy.conductivity(rod_bias.problem.mesh, {"rod": SIGMA_1018})
     (sol,) = eddy.solve_harmonic(rod_bias, sigma, [0.0], sources={"coil": Winding(j)})
     np.testing.assert_allclose(sol.a.real, inc.a, rtol=0, atol=1e-12 * np.abs(inc.a).max())
     assert sol.nu.shape[-2:] == (2, 2)
@@ -256,7 +256,7 @@ def test_coil_impedance_power_balance(rod_bias):
     """
     turns, area = 200, 2e-3 * 7e-3
     current = 0.01
-    sigma = eddy.conductivity(rod_bias.problem.mesh, {"rod": eddy.SIGMA_1018})
+    sigma = eddy.conductivity(rod_bias.problem.mesh, {"rod": SIGMA_1018})
     sols = eddy.solve_harmonic(rod_bias, sigma, [0.0, 1e3, 1e4],
                                sources={"coil": Winding(turns * current / area)})
     z = [eddy.winding_impedance(s, "coil", turns, area, r_dc=3.0) for s in sols]
@@ -317,7 +317,7 @@ def test_reversible_permeability_changes_the_signal_not_the_bias(rod_mesh, rod_b
     np.testing.assert_array_equal(bias.a, rod_bias.a)
     j = 1e6
     inc = incremental(bias, {"coil": Winding(j)})
-    sigma = eddy.conductivity(rod_mesh, {"rod": eddy.SIGMA_1018})
+    sigma = eddy.conductivity(rod_mesh, {"rod": SIGMA_1018})
     (sol,) = eddy.solve_harmonic(bias, sigma, [0.0], sources={"coil": Winding(j)})
     np.testing.assert_allclose(sol.a.real, inc.a, rtol=0, atol=1e-12 * np.abs(inc.a).max())
     full = incremental(rod_bias, {"coil": Winding(j)})

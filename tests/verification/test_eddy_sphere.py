@@ -14,8 +14,9 @@ import math
 import numpy as np
 import pytest
 
-from msens.field import eddy, eddy_sphere
+from msens.field import eddy_sphere
 from msens.field.eddy_geometry import SkinLayer, layered_sphere_mesh, skin_layer
+from msens.params.materials import SIGMA_1018
 
 pytestmark = pytest.mark.slow
 
@@ -82,7 +83,7 @@ def layer_refinement(levels: int = 4, arc_segments: int = 128, mu_r: float = 100
         (c,) = eddy_sphere.sphere_check(mesh_k, RADIUS, R_OUT, mu_r, [frequency])
         first.append(layer.first)
         moment.append(c.moment)
-    exact = eddy_sphere.conducting_sphere(RADIUS, mu_r, eddy.SIGMA_1018, frequency)[0]
+    exact = eddy_sphere.conducting_sphere(RADIUS, mu_r, SIGMA_1018, frequency)[0]
     return np.array(first), np.array(moment), np.full(levels, exact)
 
 

@@ -16,10 +16,10 @@ from msens.config.schema import CoilSpec, MagnetSpec, SensorSpec, SetupSpec
 from msens.config.study import Study
 from msens.errors import InputError
 from msens.field.build import MeshOptions
-from msens.field.eddy import SIGMA_1018, SKIN_SIZE
+from msens.field.eddy import SKIN_SIZE
 from msens.field.geometry import AirBox, BeadChain, SensorGeometry
 from msens.field.parts import WIRES, BiasMagnet, Coil, SensorUnit, Wire
-from msens.params.materials import MAGNET_GRADES
+from msens.params.materials import MAGNET_GRADES, SIGMA_1018
 from msens.readout.coil import awg_diameter, heavy_build_diameter
 from msens.readout.sensors import SensorKind
 

@@ -349,7 +349,7 @@ class FieldSpec:
         of the magnetostatic transducer. Off by default (see the README for its accuracy).
     steel_conductivity_s_per_m : float or None
         Electrical conductivity of the beads and pole pieces, S/m; None means
-        :data:`msens.field.eddy.SIGMA_1018` (AISI 1018, 6 MS/m, cited there).
+        :data:`msens.params.materials.SIGMA_1018` (AISI 1018, 6 MS/m, cited there).
     small_signal_permeability : {"differential", "reversible"}
         Permeability of the steel for the signal about the bias point (the transducer's
         sensitivities, the coil's L and Z(f)): the differential slope of the B–H curve, or its

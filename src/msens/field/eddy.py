@@ -55,12 +55,6 @@ from msens.field.regions import Winding
 from msens.field.solve import Discretisation, FieldSolution, MagnetostaticProblem, discretise
 from msens.params.units import MU0, TWO_PI
 
-#: Electrical conductivity of 1018 steel, S/m. ASSUMPTION (no measurement of the beads):
-#: annealed AISI 1018 has a resistivity of 15.9 µΩ cm at 0 °C and 21.9 µΩ cm at 100 °C
-#: (MatWeb/ASM data sheet for AISI 1018, "Electrical Resistivity"), i.e. 6.3 MS/m at 0 °C and
-#: ~5.85 MS/m at 20 °C by linear interpolation; 6.0 MS/m is the round value of design.md §5.
-SIGMA_1018 = 6.0e6
-
 #: Element size at the surfaces of the beads near a coil for the eddy-current model, m (the
 #: skin depth is ~20 µm at 100 kHz with the differential permeability). On the one-sensor model
 #: (``python benchmarks/dynamic_mesh_convergence.py``) the contact approach at 40 µm agrees
@@ -68,7 +62,7 @@ SIGMA_1018 = 6.0e6
 #: it is 9° off at 30 kHz and 28° off at 100 kHz.
 SKIN_SIZE = 40e-6
 
-__all__ = ["SIGMA_1018", "SKIN_SIZE", "HarmonicOperator", "HarmonicSolution",
+__all__ = ["SKIN_SIZE", "HarmonicOperator", "HarmonicSolution",
            "conductivity", "conductivity_mass", "dipole_moment",
            "dissipated_power", "flux_linkage", "mean_field_z", "skin_depth", "solve_harmonic",
            "winding_impedance"]

@@ -13,7 +13,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from msens.field.eddy import (
-    SIGMA_1018,
     conductivity,
     dipole_moment,
     dissipated_power,
@@ -23,6 +22,7 @@ from msens.field.eddy import (
 )
 from msens.field.mesh import AxiMesh
 from msens.field.solve import MagnetostaticProblem
+from msens.params.materials import SIGMA_1018
 from msens.params.units import MU0, TWO_PI
 
 

@@ -43,7 +43,7 @@ import numpy as np
 
 from msens.errors import internal, require
 from msens.field.build import MeshOptions
-from msens.field.eddy import SIGMA_1018, HarmonicOperator, dissipated_power
+from msens.field.eddy import HarmonicOperator, dissipated_power
 from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import coil_current_density, coil_resistance
 from msens.field.solve import FieldSolution
@@ -55,6 +55,7 @@ from msens.magnetics.mechanisms import (
     offset_table_grid,
 )
 from msens.magnetics.potentials import region_linkage
+from msens.params.materials import MAGNET_CONDUCTIVITY, SIGMA_1018
 from msens.params.units import TWO_PI
 from msens.store import Store, content_key
 
@@ -73,24 +74,14 @@ DEFAULT_FREQUENCIES: tuple[float, ...] = (0.0, 10.0, 30.0, 100.0, 300.0, 500.0, 
 #: accurate (tested against a moved coil's own model).
 RESPONSE_OFFSET_STEP = 0.25e-3
 
-#: Electrical conductivity of the magnet grades of
-#: :data:`msens.params.materials.MAGNET_GRADES`, S/m.
-#: ceramic8: hard ferrite is an oxide ceramic, an insulator for eddy-current purposes
-#: (ASSUMPTION: resistivity of order 1e4 Ω m on typical ferrite data sheets — not measured;
-#: any value below ~1 S/m gives no screening at 200 kHz in a 7 mm wall). NdFeB: resistivity
-#: 150 µΩ cm, σ = 0.667 MS/m (Stanford Magnets, "Characteristics of NdFeB magnets", physical
-#: properties table; 120–160 µΩ cm elsewhere).
-MAGNET_CONDUCTIVITY: dict[str, float] = {"ceramic8": 0.0, "N38": 0.667e6, "N42": 0.667e6}
-
-
 def sensor_conductivity(mesh, geometry: SensorGeometry, *, steel: float = SIGMA_1018,
                         magnets: Mapping[str, float] | None = None) -> np.ndarray:
     """Conductivity of every element of a sensor mesh, S/m, shape (n_elements,).
 
     Beads and pole pieces are the geometry's steel (``steel``, default 1018,
-    :data:`msens.field.eddy.SIGMA_1018`); each magnet gets the conductivity of its grade
-    (:data:`MAGNET_CONDUCTIVITY`, or ``magnets`` keyed by grade); air, coils (fine wire) and
-    the tube (not a mesh region: air) are insulators.
+    :data:`msens.params.materials.SIGMA_1018`); each magnet gets the conductivity of its grade
+    (:data:`msens.params.materials.MAGNET_CONDUCTIVITY`, or ``magnets`` keyed by grade); air,
+    coils (fine wire) and the tube (not a mesh region: air) are insulators.
 
     Parameters
     ----------
@@ -99,7 +90,8 @@ def sensor_conductivity(mesh, geometry: SensorGeometry, *, steel: float = SIGMA_
     steel : float
         S/m.
     magnets : Mapping[str, float], optional
-        Conductivity per magnet grade, S/m (overrides :data:`MAGNET_CONDUCTIVITY`).
+        Conductivity per magnet grade, S/m (overrides
+        :data:`msens.params.materials.MAGNET_CONDUCTIVITY`).
     """
     table = {**MAGNET_CONDUCTIVITY, **(magnets or {})}
     grades = {f"magnet_{u.magnet.particle}": u.magnet.grade for u in geometry.sensors
@@ -473,7 +465,6 @@ def join_reports(parts: Sequence[DynamicReport]) -> DynamicReport:
 __all__ = [
     "DEFAULT_FREQUENCIES",
     "DYNAMIC_VERSION",
-    "MAGNET_CONDUCTIVITY",
     "RESPONSE_OFFSET_STEP",
     "DynamicReport",
     "dynamic_key",

@@ -19,11 +19,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from msens.errors import require
-from msens.field.eddy import SIGMA_1018, HarmonicOperator
+from msens.field.eddy import HarmonicOperator
 from msens.field.geometry import SensorGeometry
 from msens.magnetics.dynamic import sensor_conductivity
 from msens.magnetics.mechanisms import MechanismPotentials
 from msens.magnetics.potentials import LinkageTable, rect_integral, table_grid, tabulate
+from msens.params.materials import SIGMA_1018
 
 
 @dataclass(frozen=True)

@@ -128,3 +128,18 @@ MAGNET_GRADES: dict[str, MagnetGrade] = {
     "N42": MagnetGrade("NdFeB N42", 1.30, 1.05,
                        "typical sintered NdFeB N42 datasheet: Br 1.28-1.32 T, mu_rec 1.05"),
 }
+
+
+#: Electrical conductivity of the beads' 1018 steel, S/m. ASSUMPTION (no measurement of the
+#: beads): annealed AISI 1018 has a resistivity of 15.9 µΩ cm at 0 °C and 21.9 µΩ cm at 100 °C
+#: (MatWeb/ASM data sheet for AISI 1018, "Electrical Resistivity"), i.e. 6.3 MS/m at 0 °C and
+#: ~5.85 MS/m at 20 °C by linear interpolation; 6.0 MS/m is the round value of design.md §5.
+SIGMA_1018 = 6.0e6
+
+#: Electrical conductivity of the magnet grades of :data:`MAGNET_GRADES`, S/m.
+#: ceramic8: hard ferrite is an oxide ceramic, an insulator for eddy-current purposes
+#: (ASSUMPTION: resistivity of order 1e4 Ω m on typical ferrite data sheets — not measured;
+#: any value below ~1 S/m gives no screening at 200 kHz in a 7 mm wall). NdFeB: resistivity
+#: 150 µΩ cm, σ = 0.667 MS/m (Stanford Magnets, "Characteristics of NdFeB magnets", physical
+#: properties table; 120–160 µΩ cm elsewhere).
+MAGNET_CONDUCTIVITY: dict[str, float] = {"ceramic8": 0.0, "N38": 0.667e6, "N42": 0.667e6}

@@ -48,11 +48,10 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
                  transducers: dict, study: Study, index: int,
                  responses: dict | None = None) -> SensorResult:
     from msens.config.fieldsetup import coil_geometry
-    from msens.config.schema import CoilSpec
     from msens.readout.mss import MssSensor, mss_signals, noise_model, readout, voltage_on
 
     tr = transducers[sensor.particle]
-    coil = coil_geometry(sensor.coil or CoilSpec(), sensor.particle)
+    coil = coil_geometry(sensor.coil, sensor.particle)
     circuit = readout(coil, tr.resistance_ohm, tr.inductance_H, study.electronics)
     e = study.electronics
     rec = mss_signals(MssSensor(tr, circuit), history.t, history.force, e.sample_rate_hz,

@@ -74,8 +74,8 @@ def magnet_geometry(spec: MagnetSpec, particle: int) -> BiasMagnet | None:
 
 def sensor_unit(sensor: SensorSpec) -> SensorUnit:
     """Coil and magnet of one MsS sensor."""
-    return SensorUnit(coil_geometry(sensor.coil or CoilSpec(), sensor.particle),
-                      magnet_geometry(sensor.magnet or MagnetSpec(), sensor.particle))
+    return SensorUnit(coil_geometry(sensor.coil, sensor.particle),
+                      magnet_geometry(sensor.magnet, sensor.particle))
 
 
 def geometry_from_study(study: Study, setup: SetupSpec | None = None) -> SensorGeometry:

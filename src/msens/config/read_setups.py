@@ -72,8 +72,9 @@ def _sensor(t: Table, chain: ChainSpec) -> SensorSpec:
             raise t.error("particle", f"of a four-contact MsS must be at most "
                                       f"{chain.n_particles - 1}, got {particle}")
         ct, mt = t.table("coil"), t.table("magnet")
-        coil = _coil(ct, chain) if ct is not None else CoilSpec()
-        magnet = _magnet(mt, chain) if mt is not None else MagnetSpec()
+        # without a table, SensorSpec applies the default coil and magnet
+        coil = _coil(ct, chain) if ct is not None else None
+        magnet = _magnet(mt, chain) if mt is not None else None
     t.finish()
     return SensorSpec(kind=kind, particle=particle, model=model, coil=coil, magnet=magnet)
 

@@ -253,9 +253,10 @@ class SensorSpec:
         For an MsS: ``"physics"`` (field model, both mechanisms, read-out circuit: volts) or
         ``"four-contact"`` (the paper's hypothesis: the mean of four contact forces).
     coil : CoilSpec or None
-        The MsS's ``[sensor.coil]`` table.
+        The MsS's ``[sensor.coil]`` table; for an MsS without one, the default coil (the
+        paper's), set here once for every reader of the study. None for other sensors.
     magnet : MagnetSpec or None
-        The MsS's ``[sensor.magnet]`` table.
+        The MsS's ``[sensor.magnet]`` table; for an MsS without one, the default magnet.
     """
 
     kind: SensorKind
@@ -263,6 +264,13 @@ class SensorSpec:
     model: MssModel | None = None
     coil: CoilSpec | None = None
     magnet: MagnetSpec | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind is SensorKind.MSS:  # the study's defaults, applied once, here
+            if self.coil is None:
+                object.__setattr__(self, "coil", CoilSpec())
+            if self.magnet is None:
+                object.__setattr__(self, "magnet", MagnetSpec())
 
 
 @dataclass(frozen=True)

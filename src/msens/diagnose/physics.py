@@ -20,7 +20,7 @@ import dataclasses
 import numpy as np
 
 from msens.config.fieldsetup import coil_geometry, eddy_settings, geometry_from_study
-from msens.config.schema import CoilSpec, MssModel
+from msens.config.schema import MssModel
 from msens.diagnose.effects.base import Context
 from msens.diagnose.models import FieldModel, PhysicsMss
 from msens.errors import internal
@@ -44,7 +44,7 @@ def setup_physics(ctx: Context) -> tuple[PhysicsMss | None, ...]:
                                 contact_maps=ctx.study.field.contact_map)
     return tuple(
         PhysicsMss(model=model, particle=s.particle,
-                   coil=coil_geometry(s.coil or CoilSpec(), s.particle),
+                   coil=coil_geometry(s.coil, s.particle),
                    electronics=ctx.study.electronics)
         if s.model is MssModel.PHYSICS else None for s in sensors)
 

@@ -64,9 +64,11 @@ def read_npz(path: str | os.PathLike[str]) -> Waveform:
     for name, array in arrays.items():
         try:
             channel = Channel.parse(name)
-        except InputError:
+        except InputError as exc:
+            if str(exc).startswith("channel "):  # a channel name with a value out of range
+                raise InputError(f"{source}: array {shorten(name)}: {exc}") from None
             raise InputError(
-                f"{source}: unknown array {name!r}: allowed are {TIME_NAME!r}, "
+                f"{source}: unknown array {shorten(name)}: allowed are {TIME_NAME!r}, "
                 f"{METADATA_NAME!r} and channels; {CHANNEL_FORMAT_HELP}"
             ) from None
         values = _numeric_vector(array, name, source)

@@ -1,0 +1,302 @@
+"""The hostile inputs and faults of issue 38, each class at its root: one message naming the
+key, file or value (exit 2) within seconds, never an internal error, a hang or a confident
+feature of a record that cannot hold it."""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from tests.hostile.conftest import TINY, assert_input_error, run_cli
+
+from msens import api
+from msens.errors import MESSAGE_LIMIT, InputError, shorten
+from msens.io.atomic import TEMP_MARK, atomic_write, atomic_write_bytes
+
+ROOT = Path(__file__).parents[2]
+TINY_MSS = ROOT / "tests" / "data" / "tiny-mss.toml"
+SWEEP_COIL = ROOT / "studies" / "sweep-coil.toml"
+
+
+def _run(tiny, tmp_path, capsys, *changes, extra="", seconds=15.0):
+    path = tiny(*changes, extra=extra)
+    return run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"], capsys,
+                   seconds=seconds)
+
+
+# --------------------------------------------------------------------------- internal errors
+
+def test_precompression_on_the_strikers_contact(tiny, tmp_path, capsys):
+    """+F on the striker (in flight) and -F on the last bead pulled the wall contact into
+    tension: a ValueError from the equilibrium through the budget estimate."""
+    code, err = _run(tiny, tmp_path, capsys,
+                     extra="[[precompression]]\ncontacts = [1, 10]\nforce_N = 5\n")
+    assert_input_error(code, err, "'precompression[1].contacts'", "contact 2")
+
+
+def test_tension_in_static_loads_is_input_error():
+    from msens.chain.equilibrium import contact_forces_from_loads
+
+    with pytest.raises(InputError, match="tension"):
+        contact_forces_from_loads(np.array([5.0, 0.0, 0.0, -10.0]))
+
+
+def test_npz_member_that_is_not_npy(tmp_path, capsys):
+    path = tmp_path / "w.npz"
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("time_s.npy", "not an array")
+        z.writestr("notes.txt", "hello")
+    code, err = run_cli(["check-waveform", str(path)], capsys)
+    assert_input_error(code, err, str(path))
+
+
+def test_npz_member_without_npy_suffix(tmp_path, capsys):
+    buf = tmp_path / "ok.npz"
+    np.savez(buf, time_s=np.arange(5) * 1e-6)
+    with zipfile.ZipFile(buf, "a") as z:
+        z.writestr("bead@3.txt", "1,2,3")
+    code, err = run_cli(["check-waveform", str(buf)], capsys)
+    assert_input_error(code, err, "'bead@3.txt'", "not a .npy array")
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".npz"])
+def test_huge_particle_number_refused_by_every_reader(tmp_path, capsys, suffix):
+    """check-waveform said ok, then convert to TDMS failed: one rule for every format."""
+    name = "bead@99999999999999999999999"
+    path = tmp_path / f"w{suffix}"
+    if suffix == ".csv":
+        path.write_text(f"# msens-waveform: 1\ntime_s,{name}\n0,1\n1e-6,2\n2e-6,3\n")
+    else:
+        np.savez(path, time_s=np.arange(3) * 1e-6, **{name: np.ones(3)})
+    code, err = run_cli(["check-waveform", str(path)], capsys)
+    assert_input_error(code, err, "particle must be <= 1,000,000")
+    code, err = run_cli(["convert", str(path), str(tmp_path / "c.tdms")], capsys)
+    assert_input_error(code, err, "particle must be <= 1,000,000")
+
+
+def test_failed_write_names_path_and_reason(tmp_path):
+    target = tmp_path / "out.bin"
+
+    def full_disk(tmp: Path) -> None:
+        tmp.write_bytes(b"x")
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    with pytest.raises(InputError, match=r"out\.bin: cannot write \(No space left on device\)"):
+        atomic_write(target, full_disk)
+    assert not target.exists() and not any(TEMP_MARK in p.name for p in tmp_path.iterdir())
+    with pytest.raises(InputError, match=r"/proc/self/msens-test\.bin"):
+        atomic_write_bytes("/proc/self/msens-test.bin", b"x")
+
+
+def test_convert_into_proc_exits_2(tmp_path, capsys):
+    src = tmp_path / "w.csv"
+    src.write_text("# msens-waveform: 1\ntime_s,bead@3\n0,1\n1e-6,2\n2e-6,3\n")
+    code, err = run_cli(["convert", str(src), "/proc/self/msens-test.csv"], capsys)
+    assert_input_error(code, err, "/proc/self/msens-test.csv")
+
+
+@pytest.mark.parametrize("address", ["garbage", "", "  ", "10.0.0.1", "tcp://", "inproc://x",
+                                     "tls://127.0.0.1:8786", "tcp://127.0.0.1:99999",
+                                     "tcp://host with space:1", "x" * 500])
+def test_design_scheduler_checked_before_any_work(tmp_path, capsys, address):
+    """Malformed addresses failed in parallel.py after ~40 s of field work."""
+    code, err = run_cli(["design", str(TINY_MSS), "--sweep", str(SWEEP_COIL), "--out",
+                         str(tmp_path / "d"), "--scheduler", address, "-q"], capsys,
+                        seconds=5)
+    assert_input_error(code, err, "--scheduler")
+    assert len(err) < 600
+    assert not (tmp_path / "d").exists()
+
+
+def test_design_scheduler_nothing_listening(tmp_path, capsys):
+    pytest.importorskip("distributed")
+    code, err = run_cli(["design", str(TINY_MSS), "--sweep", str(SWEEP_COIL), "--out",
+                         str(tmp_path / "d"), "--scheduler", "tcp://127.0.0.1:1", "-q"], capsys,
+                        seconds=10)
+    assert_input_error(code, err, "--scheduler", "no Dask scheduler answers")
+
+
+@pytest.mark.parametrize("workers", ["0", "-3"])
+def test_design_workers_below_one(tmp_path, capsys, workers):
+    code, err = run_cli(["design", str(TINY_MSS), "--sweep", str(SWEEP_COIL), "--out",
+                         str(tmp_path / "d"), "--workers", workers, "-q"], capsys, seconds=5)
+    assert_input_error(code, err, "--workers must be >= 1", workers)
+
+
+def test_run_checks_scheduler_without_remote_work(tiny, tmp_path, capsys):
+    path = tiny()
+    code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures",
+                         "--scheduler", "garbage"], capsys, seconds=5)
+    assert_input_error(code, err, "--scheduler 'garbage'")
+
+
+@pytest.mark.parametrize("call", [
+    lambda s, d: api.load(None),
+    lambda s, d: api.load(3),
+    lambda s, d: api.load(""),
+    lambda s, d: api.synth(s, d / "x.csv", shots=2.5),
+    lambda s, d: api.synth(s, d / "x.csv", shots="2"),
+    lambda s, d: api.synth(s, d / "x.csv", noise=float("nan")),
+    lambda s, d: api.synth(s, ""),
+    lambda s, d: api.synth(s, d),
+    lambda s, d: api.synth(s, d / "x.txt"),
+    lambda s, d: api.synth(str(TINY_MSS), d / "x.csv"),
+    lambda s, d: api.run("study.toml"),
+    lambda s, d: api.run(s, scheduler=8786),
+    lambda s, d: api.design(s, SWEEP_COIL, d / "o", workers=1.5),
+])
+def test_python_api_refuses_wrong_types(tmp_path, call):
+    study = api.load(TINY_MSS)
+    with pytest.raises(InputError) as info:
+        call(study, tmp_path)
+    assert "\n" not in str(info.value)
+
+
+def test_python_api_synth_takes_a_string_path(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.toml").write_text(TINY)
+    study = api.load("s.toml")
+    written = api.synth(study, "x.csv")
+    assert Path(written) == Path("x.csv") and (tmp_path / "x.csv").is_file()
+
+
+@pytest.mark.parametrize("layer", ["x", (3,), (3, "thin"), (1.5, 1e-6), 7])
+def test_contact_layer_of_the_wrong_type(layer):
+    from msens.field.geometry import BeadChain
+
+    with pytest.raises(InputError, match="contact_layer"):
+        BeadChain(contact_layer=layer)
+
+
+# --------------------------------------------------------------------------- hangs
+
+def test_eddy_skin_size_that_would_mesh_forever(tmp_path, capsys):
+    path = tmp_path / "s.toml"
+    path.write_text(TINY_MSS.read_text() + "\n[field]\neddy_currents = true\n"
+                    "skin_size_m = 1e-6\n")
+    code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
+                        capsys, seconds=10)
+    assert_input_error(code, err, "'field.skin_size_m'", "smallest skin_size_m", "8.3e-06")
+
+
+def test_steel_conductivity_needs_eddy_currents(tiny, tmp_path, capsys):
+    code, err = _run(tiny, tmp_path, capsys, extra="[field]\nsteel_conductivity_S_per_m = 6e6\n")
+    assert_input_error(code, err, "'field.steel_conductivity_S_per_m'", "eddy_currents = true")
+
+
+@pytest.mark.parametrize("kind", ["device", "fifo", "folder", "huge"])
+def test_study_loader_refuses_what_it_cannot_read(tmp_path, capsys, kind):
+    """``msens run /dev/zero`` read forever; the waveform readers already refused it."""
+    if kind == "device":
+        path = Path("/dev/zero")
+    elif kind == "fifo":
+        path = tmp_path / "pipe.toml"
+        os.mkfifo(path)
+    elif kind == "folder":
+        path = tmp_path
+    else:
+        path = tmp_path / "huge.toml"
+        with open(path, "wb") as fh:
+            fh.truncate(5 << 20)
+    code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
+                        capsys, seconds=5)
+    assert_input_error(code, err, str(path))
+    code, err = run_cli(["design", str(TINY_MSS), "--sweep", str(path), "--out",
+                         str(tmp_path / "d"), "-q"], capsys, seconds=5)
+    assert_input_error(code, err, str(path))
+
+
+# --------------------------------------------------------------------------- confident nonsense
+
+@pytest.mark.parametrize(("change", "fragments"), [
+    # issue 38: a 1 kHz output rate with a 1 s record reported TOF 22029 us and AR 0.29
+    (("t_end_s = 3.0e-4\nsample_rate_hz = 5e6", "t_end_s = 1.0\nsample_rate_hz = 1e3"),
+     ["'simulation.sample_rate_hz'", "cannot resolve the pulse"]),
+    (("t_end_s = 3.0e-4\nsample_rate_hz = 5e6", "t_end_s = 1.0e-3\nsample_rate_hz = 1e5"),
+     ["'simulation.sample_rate_hz'", "at least"]),
+    (("beads = 10", "beads = 100"), ["'simulation.t_end_s'", "holds no reflected pulse"]),
+    (("drop_height_m = 7.2e-3", "drop_height_m = 10.0"),
+     ["'striker.drop_height_m'", "GPa", "at most"]),
+    (("drop_height_m = 7.2e-3", "velocity_m_per_s = 19.0"),
+     ["'striker.velocity_m_per_s'", "GPa"]),
+])
+def test_unresolvable_records_refused_before_the_run(tiny, tmp_path, capsys, change, fragments):
+    code, err = _run(tiny, tmp_path, capsys, change)
+    assert_input_error(code, err, *fragments)
+
+
+def test_electronics_rate_refused_before_field_work(tmp_path, capsys):
+    path = tmp_path / "s.toml"
+    path.write_text(TINY_MSS.read_text() + "\n[electronics]\nsample_rate_hz = 1e3\n")
+    code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
+                        capsys, seconds=5)
+    assert_input_error(code, err, "'electronics.sample_rate_hz'", "cannot resolve the pulse")
+
+
+@pytest.mark.parametrize("change", [
+    ("t_end_s = 3.0e-4", "t_end_s = 1.2e-4"),  # ends after the bound, before the reflection
+    ("gamma_contact_kg_per_s = 4.7", "gamma_contact_kg_per_s = 60"),  # damped away
+])
+def test_missing_reflection_is_null_with_a_reason(tiny, tmp_path, capsys, change):
+    code, err = _run(tiny, tmp_path, capsys, change)
+    assert code == 0, err
+    assert "no TOF or AR" in err  # the warning
+    rows = json.loads((tmp_path / "o" / "summary.json").read_text())["rows"]
+    flagged = [r for r in rows if r["tof_us"] is None]
+    assert flagged
+    for r in rows:
+        if r["tof_us"] is None or r["ar"] is None:
+            assert r["ar"] is None and r["tof_us"] is None and "no TOF or AR" in r["note"]
+        else:
+            assert "note" not in r and r["tof_us"] > 0
+
+
+def test_resolved_study_has_no_notes(tiny, tmp_path, capsys):
+    code, err = _run(tiny, tmp_path, capsys)
+    assert code == 0, err
+    rows = json.loads((tmp_path / "o" / "summary.json").read_text())["rows"]
+    assert all("note" not in r and r["tof_us"] > 0 and r["ar"] > 0 for r in rows)
+
+
+# --------------------------------------------------------------------------- messages
+
+def test_shorten_and_message_bound():
+    assert shorten("abc") == "'abc'"
+    cut = shorten("x" * 5000)
+    assert len(cut) < 120 and "5,000 characters" in cut
+    msg = str(InputError("a: " + "y\r" * 100_000))
+    assert len(msg) <= MESSAGE_LIMIT + 60 and "\r" not in msg and "\n" not in msg
+
+
+def test_cr_only_file_is_not_echoed_whole(tmp_path, capsys):
+    rows = "".join(f"{i * 1e-6},{np.sin(i / 10):.6f}\r" for i in range(20_000))
+    path = tmp_path / "cr.csv"
+    path.write_bytes(("time_s,bead@13\r" + rows + "junk,\r").encode())
+    code, err = run_cli(["check-waveform", str(path)], capsys)
+    assert code in (0, 2)
+    assert len(err) < 2000, len(err)
+
+
+def test_long_columns_map_is_cut(tmp_path, capsys):
+    path = tmp_path / "w.csv"
+    path.write_text("Time,CH1\n0,1\n1e-6,2\n2e-6,3\n")
+    columns = "time=Time:s," + ",".join(f"bead@{i}=CH{i}:V" for i in range(2, 3000))
+    code, err = run_cli(["check-waveform", str(path), "--columns", columns], capsys)
+    assert code == 2
+    assert len(err) < 2000, len(err)
+
+
+def test_range_messages_quote_the_value_exactly(tiny, tmp_path, capsys):
+    code, err = _run(tiny, tmp_path, capsys,
+                     ("damping = ", "poisson_ratio = 0.5000001\ndamping = "))
+    assert_input_error(code, err, "'chain.poisson_ratio'", "<= 0.5, got 0.5000001")
+
+
+def test_synth_out_empty(tmp_path, capsys):
+    code, err = run_cli(["synth", str(TINY_MSS), "--out", ""], capsys, seconds=5)
+    assert_input_error(code, err, "--out is empty")

@@ -132,3 +132,126 @@ def test_full_precision_jitter_is_still_rejected() -> None:
     times[1000] += 0.01 * dt
     with pytest.raises(InputError, match="not uniformly sampled"):
         parse_csv(_scope_text(times, "{!r}"), "jitter.csv")
+
+
+# --- the fast reader (a compiled parser for the data lines) and its line-by-line fallback
+
+
+def _line_by_line(monkeypatch) -> None:
+    """Make the readers skip the fast path (the reference behaviour)."""
+    import msens.io.csv as csv_mod
+
+    monkeypatch.setattr(csv_mod, "read_numeric_block", lambda *a, **k: None)
+    monkeypatch.setattr("msens.io.text_table.read_numeric_block", lambda *a, **k: None)
+
+
+def _big_text(nt: int, fmt: str, *, blanks: bool = False, crlf: bool = False) -> str:
+    rng = np.random.default_rng(nt)
+    t = -1e-4 + 1e-7 * np.arange(nt)
+    v = rng.normal(size=(nt, 2)) * 1e-3
+    cell = repr if fmt == "repr" else (lambda x: fmt % x)
+    rows = [f"{cell(float(a))},{cell(float(b))},{cell(float(c))}"
+            for a, (b, c) in zip(t, v, strict=True)]
+    if blanks:
+        rows = [r if i % 97 else r + "\n" for i, r in enumerate(rows)]
+    text = "# msens-waveform: 1\n# units: V\ntime_s,mss@13,mss@18\n" + "\n".join(rows) + "\n"
+    return text.replace("\n", "\r\n") if crlf else text
+
+
+@pytest.mark.parametrize(
+    ("fmt", "blanks", "crlf"),
+    [("repr", False, False), ("%.5e", False, False), ("%.5e", True, True),
+     ("%.7f", True, False), ("%.16e", False, True)],
+)
+def test_fast_reader_equals_line_by_line(monkeypatch, fmt, blanks, crlf) -> None:
+    import msens.io.csv as csv_mod
+
+    text = _big_text(3000, fmt, blanks=blanks, crlf=crlf)
+    used = []
+    original = csv_mod.read_numeric_block
+    monkeypatch.setattr(csv_mod, "read_numeric_block",
+                        lambda *a, **k: used.append(original(*a, **k)) or used[-1])
+    fast = parse_csv(text, "f.csv")
+    assert used and used[0] is not None  # the fast reader read it
+    _line_by_line(monkeypatch)
+    slow = parse_csv(text, "f.csv")
+    assert fast == slow
+    assert np.array_equal(fast.time, slow.time)  # also the regularised time axis
+
+
+@pytest.mark.parametrize(
+    ("bad", "message"),
+    [
+        ("x", r"f\.csv:(?P<line>\d+): column 'mss@18': non-numeric cell 'x'"),
+        ("nan", r"f\.csv:(?P<line>\d+): channel mss@18 value nan is not finite"),
+        ("1_0", r"f\.csv:(?P<line>\d+): column 'mss@18': non-numeric cell '1_0'"),
+        ("1,2", r"f\.csv:(?P<line>\d+): 4 cells, but the header has 3 columns"),
+        ("\"1\"", r"f\.csv:(?P<line>\d+): column 'mss@18': non-numeric cell '\"1\"'"),
+        ("1\r2", r"f\.csv:(?P<line>\d+): column 'mss@18': non-numeric cell"),
+    ],
+)
+def test_large_file_errors_name_the_line(bad, message) -> None:
+    """A bad cell deep in a large file with blank lines: the message names its line as an
+    editor shows it."""
+    text = _big_text(5000, "repr", blanks=True)
+    lines = text.split("\n")
+    target = 4000
+    head, _, _ = lines[target - 1].rpartition(",")
+    lines[target - 1] = f"{head},{bad}"
+    with pytest.raises(InputError, match=message) as info:
+        parse_csv("\n".join(lines), "f.csv")
+    assert f"f.csv:{target}:" in str(info.value)
+
+
+def test_fast_reader_keeps_exact_floats(tmp_path: Path) -> None:
+    """Awkward floats (17 digits, subnormals, huge exponents) read back bit for bit."""
+    rng = np.random.default_rng(11)
+    nt = 5000
+    data = np.column_stack([rng.normal(size=nt) * 10.0 ** rng.integers(-300, 300, size=nt),
+                            np.nextafter(rng.uniform(-1, 1, size=nt), 2.0)])
+    w = Waveform(1e-7 * np.arange(nt), data, (Channel("bead", 13), Channel("bead", 18)), {})
+    write_csv(w, tmp_path / "w.csv")
+    assert read_csv(tmp_path / "w.csv") == w
+
+
+def test_vectorised_resolution_equals_printed_resolution() -> None:
+    from msens.io.csv import _column_resolution, printed_resolution
+
+    rng = np.random.default_rng(5)
+    formats = ["%.5e", "%.3E", "%.6f", "%g", "repr", "%+.2e", "%.10f", "%.0f", "%.15e"]
+    for _ in range(1500):
+        n = int(rng.integers(1, 8))
+        fmt = formats[rng.integers(len(formats))]
+        values = rng.normal(size=n) * 10.0 ** rng.integers(-8, 8, size=n)
+        values[rng.random(n) < 0.2] = 0.0
+        cells = [repr(float(v)) if fmt == "repr" else fmt % v for v in values]
+        if rng.random() < 0.3:
+            cells = [f" {c}  " for c in cells]
+        if rng.random() < 0.3:
+            cells = ["00" + c.strip().lstrip("+-") for c in cells]
+        raw = ",".join(cells).encode()
+        starts = np.cumsum([0] + [len(c) + 1 for c in cells[:-1]]).astype(np.int32)
+        ends = (starts + np.array([len(c) for c in cells])).astype(np.int32)
+        got = _column_resolution(np.frombuffer(raw, np.uint8), starts, ends,
+                                 np.array([float(c) for c in cells]))
+        assert got == printed_resolution(cells), cells
+
+
+@pytest.mark.parametrize("delimiter", [",", ";", "\t"])
+def test_scope_export_fast_equals_line_by_line(monkeypatch, tmp_path, delimiter) -> None:
+    from msens.io.mapped import read_mapped
+
+    rng = np.random.default_rng(2)
+    t = -1e-4 + 1e-7 * np.arange(4000)
+    rows = [delimiter.join((f"{a:.5e}", f"{b:.4e}", "x", f"{c:.4e}"))
+            for a, (b, c) in zip(t * 1e3, rng.normal(size=(t.size, 2)), strict=True)]
+    text = (f"Model{delimiter}DSO\n\nTime{delimiter}CH1{delimiter}Note{delimiter}CH2\n"
+            f"ms{delimiter}mV{delimiter}{delimiter}µV\n" + "\n".join(rows) + "\n")
+    path = tmp_path / "scope.csv"
+    path.write_bytes(text.encode("latin-1"))
+    columns = "time=Time:ms,mss@13=CH1:mV,mss@18=CH2:uV"
+    fast = read_mapped(path, columns)
+    _line_by_line(monkeypatch)
+    slow = read_mapped(path, columns)
+    assert fast == slow
+    assert np.array_equal(fast.time, slow.time)

@@ -24,7 +24,7 @@ import numpy as np
 from msens.errors import InputError
 from msens.io._files import read_bytes
 from msens.io.columns import UNITS, UNITS_KEY, ColumnMap, column_map
-from msens.io.text_table import parse_table
+from msens.io.text_table import parse_table_bytes
 from msens.io.waveform import (
     TIME_RTOL,
     Waveform,
@@ -136,14 +136,8 @@ def read_mapped(path: str | os.PathLike[str], cmap: ColumnMap | str) -> Waveform
     if p.suffix.lower() in (".npz", ".tdms"):
         raise InputError(f"{p}: column maps read text exports (CSV, TSV, TXT), not "
                          f"{p.suffix} files")
-    raw = read_bytes(p)
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        # Instrument software on Windows often writes Latin-1 (a µ in a unit row).
-        text = raw.decode("latin-1")
     source = str(p)
-    table = parse_table(text, cmap.columns, source)
+    table = parse_table_bytes(read_bytes(p), cmap.columns, source)  # UTF-8, else Latin-1
     meta = {"source_file": p.name} if p.name.strip() == p.name and p.name.isprintable() else {}
     return apply_column_map(table.columns, cmap, source, resolution=table.resolution,
                             locate=lambda i: f"{source}:{table.lines[i]}", metadata=meta)

@@ -5,13 +5,14 @@ Used by :mod:`msens.io.mapped`; see there for the rules.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import codecs
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from msens.errors import InputError
-from msens.io.csv import printed_resolution
+from msens.io.csv import printed_resolution, read_numeric_block
 
 #: Cell separators tried, in this order, on each candidate header line.
 DELIMITERS = (",", ";", "\t")
@@ -30,14 +31,96 @@ class TextTable:
     columns : dict of str to ndarray, shape (nt,)
         The requested columns, float64, in the file's units.
     resolution : dict of str to float
-        Printed rounding of each column (0 unless fixed-format), in its unit.
-    lines : tuple of int
-        1-based line number of each row.
+        Printed rounding of the time column (the first of ``columns``; 0 unless
+        fixed-format), in its unit; the line-by-line reader also gives the others.
+    lines : sequence of int, shape (nt,)
+        1-based line number of each row (a tuple, or an int64 array from the fast reader).
     """
 
     columns: Mapping[str, np.ndarray]
     resolution: Mapping[str, float]
-    lines: tuple[int, ...]
+    lines: Sequence[int]
+
+
+#: Lines searched for the header by the fast reader (further down: the line-by-line one).
+_HEAD_LINES = 10_000
+
+
+def parse_table_bytes(raw: bytes, columns: Mapping[str, str], source: str) -> TextTable:
+    """:func:`parse_table` of a file's bytes: UTF-8 (a byte-order mark allowed), else Latin-1
+    (instrument software on Windows often writes it: a µ in a unit row).
+
+    The header and the rows right after it are found line by line; the data lines are read
+    by a compiled parser (:func:`msens.io.csv.read_numeric_block`). Whatever that reader
+    does not vouch for (a ragged or non-numeric line, NaN, a lone CR) is read again line by
+    line by :func:`parse_table`, which names the line, so the rules and messages are the same.
+    """
+    encoding = "utf-8" if raw.isascii() or _is_utf8(raw) else "latin-1"
+    start = 3 if encoding == "utf-8" and raw.startswith(codecs.BOM_UTF8) else 0
+    table = _fast_table(raw, start, encoding, columns)
+    if table is not None:
+        return table
+    return parse_table(raw[start:].decode(encoding), columns, source)
+
+
+def _is_utf8(raw: bytes) -> bool:
+    decoder = codecs.getincrementaldecoder("utf-8")()
+    step = 1 << 20
+    try:
+        for at in range(0, len(raw), step):
+            decoder.decode(raw[at:at + step], final=at + step >= len(raw))
+    except UnicodeDecodeError:
+        return False
+    return True
+
+
+def _fast_table(raw: bytes, start: int, encoding: str,
+                columns: Mapping[str, str]) -> TextTable | None:
+    """The table by the fast reader, or None where the line-by-line reader must look."""
+    at, lineno = start, 1
+    header = None
+    while at < len(raw) and lineno <= _HEAD_LINES:  # the header: the first line naming all
+        end = raw.find(b"\n", at)
+        stop = len(raw) if end < 0 else end + 1
+        line = raw[at:stop].decode(encoding).removesuffix("\n").removesuffix("\r")
+        at, lineno = stop, lineno + 1
+        if not line.strip():
+            continue
+        for delimiter in DELIMITERS:
+            cells = [_unquote(c) for c in line.split(delimiter)]
+            if all(c in cells for c in columns):
+                if any(cells.count(c) > 1 for c in columns):
+                    return None  # the line-by-line reader names the column
+                header = delimiter, {c: cells.index(c) for c in columns}
+                break
+        if header is not None:
+            break
+    if header is None:
+        return None
+    delimiter, index = header
+    skipped = 0
+    while at < len(raw):  # units or settings rows between the header and the data
+        end = raw.find(b"\n", at)
+        stop = len(raw) if end < 0 else end + 1
+        line = raw[at:stop].decode(encoding).removesuffix("\n").removesuffix("\r")
+        if line.strip():
+            parts = line.split(delimiter)
+            values = [parts[j].strip() if j < len(parts) else None for j in index.values()]
+            numeric = [v is not None and _is_number(v) for v in values]
+            if all(numeric):
+                break
+            if any(numeric) or skipped >= MAX_SKIPPED_ROWS:
+                return None
+            skipped += 1
+        at, lineno = stop, lineno + 1
+    wanted = list(index.values())
+    block = read_numeric_block(raw, at, lineno, delimiter, max(wanted) + 1, wanted,
+                               exact=False, encoding=encoding)
+    if block is None:
+        return None
+    return TextTable(columns={c: block.values[:, k] for k, c in enumerate(index)},
+                     resolution={next(iter(index)): block.resolution},
+                     lines=block.lines)
 
 
 def parse_table(text: str, columns: Mapping[str, str], source: str) -> TextTable:

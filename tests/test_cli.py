@@ -143,6 +143,7 @@ def test_compare_bad_data_fails_before_the_run(tmp_path, capsys, monkeypatch, st
         raise AssertionError("compare ran the study before checking the data")
 
     monkeypatch.setattr(api, "run_study", no_run)
+    monkeypatch.setattr("msens.workflows.compare.run_study", no_run)
 
     path = (default_study_path() if study == "paper-mss"
             else _study(tmp_path, GOOD.split('[[setup]]\nname = "rod"')[0]))

@@ -11,7 +11,6 @@ exactly the numbers the terminal prints::
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 from msens import results
@@ -20,6 +19,12 @@ from msens.config.study import Study, builtin_study_path, default_study_path, lo
 from msens.io.output import DPI, OutputDir
 from msens.pipeline import run_study
 from msens.results import StudyResult
+from msens.workflows.common import check_format as _check_format
+from msens.workflows.common import figure_names as _figure_names
+from msens.workflows.common import provenance
+from msens.workflows.compare import check_measurement as _check_measurement
+from msens.workflows.compare import compare as compare
+from msens.workflows.compare import format_comparison as format_comparison
 
 
 def load(path: str | Path) -> Study:
@@ -55,16 +60,6 @@ def run(study: Study, *, scheduler: str | None = None) -> StudyResult:
     return run_study(study, scheduler=scheduler)
 
 
-def provenance(study: Study) -> dict:
-    """What made a result file: the msens version and the study's content hash (SHA-256 of
-    its canonical JSON form, so the same study gives the same hash wherever its file is)."""
-    from msens.io.hashing import content_hash
-    from msens.version import version
-
-    return {"msens_version": version(),
-            "study_sha256": content_hash(dataclasses.replace(study, source=""))}
-
-
 def summary(result: StudyResult) -> dict:
     """The content of ``summary.json`` (:func:`msens.results.summary` with this run's
     provenance)."""
@@ -79,23 +74,6 @@ frequency_summary = results.frequency_summary
 FIGURES = ("contact_forces.png", "sensor_profiles.png", "sensor_records.png", "table2.png")
 PHYSICS_FIGURES = ("mss_voltage.png", "mss_integrated.png", "sensitivity_profile.png",
                    "magnetic_precompression.png", "field_B.png")
-
-
-def _check_format(fig_format: str) -> str:
-    """``fig_format`` if msens can write figures in it (:data:`msens.plots.FORMATS`)."""
-    from msens.errors import InputError
-    from msens.plots import FORMATS
-
-    if fig_format not in FORMATS:
-        raise InputError(f"--format must be one of {', '.join(FORMATS)}, got {fig_format!r}")
-    return fig_format
-
-
-def _figure_names(names, fig_format: str) -> list[str]:
-    """Figure file names (listed as .png) in ``fig_format``."""
-    from msens.io.output import figure_name
-
-    return [figure_name(n, fig_format) if n.endswith(".png") else n for n in names]
 
 
 def prepare_outputs(out: str | Path, *, figures: bool = True,
@@ -226,82 +204,6 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
     return out
 
 
-def compare(study: Study, data: Path, out: Path, *,
-            fig_format: str = "png") -> tuple[dict, list[Path]]:
-    """Compare measured ``data`` with the model of ``study``; write ``compare.json`` and an
-    overlay figure (``overlay.<fig_format>``: png, pdf or svg) into ``out``.
-
-    The data's unit and channels are checked against the study file before anything is
-    simulated, so mismatched data fail in about a second instead of after the study's run.
-
-    Raises
-    ------
-    InputError
-        If ``out`` holds user files of the same names, the data's metadata give a unit
-        other than V, no setup of the study has exactly the data's sensors, or a record
-        has no pulse to compare.
-    """
-    from msens import plots
-    from msens.compare import (
-        check_signal,
-        check_units,
-        match_setup,
-        match_setup_spec,
-        shot_records,
-    )
-    from msens.compare import compare as compare_records
-    from msens.io.read import read_waveform
-
-    target = OutputDir(out)
-    target.check(["compare.json", f"overlay.{_check_format(fig_format)}"])
-    from msens.signals.signalcheck import check_amplitudes, check_pulses, check_shots
-
-    waveform = read_waveform(data)
-    source = str(getattr(data, "path", data))
-    check_units(waveform)
-    match_setup_spec(study, waveform)
-    check_shots(waveform, source)
-    check_amplitudes(waveform, source)
-    check_pulses(waveform, source)  # no signal is an error, in compare as in diagnose
-    result = run_study(study)
-    check_signal(match_setup(result, waveform), waveform, source)
-    report = compare_records(result, waveform)
-    report["data"] = str(data)
-    report["provenance"] = provenance(study)
-    written = [target.write_json("compare.json", report)]
-    setup = match_setup(result, waveform)
-    fig = plots.overlay(setup, shot_records(setup, waveform))
-    written.append(target.savefig("overlay.png", fig, fmt=fig_format, dpi=DPI))
-    plots.close(fig)
-    return report, written
-
-
-def format_comparison(report: dict) -> str:
-    """Plain-text table of a comparison report (the content of ``compare.json``).
-
-    The conversion factor K is printed with its unit (``gain_unit``): N/V for bead and rod
-    channels, N/(V s) for a four-contact MsS, V/V for a physics MsS. TOF and AR are those
-    of the compared records (for a physics MsS, of its integrated DAQ voltage).
-    """
-    # K's unit follows its value in a column of its own: a channel's K is one quantity
-    head = (f"{'channel':<10} {'K':>10} {'':<7} {'TOF us':>16} {'AR':>14} "
-            f"{'nRMSE':>7} {'corr':>6}")
-    lines = [f"setup {report['setup']}, {report['shots']} shot(s)", head, "-" * len(head)]
-    for ch in report["channels"]:
-        m, s = ch["model"], ch["measured"]
-        lines.append(
-            f"{ch['channel']:<10} {s['gain']['mean']:>10.4g} {ch.get('gain_unit', '?'):<7} "
-            f"{s['tof_us']['mean']:>7.1f} ({m['tof_us']:>6.1f}) "
-            f"{s['ar']['mean']:>6.3f} ({m['ar']:>5.3f}) {s['nrmse']['mean']:>7.4f} "
-            f"{s['correlation']['mean']:>6.3f}")
-    lines.append("(model values in parentheses)")
-    if "model_processing" in report:
-        from msens.compare import processing_line
-
-        lines.append(processing_line(report))
-    return "\n".join(lines)
-
-
 FIELD_OUTPUTS = ("field.json", "field.vtu", "field_B.png", "field_3d.png")
 
 
@@ -413,21 +315,6 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
                               fig_format=fig_format)
     report = json.loads(written[0].read_text())
     return report, written
-
-
-def _check_measurement(study: Study, waveform, source: str) -> None:
-    """The checks ``compare`` makes on a measured waveform, for ``diagnose``: complete shots,
-    plausible amplitudes, and records neither inverted nor time-scaled against the model
-    (one model run, seconds)."""
-    from msens.compare import check_signal, check_units, match_setup, match_setup_spec
-    from msens.signals.signalcheck import check_amplitudes, check_pulses, check_shots
-
-    check_units(waveform)
-    match_setup_spec(study, waveform)
-    check_shots(waveform, source)
-    check_amplitudes(waveform, source)
-    check_pulses(waveform, source)
-    check_signal(match_setup(run_study(study), waveform), waveform, source)
 
 
 def format_diagnosis(report: dict) -> str:

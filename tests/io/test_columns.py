@@ -238,6 +238,7 @@ def test_cli_bad_maps_exit_2_with_one_message(tmp_path, capsys, monkeypatch, com
 
     monkeypatch.setattr(msens.pipeline, "run_study", no_run)
     monkeypatch.setattr("msens.api.run_study", no_run)
+    monkeypatch.setattr("msens.workflows.compare.run_study", no_run)
     argv = {
         "check-waveform": ["check-waveform", str(SCOPE)],
         "convert": ["convert", str(SCOPE), str(tmp_path / "x.npz")],

@@ -1,0 +1,27 @@
+"""Workflows: each owns one use of msens from a study to its result and files.
+
+One module per workflow; :mod:`msens.api` and the command line only delegate to them.
+So far:
+
+- :mod:`.common` — what every workflow shares: the figure formats it can write, the names of
+  its figures in a format, and the provenance it records (msens version, study hash).
+- :mod:`.compare` — a measured waveform against the model of a study: the checks of the
+  measurement (also the first step of a diagnosis), ``compare.json``, the overlay figure and
+  the text table.
+
+The functions named like their modules (``compare``) are not listed here (an attribute of the
+package cannot be both); import them from their modules or call them through :mod:`msens`.
+"""
+
+from msens._lazy import attribute, names
+
+_HOMES = {
+    "common": ("check_format", "figure_names", "provenance"),
+    "compare": ("check_measurement", "format_comparison"),
+}
+
+__all__ = names(_HOMES)
+
+
+def __getattr__(name: str):
+    return attribute(__name__, _HOMES, name)

@@ -1,0 +1,250 @@
+"""One forward model evaluation per row of input values: the run's own code paths.
+
+For each row of sampled input values a study is changed (chain, striker and read-out keys
+through :meth:`msens.config.study.Study.replace`, validated as a file would be), each
+physics MsS gets the transducer of its field model as the inputs say (remanence through the
+:class:`~msens.magnetics.variants.RemanenceFamily`, coil offset through its tabulated offset
+profiles, as ``msens diagnose`` varies them: :class:`msens.diagnose.models.FieldModel`; turns
+by :func:`with_turns`), the chains of a chunk of rows are integrated in one batch
+(:func:`msens.chain.integrate.simulate_batch`), and each run is observed by
+:func:`msens.pipeline.observe_setup`, the function ``msens run`` observes its setups with.
+So a row at the nominal values reproduces ``msens run`` exactly, and every feature is the
+run's feature.
+
+Nothing here keeps state between calls: :func:`evaluate` builds its field models from the
+artifact store (cached transducers: milliseconds) each call, so it can run in any worker.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from msens.chain.equilibrium import static_contact_forces
+from msens.chain.integrate import ChainResult, simulate_batch
+from msens.config.assemble import build_chain
+from msens.config.fieldsetup import coil_geometry, eddy_settings, geometry_from_study
+from msens.config.schema import CoilSpec, MssModel, SetupSpec
+from msens.config.study import Study
+from msens.diagnose import physics
+from msens.diagnose.models import ModelBank, PhysicsMss
+from msens.errors import InputError
+from msens.magnetics.transducer import Transducer
+from msens.pipeline import observe_setup, output_times, setup_responses
+from msens.results import SetupResult
+from msens.uq.inputs import CHAIN, FIELD_TABLE, InputSet
+
+#: Chain runs integrated per batch call (all contacts at the paper's 10 MHz over 1 ms:
+#: 4.8 MB per run for forces and approaches).
+BATCH_RUNS = 16
+
+
+def with_turns(tr: Transducer, turns: int) -> Transducer:
+    """The coil with ``turns`` turns in the same winding window.
+
+    The field model's coil is a current sheet of N turns over its cross-section: every flux
+    linkage (each contact's sensitivity, the offset profiles) scales as N, the small-signal
+    inductance as N², and the winding's resistance as N (the same mean turn, N times). The
+    bias state does not change (no DC current in the coil).
+    """
+    s = turns / tr.turns
+    return replace(tr, turns=int(turns),
+                   sensitivity_villari=np.asarray(tr.sensitivity_villari) * s,
+                   dlambda_dapproach=np.asarray(tr.dlambda_dapproach) * s,
+                   villari_by_offset=None if tr.villari_by_offset is None
+                   else np.asarray(tr.villari_by_offset) * s,
+                   approach_by_offset=None if tr.approach_by_offset is None
+                   else np.asarray(tr.approach_by_offset) * s,
+                   inductance_H=tr.inductance_H * s * s, resistance_ohm=tr.resistance_ohm * s)
+
+
+@dataclass(frozen=True)
+class Task:
+    """A chunk of rows to evaluate (picklable: one worker task).
+
+    Attributes
+    ----------
+    study : Study
+    inputs : InputSet
+    values : ndarray, shape (rows, p)
+        Values of the propagated inputs, SI, in :attr:`InputSet.propagated` order.
+    keep : ndarray of bool, shape (rows,)
+        Rows whose waveforms are returned.
+    """
+
+    study: Study
+    inputs: InputSet
+    values: np.ndarray
+    keep: np.ndarray
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """What :func:`evaluate` returns for a chunk.
+
+    Attributes
+    ----------
+    features : dict of str -> ndarray, shape (rows,)
+        Each output by name (``setup/sensor/feature``), SI-named units (NaN: not found).
+    waveforms : dict of str -> ndarray, shape (kept rows, nt)
+        Each sensor's record (a physics MsS's DAQ voltage in V, others their force in N).
+    runs : int
+        Chain runs made.
+    """
+
+    features: dict[str, np.ndarray]
+    waveforms: dict[str, np.ndarray]
+    runs: int
+
+
+def sensor_name(setup: SetupSpec, index: int) -> str:
+    """``setup/kind@particle`` of a setup's sensor."""
+    s = setup.sensors[index]
+    return f"{setup.name}/{s.kind.value}@{s.particle}"
+
+
+def waveform_unit(setup: SetupSpec, index: int) -> str:
+    """Unit of a sensor's waveform: V for a physics MsS (its DAQ voltage), N otherwise."""
+    return "V" if setup.sensors[index].model is MssModel.PHYSICS else "N"
+
+
+def row_features(result: SetupResult) -> dict[str, float]:
+    """The reported features of one observed setup, by output name."""
+    out: dict[str, float] = {}
+    setup = result.setup
+    for i, r in enumerate(result.sensors):
+        name, f = sensor_name(setup, i), r.features
+        out[f"{name}/tof_us"] = float(f.tof) * 1e6
+        out[f"{name}/ar"] = float(f.ar)
+        out[f"{name}/incident_peak_N"] = float(f.f_incident)
+        if r.mss is not None:
+            v, e = np.abs(r.mss.voltage), np.abs(r.mss.emf)
+            out[f"{name}/peak_voltage_V"] = float(np.max(v))
+            out[f"{name}/peak_voltage_time_us"] = float(r.mss.t_daq[np.argmax(v)]) * 1e6
+            out[f"{name}/peak_emf_V"] = float(np.max(e))
+            out[f"{name}/peak_emf_time_us"] = float(r.mss.t[np.argmax(e)]) * 1e6
+    if len(result.sensors) > 1:
+        out[f"{setup.name}/speed_incident_m_per_s"] = float(result.speed_incident)
+        out[f"{setup.name}/speed_reflected_m_per_s"] = float(result.speed_reflected)
+    return out
+
+
+def row_waveforms(result: SetupResult) -> dict[str, np.ndarray]:
+    """Each sensor's record of one observed setup (float32), by ``setup/sensor`` name."""
+    return {sensor_name(result.setup, i): np.asarray(
+        r.voltage_shape if r.mss is not None else r.force, dtype=np.float32)
+        for i, r in enumerate(result.sensors)}
+
+
+class _Setup:
+    # the nominal physics of one setup: its physics MsS specs (the run's field model)
+    def __init__(self, study: Study, setup: SetupSpec, bank: ModelBank):
+        self.setup = setup
+        self.index = study.setups.index(setup)
+        self.specs: tuple[PhysicsMss | None, ...] = ()
+        self.responses = setup_responses(study, setup)
+        if any(s.model is MssModel.PHYSICS for s in setup.sensors):
+            eddy = eddy_settings(study) if study.field.eddy_currents else None
+            model = bank.register(geometry_from_study(study, setup), eddy,
+                                  contact_maps=study.field.contact_map)
+            self.specs = tuple(
+                PhysicsMss(model=model, particle=s.particle,
+                           coil=coil_geometry(s.coil or CoilSpec(), s.particle),
+                           electronics=study.electronics)
+                if s.model is MssModel.PHYSICS else None for s in setup.sensors)
+
+    def row(self, changed: Study, field: dict) -> tuple[dict | None, np.ndarray | None]:
+        # the transducers of the row's physics MsS and their magnets' pull on the beads
+        if not self.specs:
+            return None, None
+        specs = tuple(None if p is None else replace(
+            p, remanence_factor=field.get("remanence", 1.0),
+            offset_m=field.get(("offset", i), 0.0))
+            for i, p in enumerate(self.specs))
+        transducers = {}
+        for i, p in enumerate(specs):
+            if p is None:
+                continue
+            tr = physics.sensor(p).transducer
+            turns = field.get(("turns", i))
+            transducers[p.particle] = tr if turns is None else with_turns(tr, turns)
+        return transducers, physics.magnetic_force(specs)
+
+
+def _row_changes(inputs: InputSet, row: np.ndarray) -> tuple[dict, dict]:
+    # study-key changes and field-model changes of one row of values
+    study_changes, field = {}, {}
+    for p, v in zip(inputs.propagated, row, strict=True):
+        pattern = p.kind.pattern
+        if pattern == "sensor[i].coil.turns":
+            n = round(float(v))
+            study_changes[p.name] = n  # the winding capacitance of its read-out
+            field[("turns", p.sensor)] = n
+        elif pattern == "sensor[i].coil.axial_offset_m":
+            field[("offset", p.sensor)] = float(v)
+        elif pattern == "sensor.magnet.remanence_factor":
+            field["remanence"] = float(v)
+        elif p.route == CHAIN:
+            study_changes[p.name] = float(v)
+        else:  # pragma: no cover - inputs.py routes every other field input to HELD
+            raise AssertionError(f"no route for {p.name} ({p.route}, {FIELD_TABLE})")
+    return study_changes, field
+
+
+def evaluate(task: Task) -> Evaluation:
+    """Features (and the kept rows' waveforms) of every row of ``task``.
+
+    Raises
+    ------
+    InputError
+        A row whose magnets pull the beads apart (as ``msens run`` refuses it).
+    """
+    study = task.study
+    t = output_times(study)
+    bank = ModelBank()
+    setups = [_Setup(study, s, bank) for s in study.setups]
+    rows = np.atleast_2d(task.values)
+    features: dict[str, list[float]] = {}
+    waves: dict[str, list[np.ndarray]] = {}
+    runs = 0
+    for start in range(0, rows.shape[0], BATCH_RUNS):
+        block = range(start, min(start + BATCH_RUNS, rows.shape[0]))
+        changed = []
+        for r in block:
+            changes, field = _row_changes(task.inputs, rows[r])
+            changed.append((study.replace(changes) if changes else study, field))
+        for nominal in setups:
+            chains, velocities, extras = [], [], []
+            for s, field in changed:
+                setup = s.setups[nominal.index]
+                trs, magnetic = nominal.row(s, field)
+                chain = build_chain(s, setup, static_force=magnetic)
+                try:
+                    static_contact_forces(chain)
+                except ValueError as exc:
+                    raise InputError(f"{task.inputs.source}: at input values {field} the bias "
+                                     f"magnets pull the beads apart ({exc}): narrow the "
+                                     "magnet inputs' distributions") from None
+                chains.append(chain)
+                velocities.append(s.striker.velocity_m_per_s)
+                extras.append((s, setup, trs))
+            batch = simulate_batch(chains, np.array(velocities), t, dt=study.simulation.dt_s)
+            runs += len(chains)
+            for j, (r, (s, setup, trs)) in enumerate(zip(block, extras, strict=True)):
+                # contiguous copies: the read-out gathers a coil's contacts column-wise
+                history = ChainResult(t=t, force=np.ascontiguousarray(batch.force[j]),
+                                      approach=np.ascontiguousarray(batch.approach[j]))
+                result = observe_setup(setup, chains[j], history, transducers=trs, study=s,
+                                       responses=nominal.responses)
+                for k, v in row_features(result).items():
+                    features.setdefault(k, [np.nan] * rows.shape[0])[r] = v
+                if task.keep[r]:
+                    for k, w in row_waveforms(result).items():
+                        waves.setdefault(k, []).append(w)
+    return Evaluation(features={k: np.asarray(v, dtype=float) for k, v in features.items()},
+                      waveforms={k: np.asarray(v) for k, v in waves.items()}, runs=runs)
+
+
+__all__ = ["BATCH_RUNS", "Evaluation", "Task", "evaluate", "row_features", "row_waveforms",
+           "sensor_name", "waveform_unit", "with_turns"]

@@ -13,6 +13,7 @@ import pytest
 from msens import api, plots, plots_mss
 from msens.config.study import default_study_path
 from msens.io.output import DPI, OutputDir
+from msens.vocabulary import TIME_LABEL, sensor_name
 
 # a file's first bytes, by format
 MAGIC = {"png": b"\x89PNG", "pdf": b"%PDF", "svg": b"<?xml"}
@@ -39,7 +40,13 @@ def _labels(fig) -> list[str]:
 
 
 def _texts(fig) -> list[str]:
-    return [t.get_text() for ax in fig.axes for t in ax.texts]
+    """Texts drawn in the axes, a name broken over two lines read as one."""
+    return [t.get_text().replace("\n", " ") for ax in fig.axes for t in ax.texts]
+
+
+def _time_axes(fig) -> list[str]:
+    """x labels of the axes whose unit is a time (µs)."""
+    return [ax.get_xlabel() for ax in fig.axes if ax.get_xlabel().endswith("(µs)")]
 
 
 @pytest.mark.parametrize("name", ["contact_forces.png", "sensor_records.png", "table2.png",
@@ -54,6 +61,15 @@ def test_every_run_figure_writes_each_format_with_units(result, tmp_path, name):
         assert labels, name
         for label in labels:
             assert UNIT.search(label), f"{name}: axis label {label!r} has no unit"
+            assert "_" not in re.sub(r"\$[^$]*\$", "", label), \
+                f"{name}: literal underscore in {label!r}: write it as mathtext"
+        # one time origin in every figure
+        assert set(_time_axes(fig)) <= {TIME_LABEL}, name
+        for text in _texts(fig) + [t.get_text() for ax in fig.axes
+                                   for t in (ax.get_legend().get_texts()
+                                             if ax.get_legend() else [])]:
+            assert "@" not in text and not re.fullmatch(r"c\d+.*", text), \
+                f"{name}: {text!r} is not the vocabulary's name"
         d = OutputDir(tmp_path)
         for fmt in plots.FORMATS:
             path = d.savefig(name, fig, fmt=fmt, dpi=DPI)
@@ -74,9 +90,17 @@ def test_sensitivity_profile_villari_on_its_own_scale_parts_marked(result):
         assert np.ptp(a_app.get_ylim()) > 20 * span
         assert "contact approach" in a_app.get_title(loc="left")
         assert "Villari" in a_vil.get_title(loc="left")
-        assert {"coil @13", "coil @18"} <= set(_texts(fig))
+        assert {"coil at particle 13", "coil at particle 18"} <= set(_texts(fig))
         legend = [t.get_text() for t in a_app.get_legend().get_texts()]
         assert "magnet pole pieces" in legend
+        # the windings' legend entry is drawn as the bands are: each coil's colour
+        assert "coil winding (in its coil's colour)" in legend
+        spans = plots_mss._part_spans(result, result.setups[0])
+        handles, names = plots_mss._parts_legend(spans, {13: "C0", 18: "C1"})
+        winding = handles[names.index("coil winding (in its coil's colour)")]
+        drawn = {tuple(np.round(p.get_facecolor(), 4)) for p in a_app.patches}
+        legend_colours = {tuple(np.round(p.get_facecolor(), 4)) for p in winding}
+        assert len(legend_colours) == 2 and legend_colours <= drawn
     finally:
         plots.close(fig)
 
@@ -99,8 +123,10 @@ def test_contact_forces_show_the_sensors_contacts_over_the_whole_record(result,
                           (table2_result, {11, 12, 13, 14, 16, 17, 18, 19})):
         fig = plots.contact_profiles(res)
         try:
-            shown = {int(re.match(r"c(\d+)", t).group(1)) for t in _texts(fig)}
+            shown = {int(re.fullmatch(r"contact (\d+) \(particles (\d+), (\d+)\)", t)
+                         .group(1)) for t in _texts(fig)}
             assert shown == expected
+            assert set(_time_axes(fig)) == {TIME_LABEL}
             t_end = res.setups[0].history.t[-1] * 1e6
             for ax in fig.axes:
                 if ax.get_visible():
@@ -129,14 +155,59 @@ def test_sensor_records_label_each_kind(result, table2_result):
         plots.close(fig)
 
 
-def test_table2_shows_every_setups_rows(table2_result):
+def test_table2_shows_per_cent_errors_with_visible_error_bars(table2_result, result):
     rows = table2_result.rows()
-    fig = plots.table2(rows)
+    fig = plots.table2(rows, table2_result.study.name)
     try:
-        for ax in fig.axes:
-            ticks = [t.get_text() for t in ax.get_xticklabels()]
-            assert ticks == [f"{r['setup']} {r['position']}" for r in rows]
-            assert {r["setup"] for r in rows} == {"bead", "rod", "mss"}
+        a_tof, a_ar = fig.axes
+        ticks = [t.get_text() for t in a_tof.get_yticklabels()]
+        assert ticks == [f"{sensor_name(r['sensor'], r['particle'])}\n{r['position']}, "
+                         f"setup {r['setup']}" for r in rows]
+        assert {r["setup"] for r in rows} == {"bead", "rod", "mss"}
+        assert "paper-table2" in fig.get_suptitle() and "Table 2" not in fig.get_suptitle()
+        for ax, key in ((a_tof, "tof"), (a_ar, "ar")):
+            assert ax.get_xlabel().endswith("(%)")
+            msens = next(line for line in ax.lines if line.get_label() == "model (msens)")
+            expected = [r["reference"][f"{key}_error_pct"] for r in rows]
+            np.testing.assert_allclose(msens.get_xdata(), expected)
+            # the experiment's ±1 s.d. bars: centred on 0, as wide as 2 s.d. in %, and
+            # no marker sits on the bar's row line
+            (bars,) = ax.containers
+            suffix = "_us" if key == "tof" else ""
+            for bar, r in zip(bars, rows, strict=True):
+                ref = r["reference"]
+                std = 100 * ref[f"experiment_{key}_std{suffix}"] / ref[f"experiment_{key}{suffix}"]
+                assert bar.get_width() == pytest.approx(2 * std)
+                assert bar.get_x() == pytest.approx(-std)
+                centre = bar.get_y() + bar.get_height() / 2
+                for line in ax.lines:
+                    if line.get_marker() not in ("None", None, ""):
+                        assert np.all(np.abs(np.asarray(line.get_ydata()) - centre) > 0.1)
+    finally:
+        plots.close(fig)
+    fig = plots.table2(result.rows(), result.study.name)  # a two-row study
+    try:
+        assert "paper-mss" in fig.get_suptitle()
+        assert len(fig.axes[0].get_yticklabels()) == 2
+    finally:
+        plots.close(fig)
+
+
+def test_mss_voltage_shows_what_the_readout_does(result):
+    fig = plots_mss.mss_voltages(result)
+    try:
+        axes = fig.axes
+        assert len(axes) == 4  # per coil: the voltages, and DAQ − EMF on its own scale
+        for k, r in enumerate(s for s in result.setups[0].sensors if s.mss is not None):
+            volts, diff = axes[2 * k], axes[2 * k + 1]
+            assert volts.get_title(loc="left") == f"coil at particle {r.sensor.particle}"
+            m = r.mss
+            keep = m.t_daq <= 600e-6
+            expected = (m.voltage[keep] - np.interp(m.t_daq[keep], m.t, m.emf)) * 1e3
+            np.testing.assert_allclose(diff.lines[0].get_ydata(), expected)
+            # the difference is small beside the voltage: its own axis shows it
+            assert np.ptp(diff.get_ylim()) < 0.5 * np.ptp(volts.get_ylim())
+            assert np.max(np.abs(expected)) > 1.0  # mV: the read-out changes the signal
     finally:
         plots.close(fig)
 
@@ -154,7 +225,7 @@ def test_magnetic_precompression_bars_match_the_summary(result):
         guess = [c for c in ax.collections if np.allclose(
             np.asarray(c.get_segments())[:, :, 1], plots_mss.PAPER_PRECOMPRESSION_N)]
         assert guess
-        assert {"coil @13", "coil @18"} <= set(_texts(fig))
+        assert {"coil at particle 13", "coil at particle 18"} <= set(_texts(fig))
     finally:
         plots.close(fig)
 
@@ -172,7 +243,9 @@ def test_field_map_smooth_parts_named_units(tmp_path):
         assert cbar.get_ylabel() == "|B| (T)"
         assert UNIT.search(ax.get_xlabel()) and UNIT.search(ax.get_ylabel())
         texts = set(_texts(fig))
-        assert {"beads", "tube", "magnet", "pole piece", "coil @13", "coil @18"} <= texts
+        assert {"beads", "tube", "magnet", "pole piece", "coil at particle 13",
+                "coil at particle 18"} <= texts
+        assert "$r\\,A_\\varphi$" in ax.get_title() and "_φ" not in ax.get_title()
         # smooth shading: Gouraud triangle meshes, not flat-coloured facets
         assert any(type(c).__name__ == "TriMesh" for c in ax.collections)
     finally:
@@ -192,8 +265,10 @@ def test_diagnosis_figure_says_no_effect_named():
     try:
         ax = fig.axes[0]
         legend = [t.get_text() for t in ax.get_legend().get_texts()]
-        assert legend == ["baseline (no effect named)"]
-        assert "no effect named" in ax.get_title()
+        assert legend == ["baseline model (no effect named)"]
+        title = fig.get_suptitle()
+        assert "no effect" in title and "bead" in title
+        assert "_" not in title and "@" not in title
         assert not any("with none" in t for t in legend)
     finally:
         plots.close(fig)

@@ -39,10 +39,10 @@ def run_msens(mesh) -> tuple[float, float, float, int, float]:
     from msens.field.forms import element_stiffness
     from msens.field.linsolve import factorize
     from msens.field.post import flux_density
-    from msens.field.regions import Air, LinearMagnetic, Winding
+    from msens.field.regions import Air, CurrentRegion, LinearMagnetic
     from msens.field.solve import FieldSolution, MagnetostaticProblem, _external_load, discretise
 
-    prob = MagnetostaticProblem(mesh, {"core": LinearMagnetic(1000.0), "coil": Winding(1e6),
+    prob = MagnetostaticProblem(mesh, {"core": LinearMagnetic(1000.0), "coil": CurrentRegion(1e6),
                                        "air": Air()})
     t0 = time.perf_counter()
     d = discretise(prob)

@@ -21,7 +21,7 @@ from msens.field import eddy, eddy_sphere
 from msens.field.constitutive import material_fields
 from msens.field.eddy_geometry import SkinLayer, layer_profile, layered_sphere_mesh, skin_layer
 from msens.field.forms import element_mass, flux_density_qp, potential_qp, quadrature_data
-from msens.field.regions import Air, LinearMagnetic, NonlinearSoft, PermanentMagnet, Winding
+from msens.field.regions import Air, CurrentRegion, LinearMagnetic, NonlinearSoft, PermanentMagnet
 from msens.field.solve import MagnetostaticProblem, incremental, solve
 from msens.field.verification_geometry import Part, build_mesh
 from msens.params.materials import SIGMA_1018, STEEL_1018_BH
@@ -50,7 +50,7 @@ def rod_mesh():
 
 @pytest.fixture(scope="module")
 def rod_bias(rod_mesh):
-    regions = {"rod": NonlinearSoft(STEEL_1018_BH), "coil": Winding(0.0),
+    regions = {"rod": NonlinearSoft(STEEL_1018_BH), "coil": CurrentRegion(0.0),
                "magnet": PermanentMagnet(1.24, 1.05), "air": Air()}
     return solve(MagnetostaticProblem(rod_mesh, regions))
 
@@ -241,9 +241,9 @@ def test_zero_frequency_is_the_static_solution(sphere_mesh):
 def test_bias_state_uses_the_tangent(rod_bias):
     """At f = 0 the harmonic solve at a bias state is the incremental (tangent) solve."""
     j = 1e6
-    inc = incremental(rod_bias, {"coil": Winding(j)})
+    inc = incremental(rod_bias, {"coil": CurrentRegion(j)})
     sigma = eddy.conductivity(rod_bias.problem.mesh, {"rod": SIGMA_1018})
-    (sol,) = eddy.solve_harmonic(rod_bias, sigma, [0.0], sources={"coil": Winding(j)})
+    (sol,) = eddy.solve_harmonic(rod_bias, sigma, [0.0], sources={"coil": CurrentRegion(j)})
     np.testing.assert_allclose(sol.a.real, inc.a, rtol=0, atol=1e-12 * np.abs(inc.a).max())
     assert sol.nu.shape[-2:] == (2, 2)
 
@@ -258,7 +258,7 @@ def test_coil_impedance_power_balance(rod_bias):
     current = 0.01
     sigma = eddy.conductivity(rod_bias.problem.mesh, {"rod": SIGMA_1018})
     sols = eddy.solve_harmonic(rod_bias, sigma, [0.0, 1e3, 1e4],
-                               sources={"coil": Winding(turns * current / area)})
+                               sources={"coil": CurrentRegion(turns * current / area)})
     z = [eddy.winding_impedance(s, "coil", turns, area, r_dc=3.0) for s in sols]
     for s, zi in zip(sols[1:], z[1:], strict=True):
         loss = 2 * eddy.dissipated_power(s) / current**2
@@ -280,9 +280,9 @@ def test_input_errors(sphere_mesh, rod_bias):
         eddy.conductivity(sphere_mesh, {"bead": 1.0})
     with pytest.raises(InputError, match="nonlinear"):
         eddy.solve_harmonic(rod_bias.problem, np.zeros(rod_bias.problem.mesh.n_elements), [1.0])
-    with pytest.raises(InputError, match="not a Winding"):
+    with pytest.raises(InputError, match="not a CurrentRegion"):
         eddy.solve_harmonic(prob, np.zeros(sphere_mesh.n_elements), [1.0],
-                            sources={"sphere": Winding(1.0)})
+                            sources={"sphere": CurrentRegion(1.0)})
 
 
 # ------------------------------------------------------------ small-signal permeability
@@ -316,11 +316,11 @@ def test_reversible_permeability_changes_the_signal_not_the_bias(rod_mesh, rod_b
     bias = solve(MagnetostaticProblem(rod_mesh, regions))
     np.testing.assert_array_equal(bias.a, rod_bias.a)
     j = 1e6
-    inc = incremental(bias, {"coil": Winding(j)})
+    inc = incremental(bias, {"coil": CurrentRegion(j)})
     sigma = eddy.conductivity(rod_mesh, {"rod": SIGMA_1018})
-    (sol,) = eddy.solve_harmonic(bias, sigma, [0.0], sources={"coil": Winding(j)})
+    (sol,) = eddy.solve_harmonic(bias, sigma, [0.0], sources={"coil": CurrentRegion(j)})
     np.testing.assert_allclose(sol.a.real, inc.a, rtol=0, atol=1e-12 * np.abs(inc.a).max())
-    full = incremental(rod_bias, {"coil": Winding(j)})
+    full = incremental(rod_bias, {"coil": CurrentRegion(j)})
     coil = rod_mesh.subdomains["coil"]
     q = bias.disc.quad
     link = [float(np.sum(potential_qp(q, a)[coil] * q.w[coil])) for a in (inc.a, full.a)]

@@ -7,7 +7,7 @@ import pytest
 
 from msens.errors import InputError
 from msens.field.post import energy, field_strength, flux_density, flux_linkage, force_z
-from msens.field.regions import Air, NonlinearSoft, PermanentMagnet, Winding
+from msens.field.regions import Air, CurrentRegion, NonlinearSoft, PermanentMagnet
 from msens.field.solve import MagnetostaticProblem, incremental, solve
 from msens.field.verification_geometry import Part, build_mesh
 from msens.params.materials import STEEL_1018_BH
@@ -27,7 +27,7 @@ def beads_solution():
              Part("magnet", "rect", (8e-3, 14e-3, 1e-3, 7e-3), 0.8e-3)]
     mesh = build_mesh(parts, 0.06, 0.01, grading=0.3,
                       sizing=[Part("gap", "rect", (0.0, 1e-3, -0.2e-3, 0.2e-3), 0.08e-3)])
-    regions = {"lower": STEEL, "upper": STEEL, "coil": Winding(0.0),
+    regions = {"lower": STEEL, "upper": STEEL, "coil": CurrentRegion(0.0),
                "magnet": PermanentMagnet(1.24, 1.05), "air": Air()}
     return solve(MagnetostaticProblem(mesh, regions))
 
@@ -85,7 +85,7 @@ def test_force_needs_air_around_the_bodies(beads_solution):
         force_z(beads_solution, ["nope"])
     with pytest.raises(InputError, match="winding"):
         force_z(beads_solution, ["coil"])
-    inc = incremental(beads_solution, {"coil": Winding(1e6)})
+    inc = incremental(beads_solution, {"coil": CurrentRegion(1e6)})
     with pytest.raises(InputError, match="bias solution"):
         force_z(inc, ["upper"])
 
@@ -102,7 +102,7 @@ def test_touching_bodies_are_rejected():
 
 def test_incremental_energy_equals_half_l_i_squared(beads_solution):
     turns, area = 300, 2e-3 * 7e-3
-    inc = incremental(beads_solution, {"coil": Winding(turns / area)})
+    inc = incremental(beads_solution, {"coil": CurrentRegion(turns / area)})
     assert 2 * energy(inc) == pytest.approx(flux_linkage(inc, "coil", turns), rel=1e-9)
 
 

@@ -12,7 +12,7 @@ import pytest
 from msens.field import sensor_model as sm
 from msens.field.geometry import AirBox, BeadChain, SensorGeometry
 from msens.field.parts import BiasMagnet, Coil, SensorUnit
-from msens.field.regions import Winding
+from msens.field.regions import CurrentRegion
 from msens.field_outputs import write_field_outputs
 from msens.params.units import MU0, RHO_COPPER
 from msens.store import Store
@@ -83,7 +83,7 @@ def test_point_evaluation_on_axis_matches_the_air_core_solenoid(small):
     axi = sol.problem.mesh
     regions = sm.regions_for(g, list(axi.subdomains), magnets=False, steel=False)
     coil = g.sensors[0].coil
-    regions["coil_13"] = Winding(sm.coil_current_density(coil))
+    regions["coil_13"] = CurrentRegion(sm.coil_current_density(coil))
     air = sm.solve(sm.MagnetostaticProblem(axi, regions))
     zc = g.beads.center(13)
     z = zc + np.linspace(-0.02, 0.02, 21)

@@ -7,7 +7,7 @@ import pytest
 
 from msens.errors import InputError
 from msens.field.post import flux_density, flux_linkage
-from msens.field.regions import Air, LinearMagnetic, NonlinearSoft, PermanentMagnet, Winding
+from msens.field.regions import Air, CurrentRegion, LinearMagnetic, NonlinearSoft, PermanentMagnet
 from msens.field.solve import FieldSolveError, MagnetostaticProblem, incremental, solve
 from msens.field.verification_geometry import Part, build_mesh, rect_mesh
 from msens.field.verify import nonlinear_sphere_exact
@@ -31,23 +31,23 @@ def rod_mesh():
 
 
 def rod_regions(remanence=1.24, coil_j=0.0):
-    return {"rod": STEEL, "coil": Winding(coil_j), "magnet": PermanentMagnet(remanence, 1.05),
+    return {"rod": STEEL, "coil": CurrentRegion(coil_j), "magnet": PermanentMagnet(remanence, 1.05),
             "air": Air()}
 
 
 def test_every_subdomain_needs_a_region(coil_mesh):
     with pytest.raises(InputError, match="missing"):
-        MagnetostaticProblem(coil_mesh, {"coil": Winding(1.0)})
+        MagnetostaticProblem(coil_mesh, {"coil": CurrentRegion(1.0)})
 
 
 def test_unknown_outer_boundary_is_rejected(coil_mesh):
     with pytest.raises(InputError, match="outer boundary 'box'"):
-        MagnetostaticProblem(coil_mesh, {"coil": Winding(1.0), "air": Air()}, outer=("box",))
+        MagnetostaticProblem(coil_mesh, {"coil": CurrentRegion(1.0), "air": Air()}, outer=("box",))
 
 
 def test_linear_solution_scales_with_current(coil_mesh):
-    s1 = solve(MagnetostaticProblem(coil_mesh, {"coil": Winding(1e6), "air": Air()}))
-    s3 = solve(MagnetostaticProblem(coil_mesh, {"coil": Winding(3e6), "air": Air()}))
+    s1 = solve(MagnetostaticProblem(coil_mesh, {"coil": CurrentRegion(1e6), "air": Air()}))
+    s3 = solve(MagnetostaticProblem(coil_mesh, {"coil": CurrentRegion(3e6), "air": Air()}))
     assert s1.iterations == 1 and s1.residuals[0] < 1e-10
     np.testing.assert_allclose(s3.a, 3 * s1.a, rtol=1e-10, atol=1e-14)
 
@@ -84,7 +84,7 @@ def test_incremental_equals_central_difference_of_nonlinear_solves(rod_mesh):
     n_turns, area = 500, 2e-3 * 7e-3
     j1 = n_turns / area  # 1 A
     bias = solve(MagnetostaticProblem(rod_mesh, rod_regions()), tol=1e-12, max_iter=30)
-    inc = incremental(bias, {"coil": Winding(j1)})
+    inc = incremental(bias, {"coil": CurrentRegion(j1)})
     l_inc = flux_linkage(inc, "coil", n_turns)
     eps = 1e-3
     lam = [flux_linkage(solve(MagnetostaticProblem(rod_mesh, rod_regions(coil_j=s * eps * j1)),
@@ -94,21 +94,21 @@ def test_incremental_equals_central_difference_of_nonlinear_solves(rod_mesh):
     assert l_inc == pytest.approx(l_fd, rel=1e-5)
     # saturation lowers the incremental inductance below the unbiased one
     unbiased = incremental(solve(MagnetostaticProblem(rod_mesh, rod_regions(remanence=0.0))),
-                           {"coil": Winding(j1)})
+                           {"coil": CurrentRegion(j1)})
     assert l_inc < flux_linkage(unbiased, "coil", n_turns)
 
 
 def test_incremental_of_linear_problem_is_the_linear_solve(rod_mesh):
-    regions = {"rod": LinearMagnetic(500.0), "coil": Winding(0.0),
+    regions = {"rod": LinearMagnetic(500.0), "coil": CurrentRegion(0.0),
                "magnet": PermanentMagnet(1.0, 1.05), "air": Air()}
     bias = solve(MagnetostaticProblem(rod_mesh, regions))
-    inc = incremental(bias, {"coil": Winding(2e6)})
-    direct = solve(MagnetostaticProblem(rod_mesh, {**regions, "coil": Winding(2e6),
+    inc = incremental(bias, {"coil": CurrentRegion(2e6)})
+    direct = solve(MagnetostaticProblem(rod_mesh, {**regions, "coil": CurrentRegion(2e6),
                                                    "magnet": PermanentMagnet(0.0, 1.05)}))
     np.testing.assert_allclose(inc.a, direct.a, rtol=1e-9, atol=1e-12 * np.abs(direct.a).max())
 
 
 def test_incremental_source_must_be_a_winding(rod_mesh):
     bias = solve(MagnetostaticProblem(rod_mesh, rod_regions(remanence=0.0)))
-    with pytest.raises(InputError, match="not a Winding"):
-        incremental(bias, {"rod": Winding(1.0)})
+    with pytest.raises(InputError, match="not a CurrentRegion"):
+        incremental(bias, {"rod": CurrentRegion(1.0)})

@@ -25,7 +25,7 @@ from msens.field.forms import quadrature_data
 from msens.field.geometry import AirBox, BeadChain, SensorGeometry
 from msens.field.mesh import from_arrays
 from msens.field.parts import BiasMagnet, Coil, SensorUnit
-from msens.field.regions import Winding
+from msens.field.regions import CurrentRegion
 from msens.field.sensor_model import (
     bias_problem,
     coil_current_density,
@@ -174,7 +174,7 @@ def test_rigid_translation_equals_the_force_per_coil_ampere(small):
     link = coil_linkage(model, coil)
     translation = link[model.particles.size + int(np.flatnonzero(
         model.contacts == g.beads.last)[0])]
-    a1 = incremental(sol, {f"coil_{coil.particle}": Winding(coil_current_density(coil))}).a
+    a1 = incremental(sol, {f"coil_{coil.particle}": CurrentRegion(coil_current_density(coil))}).a
     beads = [f"bead_{p}" for p in g.beads.particles]
     eps = 1e-2
     f = [group_force(replace(sol, a=sol.a + s * eps * a1), beads) for s in (1.0, -1.0)]

@@ -4,7 +4,7 @@ Core API (see the modules for details):
 
 - :mod:`.mesh`: :class:`AxiMesh`, :func:`read_gmsh`, :func:`refined`
 - :mod:`.regions`: :class:`Air`, :class:`LinearMagnetic`, :class:`NonlinearSoft`,
-  :class:`PermanentMagnet`, :class:`Winding`
+  :class:`PermanentMagnet`, :class:`CurrentRegion`
 - :mod:`.solve`: :class:`MagnetostaticProblem`, ``solve.solve``, :func:`incremental`,
   :class:`FieldSolution`, :class:`FieldSolveError` (``solve`` itself is not re-exported
   here: it would shadow the submodule ``msens.field.solve``)
@@ -22,7 +22,7 @@ from msens.field.post import (
     force_z,
     potential_energy,
 )
-from msens.field.regions import Air, LinearMagnetic, NonlinearSoft, PermanentMagnet, Winding
+from msens.field.regions import Air, CurrentRegion, LinearMagnetic, NonlinearSoft, PermanentMagnet
 from msens.field.solve import (
     FieldSolution,
     FieldSolveError,
@@ -33,13 +33,13 @@ from msens.field.solve import (
 __all__ = [
     "Air",
     "AxiMesh",
+    "CurrentRegion",
     "FieldSolution",
     "FieldSolveError",
     "LinearMagnetic",
     "MagnetostaticProblem",
     "NonlinearSoft",
     "PermanentMagnet",
-    "Winding",
     "energy",
     "field_strength",
     "flux_density",

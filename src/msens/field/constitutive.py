@@ -16,11 +16,11 @@ from msens.field.bh import MonotoneBH, monotone_bh
 from msens.field.mesh import AxiMesh
 from msens.field.regions import (
     Air,
+    CurrentRegion,
     LinearMagnetic,
     NonlinearSoft,
     PermanentMagnet,
     Region,
-    Winding,
 )
 from msens.params.units import MU0
 
@@ -89,7 +89,7 @@ def material_fields(mesh: AxiMesh, regions: Mapping[str, Region]) -> Materials:
             nu[el] = NU0 / reg.recoil_permeability
             hc[el] = reg.remanence * NU0 / reg.recoil_permeability
             br[el] = reg.remanence
-        elif isinstance(reg, Winding):
+        elif isinstance(reg, CurrentRegion):
             j[el] = reg.current_density
         elif isinstance(reg, NonlinearSoft):
             law = monotone_bh(reg.curve)

@@ -51,7 +51,7 @@ from msens.field.forms import (
 )
 from msens.field.linsolve import SparseLU, factorize
 from msens.field.mesh import AxiMesh
-from msens.field.regions import Winding
+from msens.field.regions import CurrentRegion
 from msens.field.solve import Discretisation, FieldSolution, MagnetostaticProblem, discretise
 from msens.params.units import MU0, TWO_PI
 
@@ -250,7 +250,7 @@ class HarmonicOperator:
 
 
 def _setup(model: MagnetostaticProblem | FieldSolution,
-           sources: Mapping[str, Winding] | None, background_field: complex | None):
+           sources: Mapping[str, CurrentRegion] | None, background_field: complex | None):
     """Discretisation, reluctivity at the quadrature points, J per element and lift."""
     if isinstance(model, FieldSolution):
         prob = model.problem
@@ -279,9 +279,9 @@ def _setup(model: MagnetostaticProblem | FieldSolution,
         else:
             values = background_field * d.basis.doflocs[0, d.fixed] / 2.0
     for name, w in (sources or {}).items():
-        require(name in prob.regions and isinstance(prob.regions[name], Winding),
-                f"harmonic source '{name}' is not a Winding region of the problem")
-        require(isinstance(w, Winding), f"harmonic source '{name}' must be a Winding")
+        require(name in prob.regions and isinstance(prob.regions[name], CurrentRegion),
+                f"harmonic source '{name}' is not a CurrentRegion of the problem")
+        require(isinstance(w, CurrentRegion), f"harmonic source '{name}' must be a CurrentRegion")
         j[prob.mesh.subdomains[name]] = w.current_density
     lift = np.zeros(d.basis.N, dtype=complex)
     lift[d.fixed] = np.where(d.basis.doflocs[0, d.fixed] <= 0.0, 0.0, values)
@@ -290,7 +290,7 @@ def _setup(model: MagnetostaticProblem | FieldSolution,
 
 def solve_harmonic(model: MagnetostaticProblem | FieldSolution, sigma: np.ndarray,
                    frequencies: Sequence[float], *,
-                   sources: Mapping[str, Winding] | None = None,
+                   sources: Mapping[str, CurrentRegion] | None = None,
                    background_field: complex | None = None,
                    load: np.ndarray | None = None) -> tuple[HarmonicSolution, ...]:
     """Solve (K_t + jω M_σ) a = f at each frequency.
@@ -306,7 +306,7 @@ def solve_harmonic(model: MagnetostaticProblem | FieldSolution, sigma: np.ndarra
         Conductivity per element, S/m (:func:`conductivity`).
     frequencies : sequence of float
         Hz, >= 0; f = 0 solves the static problem with the same operator (K_t a = f).
-    sources : Mapping[str, Winding], optional
+    sources : Mapping[str, CurrentRegion], optional
         Winding subdomains and their current-density phasors J_s (A/m², e.g. N × 1 A / S);
         the other windings carry none. Default: a problem's own windings; none for a bias
         state.

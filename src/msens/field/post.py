@@ -20,7 +20,7 @@ from msens.errors import InputError, require
 from msens.field.constitutive import energy_density, reluctivities, small_signal_tangent
 from msens.field.forms import flux_density_qp, potential_qp
 from msens.field.mesh import AxiMesh
-from msens.field.regions import Air, Winding
+from msens.field.regions import Air, CurrentRegion
 from msens.field.solve import FieldSolution, solve
 from msens.params.units import MU0
 
@@ -285,7 +285,7 @@ def force_z(sol: FieldSolution, bodies: Sequence[str], *,
     prob = sol.problem
     for n in bodies:
         require(n in prob.regions, f"body '{n}' is not a region of the problem")
-        require(not isinstance(prob.regions[n], Winding),
+        require(not isinstance(prob.regions[n], CurrentRegion),
                 f"body '{n}' is a winding; windings are not supported as moving bodies")
     phi = eggshell(prob.mesh, dict(prob.regions), bodies, prob.outer)
     if method == "maxwell":

@@ -78,7 +78,7 @@ class PermanentMagnet:
 
 
 @dataclass(frozen=True)
-class Winding:
+class CurrentRegion:
     """Homogenised coil cross-section carrying an azimuthal current density, μ = μ0.
 
     Attributes
@@ -90,4 +90,4 @@ class Winding:
     current_density: float
 
 
-Region = Air | LinearMagnetic | NonlinearSoft | PermanentMagnet | Winding
+Region = Air | LinearMagnetic | NonlinearSoft | PermanentMagnet | CurrentRegion

@@ -38,7 +38,7 @@ from msens.field.forms import flux_density_qp, potential_qp
 from msens.field.geometry import SensorGeometry
 from msens.field.mesh import AxiMesh, from_arrays, read_gmsh
 from msens.field.parts import Coil
-from msens.field.regions import Air, NonlinearSoft, PermanentMagnet, Region, Winding
+from msens.field.regions import Air, CurrentRegion, NonlinearSoft, PermanentMagnet, Region
 from msens.field.solve import FieldSolution, MagnetostaticProblem, incremental, solve
 from msens.params.materials import BHCurve
 from msens.params.units import MU0, RHO_COPPER, TWO_PI
@@ -80,7 +80,7 @@ def regions_for(geometry: SensorGeometry, names: Sequence[str], *, magnets: bool
             out[name] = (PermanentMagnet(m.remanence, m.recoil_permeability) if magnets
                          else Air())
         elif name.startswith("coil_"):
-            out[name] = Winding(0.0)
+            out[name] = CurrentRegion(0.0)
         else:
             out[name] = Air()
     return out
@@ -433,9 +433,9 @@ def coil_results(sol: FieldSolution, geometry: SensorGeometry) -> tuple[CoilResu
         c = unit.coil
         name = f"coil_{c.particle}"
         j = coil_current_density(c)
-        inc = incremental(sol, {name: Winding(j)})
+        inc = incremental(sol, {name: CurrentRegion(j)})
         air = dict(air_regions)
-        air[name] = Winding(j)
+        air[name] = CurrentRegion(j)
         air_sol = solve(MagnetostaticProblem(axi, air))
         out.append(CoilResult(
             particle=c.particle, turns=c.turns, resistance_ohm=coil_resistance(c),

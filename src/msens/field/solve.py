@@ -43,7 +43,7 @@ from msens.field.forms import (
 from msens.field.linsolve import factorize
 from msens.field.mesh import AxiMesh, axis_facets
 from msens.field.probes import P2Field
-from msens.field.regions import PermanentMagnet, Region, Winding
+from msens.field.regions import CurrentRegion, PermanentMagnet, Region
 
 
 class FieldSolveError(RuntimeError):
@@ -304,7 +304,7 @@ def solve(problem: MagnetostaticProblem, *, tol: float = 1e-8, max_iter: int = 1
         + ", ".join(f"{x:.3e}" for x in history), tuple(history))
 
 
-def incremental(solution: FieldSolution, sources: Mapping[str, Winding]) -> FieldSolution:
+def incremental(solution: FieldSolution, sources: Mapping[str, CurrentRegion]) -> FieldSolution:
     """Linearised (small-signal) solve at the bias point of ``solution``.
 
     Nonlinear regions get the tangent reluctivity tensor dH/dB of the bias state (differential
@@ -315,7 +315,7 @@ def incremental(solution: FieldSolution, sources: Mapping[str, Winding]) -> Fiel
     ----------
     solution : FieldSolution
         Bias state.
-    sources : Mapping[str, Winding]
+    sources : Mapping[str, CurrentRegion]
         Winding subdomains and their current densities (e.g. N × 1 A / S).
 
     Returns
@@ -326,13 +326,14 @@ def incremental(solution: FieldSolution, sources: Mapping[str, Winding]) -> Fiel
     """
     prob = solution.problem
     for name, w in sources.items():
-        require(name in prob.regions and isinstance(prob.regions[name], Winding),
-                f"incremental source '{name}' is not a Winding region of the problem")
-        require(isinstance(w, Winding), f"incremental source '{name}' must be a Winding")
+        require(name in prob.regions and isinstance(prob.regions[name], CurrentRegion),
+                f"incremental source '{name}' is not a CurrentRegion of the problem")
+        require(isinstance(w, CurrentRegion),
+                f"incremental source '{name}' must be a CurrentRegion")
     regions = {}
     for name, reg in prob.regions.items():
-        if isinstance(reg, Winding):
-            regions[name] = sources.get(name, Winding(0.0))
+        if isinstance(reg, CurrentRegion):
+            regions[name] = sources.get(name, CurrentRegion(0.0))
         elif isinstance(reg, PermanentMagnet):
             regions[name] = replace(reg, remanence=0.0)
         else:

@@ -18,7 +18,7 @@ from msens.field import analytic
 from msens.field.bh import monotone_bh
 from msens.field.mesh import AxiMesh, refined
 from msens.field.post import energy, field_strength, flux_density, flux_linkage, force_z
-from msens.field.regions import Air, LinearMagnetic, NonlinearSoft, PermanentMagnet, Winding
+from msens.field.regions import Air, CurrentRegion, LinearMagnetic, NonlinearSoft, PermanentMagnet
 from msens.field.solve import MagnetostaticProblem, solve
 from msens.field.verification_geometry import (
     Part,
@@ -129,7 +129,7 @@ def check_truncation(r_out: float = 0.4) -> list[Row]:
     """
     r1, r2, length, j = 0.01, 0.02, 0.02, 1e6
     mesh = rect_mesh("coil", r1, r2, length, r_out, 1.0e-3, r_out / 10)
-    regions = {"coil": Winding(j), "air": Air()}
+    regions = {"coil": CurrentRegion(j), "air": Air()}
     z = np.linspace(-1.5, 1.5, 7) * length
     b_cut = flux_density(solve(MagnetostaticProblem(mesh, regions)), 0.0, z)[:, 1]
     exact_bc = MagnetostaticProblem(mesh, regions,
@@ -149,7 +149,7 @@ def check_thin_solenoid(radius: float = 0.01, thickness: float = 0.2e-3, length:
                                              -length / 2, length / 2), thickness / 2)],
                       r_out=0.5, h_far=0.05, grading=0.25,
                       sizing=[Part("axis", "rect", (0.0, radius, -length, length), 1.5e-3)])
-    sol = solve(MagnetostaticProblem(mesh, {"coil": Winding(j), "air": Air()}))
+    sol = solve(MagnetostaticProblem(mesh, {"coil": CurrentRegion(j), "air": Air()}))
     z = np.linspace(-0.75, 0.75, 7) * length
     fe = flux_density(sol, 0.0, z)[:, 1]
     ref = analytic.thin_solenoid_bz(z, radius, length, j * thickness, 1.0)
@@ -160,7 +160,7 @@ def check_thick_solenoid(r1: float = 0.01, r2: float = 0.02, length: float = 0.0
                          j: float = 1e6) -> list[Row]:
     """Thick winding (uniform J) vs the exact on-axis integral."""
     mesh = rect_mesh("coil", r1, r2, length, 0.4, 1.0e-3, 0.04)
-    sol = solve(MagnetostaticProblem(mesh, {"coil": Winding(j), "air": Air()}))
+    sol = solve(MagnetostaticProblem(mesh, {"coil": CurrentRegion(j), "air": Air()}))
     z = np.linspace(-1.5, 1.5, 7) * length
     fe = flux_density(sol, 0.0, z)[:, 1]
     ref = analytic.thick_solenoid_bz(z, r1, r2, length, j)
@@ -202,7 +202,7 @@ def check_inductance() -> list[Row]:
     r2 = paper_coil_outer_radius()
     mesh = rect_mesh("coil", r1, r2, length, 0.15, 0.4e-3, 0.015)
     j = n * 1.0 / ((r2 - r1) * length)
-    sol = solve(MagnetostaticProblem(mesh, {"coil": Winding(j), "air": Air()}))
+    sol = solve(MagnetostaticProblem(mesh, {"coil": CurrentRegion(j), "air": Air()}))
     l_flux = flux_linkage(sol, "coil", n)
     l_energy = 2.0 * energy(sol)
     ref = reference_inductance(r1, r2, length, n)
@@ -248,7 +248,7 @@ def convergence_study(levels: int = 3, base_h: float = 4e-3
     ref = analytic.thick_solenoid_bz(z, r1, r2, length, j)
     errs = []
     for _ in range(levels):
-        prob = MagnetostaticProblem(mesh, {"coil": Winding(j), "air": Air()},
+        prob = MagnetostaticProblem(mesh, {"coil": CurrentRegion(j), "air": Air()},
                                     outer_potential=exact_a)
         fe = flux_density(solve(prob), 0.0, z)[:, 1]
         errs.append(np.max(np.abs(fe - ref)) / ref[4])

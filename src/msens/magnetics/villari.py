@@ -36,7 +36,7 @@ from matplotlib.tri import Triangulation
 from msens.errors import internal
 from msens.field.geometry import SensorGeometry
 from msens.field.parts import Coil
-from msens.field.regions import Winding
+from msens.field.regions import CurrentRegion
 from msens.field.solve import FieldSolution, incremental, internal_field_strength
 from msens.magnetics.magnetoelastic import (
     JilesAthertonSablik,
@@ -228,7 +228,7 @@ class BeadState:
 def bead_state(sol: FieldSolution, coil: Coil) -> BeadState:
     """The coil's incremental solution and H per ampere at every quadrature point."""
     name = f"coil_{coil.particle}"
-    inc = incremental(sol, {name: Winding(coil.turns / coil.area)})
+    inc = incremental(sol, {name: CurrentRegion(coil.turns / coil.area)})
     return BeadState(coil=coil, h_coil=internal_field_strength(inc), incremental=inc)
 
 

@@ -20,8 +20,6 @@ DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(DOCS / "_ext"))
 os.environ.setdefault("MPLBACKEND", "Agg")
-# the compiled chain kernel: reuse the repository's cache (the gallery runs the chain)
-os.environ.setdefault("NUMBA_CACHE_DIR", str(ROOT / ".numba-cache"))
 
 import msens  # noqa: E402
 

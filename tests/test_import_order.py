@@ -34,7 +34,7 @@ STAGES = {
     7: ("results",),
     8: ("budget", "preflight", "pipeline", "synth", "compare", "field_outputs"),
     9: ("plots", "plots_mss"),
-    10: ("design", "diagnose", "workflows"),
+    10: ("design", "diagnose", "workflows", "uq"),
     11: ("api",),
     12: ("cli",),
     13: ("__main__",),

@@ -8,6 +8,7 @@ in seconds) yet inside the stated tolerances; :func:`check_convergence` shows th
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -279,11 +280,24 @@ CHECKS: tuple[Callable[[], list[Row]], ...] = (
     check_convergence)
 
 
-def run_all() -> list[Row]:
-    """Run every field verification check; returns their rows in order."""
+def run_all(progress: Callable[[Row], None] | None = None) -> list[Row]:
+    """Run every field verification check; returns their rows in order.
+
+    ``progress`` is called with each row as soon as its check has run (``msens verify``
+    prints a line per check as it goes); a check that runs longer than a few seconds has a
+    heartbeat (:func:`msens.progress.heartbeat`).
+    """
+    from msens.progress import heartbeat
+
+    log = logging.getLogger(__name__)
     rows: list[Row] = []
     for check in CHECKS:
-        rows.extend(check())
+        with heartbeat(log, f"verify: {check.__name__.removeprefix('check_')}"):
+            new = check()
+        for row in new:
+            if progress is not None:
+                progress(row)
+        rows.extend(new)
     return rows
 
 

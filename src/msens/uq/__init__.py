@@ -1,0 +1,19 @@
+"""Predictions with error bars: uncertain inputs as data, forward propagation, Sobol indices.
+
+- :mod:`.inputs` — the uncertain inputs of a study (``msens.uncertainty/1`` files), checked
+  once against it; each input's route to the model (chain and read-out, field-model tables,
+  or held at its nominal value with the reason).
+- :mod:`.model` — one model evaluation per row of input values through ``msens run``'s own
+  observation (:func:`msens.pipeline.observe_setup`).
+- :mod:`.propagate` — Saltelli samples (SALib), bands and Sobol indices with confidence
+  intervals.
+- :mod:`.report` — ``uq.json``, the text table and the figures.
+- :mod:`.workflow` — ``msens uq``: checks, then the work, then the files.
+"""
+
+from msens.uq.inputs import InputSet, UncertainInput, load_inputs
+from msens.uq.propagate import Propagation, propagate
+from msens.uq.workflow import UqResult, run_uq
+
+__all__ = ["InputSet", "Propagation", "UncertainInput", "UqResult", "load_inputs", "propagate",
+           "run_uq"]

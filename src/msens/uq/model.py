@@ -17,6 +17,9 @@ artifact store (cached transducers: milliseconds) each call, so it can run in an
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -192,6 +195,18 @@ def _row_changes(inputs: InputSet, row: np.ndarray) -> tuple[dict, dict]:
     return study_changes, field
 
 
+@contextmanager
+def _quiet(name: str) -> Iterator[None]:
+    # the run's per-setup progress messages, once per row, would bury the uq's own
+    log = logging.getLogger(name)
+    level = log.level
+    log.setLevel(max(level, logging.WARNING))
+    try:
+        yield
+    finally:
+        log.setLevel(level)
+
+
 def evaluate(task: Task) -> Evaluation:
     """Features (and the kept rows' waveforms) of every row of ``task``.
 
@@ -235,8 +250,9 @@ def evaluate(task: Task) -> Evaluation:
                 # contiguous copies: the read-out gathers a coil's contacts column-wise
                 history = ChainResult(t=t, force=np.ascontiguousarray(batch.force[j]),
                                       approach=np.ascontiguousarray(batch.approach[j]))
-                result = observe_setup(setup, chains[j], history, transducers=trs, study=s,
-                                       responses=nominal.responses)
+                with _quiet("msens.pipeline"):
+                    result = observe_setup(setup, chains[j], history, transducers=trs,
+                                           study=s, responses=nominal.responses)
                 for k, v in row_features(result).items():
                     features.setdefault(k, [np.nan] * rows.shape[0])[r] = v
                 if task.keep[r]:

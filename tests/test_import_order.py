@@ -24,7 +24,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "msens"
 
 #: Stage of every top-level unit, lowest first.
 STAGES = {
-    0: ("errors", "version", "parallel", "meshing", "vocabulary", "_lazy"),
+    0: ("errors", "version", "parallel", "meshing", "vocabulary", "_lazy", "progress"),
     1: ("params", "io", "store"),
     2: ("mechanics", "readout", "signals"),
     3: ("chain", "field"),

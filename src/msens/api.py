@@ -161,15 +161,16 @@ def format_summary(result: StudyResult) -> str:
 
 
 def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
-          noise: float = 0.01, seed: int = 0) -> Path:
-    """Write synthetic measurements of one setup of ``study`` to ``out`` (never over a file)."""
+          noise: float = 0.01, seed: int = 0, overwrite: bool = False) -> Path:
+    """Write synthetic measurements of one setup of ``study`` to ``out`` (never over an
+    existing file unless ``overwrite``)."""
     from msens import preflight
     from msens.errors import InputError
     from msens.io.read import write_waveform
     from msens.synth import RigEffects, synthesize
 
     preflight.study(study)
-    out = preflight.output_file(out, "--out")
+    out = preflight.output_file(out, "--out", overwrite=overwrite)
     shots = preflight.count(shots, "--shots", 1, 10000)
     noise = preflight.number(noise, "--noise", 0.0, 1.0, " (fraction of the peak)")
     seed = preflight.count(seed, "--seed", 0, 2**63 - 1)
@@ -179,8 +180,8 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
     name = setup or names[0]
     if name not in names:
         raise InputError(f"--setup must be one of {', '.join(names)}, got {name!r}")
-    if out.exists():
-        raise InputError(f"refusing to overwrite '{out}'")
+    if out.exists() and not overwrite:
+        raise InputError(f"refusing to overwrite '{out}' (the command's --overwrite replaces it)")
     from msens.config import plausible
 
     chosen_setup = study.setup(name)
@@ -200,7 +201,7 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
         meta["drop_height_m"] = repr(study.striker.drop_height_m)
     waveform = synthesize(chosen, RigEffects(shots=shots, noise=noise, seed=seed),
                           metadata=meta)
-    write_waveform(waveform, out)
+    write_waveform(waveform, out, overwrite=overwrite)
     return out
 
 

@@ -349,7 +349,8 @@ def overlay(setup: SetupResult, shots: list, t_max_s: float | None = None) -> Fi
     standard deviation band when there are several) over the model record it was compared
     with, processed the same way (:func:`msens.compare.model_record`): force in N for bead,
     rod and four-contact MsS channels, the integrated DAQ voltage in µV s for a physics MsS;
-    and a panel of the residual, measured − model, in the same unit. A physics MsS channel
+    and a panel of the residual, measured − model, in the same unit, with the noise of the
+    shots' mean (rms of their scatter over √shots) as dashed lines. A physics MsS channel
     first shows the DAQ voltage itself (mV): the calibrated measured voltage (the time
     derivative of its integrated record, so a 1-2-1 average of neighbouring samples) over
     the model's.
@@ -373,7 +374,7 @@ def overlay(setup: SetupResult, shots: list, t_max_s: float | None = None) -> Fi
     kinds = [p for s in sensors for p in _overlay_panels(s)]
     ratios = [1.0 if k == "residual" else 2.0 for k in kinds]
     fig, axes = plt.subplots(len(kinds), 1, figsize=(7, 1.05 * sum(ratios) + 1.0),
-                             sharex=True, squeeze=False,
+                             sharex=True, squeeze=False, layout="constrained",
                              gridspec_kw={"height_ratios": ratios})
     t = setup.history.t
     m = np.ones(t.size, bool) if t_max_s is None else t <= t_max_s
@@ -427,11 +428,15 @@ def overlay(setup: SetupResult, shots: list, t_max_s: float | None = None) -> Fi
                 if recs:
                     mean, std = _shot_stack(recs, lambda r: r.force)
                     res = mean[m] * scale - model
-                    if std is not None:
-                        ax.fill_between(t_us, -std[m] * scale, std[m] * scale, color="0.7",
-                                        lw=0, gid="residual scatter")
-                    (line,) = ax.plot(t_us, res, color="C0", lw=0.9, gid="residual")
+                    (line,) = ax.plot(t_us, res, color="C0", lw=0.7, gid="residual")
                     handles.setdefault("measured − model", line)
+                    if std is not None:
+                        # the noise of a mean over the shots: their scatter's rms / √n
+                        noise = float(np.sqrt(np.nanmean(std[m] ** 2) / len(recs))) * scale
+                        for sign in (-1, 1):
+                            edge = ax.axhline(sign * noise, color="k", ls="--", lw=0.8,
+                                              gid="residual noise")
+                        handles.setdefault("±1 s.d. of the shots' mean (noise)", edge)
                 ax.axhline(0.0, color="0.3", lw=0.7)
                 ax.set_ylabel(f"residual\n({unit})")
         first.set_title(sensor_name(sensor.sensor.kind, sensor.sensor.particle), loc="left",
@@ -440,12 +445,11 @@ def overlay(setup: SetupResult, shots: list, t_max_s: float | None = None) -> Fi
             gain = float(np.mean([r.gain for r in recs]))
             first.set_title(f"calibration factor K = {_overlay_number(gain)} "
                             f"{gain_unit(sensor)}", loc="right", fontsize=9)
-    fig.legend(list(handles.values()), list(handles), fontsize=8, loc="lower center",
-               ncol=len(handles), frameon=False, handler_map={tuple: HandlerTuple(ndivide=1)})
+    fig.legend(list(handles.values()), list(handles), fontsize=8, loc="outside lower center",
+               ncol=2, frameon=False, handler_map={tuple: HandlerTuple(ndivide=1)})
     axes[-1, 0].set_xlabel(TIME_LABEL)
     axes[-1, 0].set_xlim(t_us[0], t_us[-1])
     fig.align_ylabels(axes[:, 0])
     fig.suptitle(f"Measured (aligned, calibrated) and model records, "
                  f"{setup_name(setup.setup.name)}", fontsize=10)
-    fig.tight_layout(rect=(0, 0.035 + 0.2 / fig.get_figheight(), 1, 1))
     return fig

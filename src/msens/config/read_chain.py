@@ -91,7 +91,10 @@ def _check_dashpot(t: Table, key: str, gamma: float, mass: float, law: Damping) 
 def _striker(t: Table) -> StrikerSpec:
     has_h, has_v = t.has("drop_height_m"), t.has("velocity_m_per_s")
     if has_h == has_v:
-        raise t.error("drop_height_m", "or 'striker.velocity_m_per_s': give exactly one")
+        # a typo of one of them is named, not only the missing key
+        unknown = [k for k in t.keys() if k not in ("drop_height_m", "velocity_m_per_s")]
+        typo = f" (unknown key '{t.key(unknown[0])}' given)" if unknown else ""
+        raise t.error("drop_height_m", f"or 'striker.velocity_m_per_s': give exactly one{typo}")
     if has_h:
         h = t.number("drop_height_m", low=P.DROP_HEIGHT_M[0], high=P.DROP_HEIGHT_M[1])
         t.finish()

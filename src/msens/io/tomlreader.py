@@ -61,8 +61,13 @@ class Table:
     def _raw(self, name: str, default: Any, required: bool) -> Any:
         self._used.add(name)
         if name not in self._data:
-            if required:
-                raise self.error(name, "is missing")
+            if required:  # a typo of it is named too: "'x.beads' is missing (unknown ...)"
+                import difflib
+
+                close = difflib.get_close_matches(name, [k for k in self._data
+                                                         if k not in self._used], 1, 0.75)
+                typo = f" (unknown key '{self.key(close[0])}' given)" if close else ""
+                raise self.error(name, f"is missing{typo}")
             return default
         return self._data[name]
 

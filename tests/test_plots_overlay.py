@@ -75,7 +75,7 @@ def test_physics_mss_overlay_is_integrated_voltage(physics_setup):
             assert res.get_xlabel() in ("", TIME_LABEL)
         assert fig.axes[-1].get_xlabel() == TIME_LABEL
         assert _legend(fig) == ["measured, mean ± 1 s.d. of 3 shots", "model",
-                                "measured − model"]
+                                "measured − model", "±1 s.d. of the shots' mean (noise)"]
     finally:
         plots.close(fig)
 

@@ -178,9 +178,9 @@ _DOCS: dict[str, tuple[str, str, str]] = {
 
 def _sub(sub, name: str) -> argparse.ArgumentParser:
     """A sub-command parser with its help line, paragraph and examples."""
-    from msens.progress import COMPILE_ESTIMATE_TEXT
-
     import textwrap
+
+    from msens.progress import COMPILE_ESTIMATE_TEXT
 
     short, paragraph, examples = _DOCS[name]
     description = textwrap.fill(paragraph.format(compile=COMPILE_ESTIMATE_TEXT), 78)
@@ -356,6 +356,20 @@ def _load_study(name: str | None, sets: Sequence[str] = ()):
     return study
 
 
+def _output_file(value: object, option: str, suffixes: tuple[str, ...] | None = None, *,
+                 overwrite: bool) -> Path:
+    """An output file checked before any work (suffix, folder); an existing one is refused
+    unless ``overwrite``, naming the option that replaces it."""
+    from msens import preflight
+
+    kwargs = {} if suffixes is None else {"suffixes": suffixes}
+    path = preflight.output_file(value, option, overwrite=True, **kwargs)
+    if not overwrite and (path.exists() or path.is_symlink()):
+        raise InputError(f"{option} '{path}': file exists; msens replaces it only with "
+                         "--overwrite (or choose another name)")
+    return path
+
+
 def _out(args: argparse.Namespace, study, command: str) -> Path:
     """``--out``, or its default: ``out/<study>/`` for run, else ``out/<study>-<command>/``."""
     if args.out is not None:
@@ -382,10 +396,8 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _study(args: argparse.Namespace) -> int:
-    from msens import preflight
-
     if args.out is not None:
-        preflight.output_file(args.out, "--out", (".toml",), overwrite=args.overwrite)
+        _output_file(args.out, "--out", (".toml",), overwrite=args.overwrite)
     study = _load_study(args.study, args.sets)
     from msens.config.dump import study_toml
 
@@ -423,15 +435,15 @@ def _verify(args: argparse.Namespace) -> int:
 
 
 def _synth(args: argparse.Namespace) -> int:
-    from msens import preflight
-
     if args.out is not None:  # the suffix and the file, before any work
-        preflight.output_file(args.out, "--out", overwrite=args.overwrite)
+        _output_file(args.out, "--out", overwrite=args.overwrite)
     study = _load_study(args.study, args.sets)
     from msens import api
 
-    out = _out(args, study, "synth") if args.out else Path("out") / f"{study.name}-synth.csv"
-    preflight.output_file(out, "--out", overwrite=args.overwrite)
+    out = Path(args.out) if args.out else Path("out") / f"{study.name}-synth.csv"
+    _output_file(out, "--out", overwrite=args.overwrite)
+    if args.out is None:
+        out.parent.mkdir(parents=True, exist_ok=True)
     path = api.synth(study, out, setup=args.setup, shots=args.shots, noise=args.noise,
                      seed=args.seed, overwrite=args.overwrite)
     print(f"wrote {path}")
@@ -503,10 +515,8 @@ def _check_waveform(args: argparse.Namespace) -> int:
 
 
 def _convert(args: argparse.Namespace) -> int:
-    from msens import preflight
-
     # the target first: a bad suffix or an existing file is refused before reading
-    preflight.output_file(args.target, "TARGET", overwrite=args.overwrite)
+    _output_file(args.target, "TARGET", overwrite=args.overwrite)
     from msens.io.read import describe, read_waveform, write_waveform
 
     waveform = read_waveform(_data(args.source, args.columns))

@@ -22,6 +22,7 @@ from msens.config.assemble import build_chain
 from msens.config.schema import MssModel, SensorSpec, SetupSpec
 from msens.config.study import Study
 from msens.errors import InputError
+from msens.progress import COMPILE_ESTIMATE_TEXT, heartbeat
 from msens.readout.sensors import SensorKind, observe, time_derivative
 from msens.results import SensorResult, SetupResult, StudyResult
 from msens.signals.features import centre_distance, model_features, wave_speed
@@ -167,10 +168,12 @@ def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:
             return build_chain(study, setup, gamma_contact=gc, gamma_wall=gw)
 
         try:
-            fit = fit_dissipation(
-                make_chain, sensors=(particles[0], particles[-1]), ar_top=spec.ar_top,
-                ar_bottom=spec.ar_bottom, velocity=study.striker.velocity_m_per_s, t_out=t,
-                kind=kind)
+            with heartbeat(_log, "Eq. 10 calibration",
+                           note=" (the first run compiles the chain kernel)"):
+                fit = fit_dissipation(
+                    make_chain, sensors=(particles[0], particles[-1]), ar_top=spec.ar_top,
+                    ar_bottom=spec.ar_bottom, velocity=study.striker.velocity_m_per_s,
+                    t_out=t, kind=kind)
         except InputError as exc:  # name the study's keys behind the fit
             raise InputError(f"{study.source}: 'calibration.dissipation' on setup "
                              f"{setup.name!r}: {exc} (the run ends at 'simulation.t_end_s' = "
@@ -246,12 +249,15 @@ def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_conta
                          "[[precompression]] hold them together; use a weaker magnet "
                          "('sensor.magnet.grade'), move it ('axial_offset_m') or add "
                          "precompression") from None
-    # the silent wait of a first run: numba compiles the kernel once per install (~0.5-1.5 min)
+    # the long wait of a first run: numba compiles the kernel once per install (kept in the
+    # user cache folder), with a heartbeat line every few seconds meanwhile
     _log.info("setup %s: simulating the chain (%d particles, %.3g ms; the first run after "
-              "installing also compiles the chain kernel, about a minute)", setup.name,
-              chain.n_particles, t[-1] * 1e3)
+              "installing also compiles the chain kernel, %s on an idle 2-core machine)",
+              setup.name, chain.n_particles, t[-1] * 1e3, COMPILE_ESTIMATE_TEXT)
     start = time.perf_counter()
-    history = simulate(chain, study.striker.velocity_m_per_s, t, dt=study.simulation.dt_s)
+    with heartbeat(_log, f"setup {setup.name}: simulating the chain",
+                   note=" (the first run compiles the chain kernel)"):
+        history = simulate(chain, study.striker.velocity_m_per_s, t, dt=study.simulation.dt_s)
     _log.info("setup %s: simulated in %.1f s", setup.name, time.perf_counter() - start)
     return chain, history
 

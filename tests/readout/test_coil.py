@@ -1,4 +1,5 @@
-"""Winding model: wire table, geometry, resistance, Wheeler L, self-capacitance estimate."""
+"""The coil (msens.readout.coil.Coil): wire table, geometry, resistance, Wheeler L,
+self-capacitance estimate."""
 
 from __future__ import annotations
 
@@ -12,20 +13,23 @@ from msens.errors import InputError
 from msens.params.units import ALPHA_COPPER, MU0
 from msens.readout.coil import (
     PACKING,
-    Winding,
+    WIRES,
+    Coil,
+    Wire,
     awg_diameter,
+    coil_from,
     heavy_build_diameter,
     turn_to_turn_capacitance,
     wheeler_inductance,
     winding_capacitance,
-    winding_from_coil,
+    wire_for,
 )
 
 PAPER = {"turns": 1100, "length": 7e-3, "inner_radius": 7.95e-3}
 
 
-def paper_winding(**kw) -> Winding:
-    return winding_from_coil(PAPER["turns"], PAPER["length"], PAPER["inner_radius"], **kw)
+def paper_winding(**kw) -> Coil:
+    return coil_from(PAPER["turns"], PAPER["length"], PAPER["inner_radius"], **kw)
 
 
 def test_awg_diameters_match_astm_b258():
@@ -51,21 +55,21 @@ def test_heavy_build_awg36_is_0152_mm():
 
 def test_paper_coil_geometry_and_layers():
     w = paper_winding()
-    d = w.insulated_diameter
+    d = w.wire.insulated_diameter
     # square packing: the build is N d² / length and equals layers × d up to the last layer
-    assert w.build == pytest.approx(PAPER["turns"] * d**2 / PAPER["length"], rel=1e-12)
+    assert w.thickness == pytest.approx(PAPER["turns"] * d**2 / PAPER["length"], rel=1e-12)
     assert w.turns_per_layer == math.floor(PAPER["length"] / d)
     assert (w.layers - 1) * w.turns_per_layer < PAPER["turns"] <= w.layers * w.turns_per_layer
-    assert w.outer_radius == pytest.approx(w.inner_radius + w.build)
+    assert w.outer_radius == pytest.approx(w.inner_radius + w.thickness)
     assert w.mean_turn_length == pytest.approx(math.pi * (w.inner_radius + w.outer_radius))
 
 
 def test_orthocyclic_build_is_sqrt3_over_2_of_square():
     square = paper_winding(packing="square")
     ortho = paper_winding(packing="orthocyclic")
-    assert ortho.build / square.build == pytest.approx(math.sqrt(3) / 2, rel=1e-12)
-    assert paper_winding(packing=0.7).build == pytest.approx(square.build * PACKING["square"]
-                                                             / 0.7)
+    assert ortho.thickness / square.thickness == pytest.approx(math.sqrt(3) / 2, rel=1e-12)
+    assert paper_winding(packing=0.7).thickness == pytest.approx(
+        square.thickness * PACKING["square"] / 0.7)
 
 
 def test_resistance_temperature_coefficient():
@@ -84,13 +88,13 @@ def loop_mutual(a: np.ndarray, b: np.ndarray, d: np.ndarray) -> np.ndarray:
                                    - 2 / k * special.ellipe(k2))
 
 
-def filament_inductance(w: Winding, n_r: int, n_z: int) -> float:
+def filament_inductance(w: Coil, n_r: int, n_z: int) -> float:
     """L of a uniform-current rectangular winding section by filament sums.
 
     Cell self-terms: a loop of radius r with the geometric mean distance of a rectangle
     (≈ 0.2235 (h_r + h_z), Grover 1946) as its equivalent radius: μ0 r (ln(8r/g) − 2).
     """
-    hr, hz = w.build / n_r, w.length / n_z
+    hr, hz = w.thickness / n_r, w.length / n_z
     r = w.inner_radius + hr * (np.arange(n_r) + 0.5)
     z = hz * (np.arange(n_z) + 0.5)
     rr, zz = (x.ravel() for x in np.meshgrid(r, z, indexing="ij"))
@@ -107,7 +111,7 @@ def filament_inductance(w: Winding, n_r: int, n_z: int) -> float:
                                                  (7e-3, 5e-3)])
 def test_wheeler_matches_filament_sum(length, inner_radius):
     # Wheeler (1928) claims ~1 % for comparable 6a, 9b, 10c; assert 3 %.
-    w = winding_from_coil(1100, length, inner_radius)
+    w = coil_from(1100, length, inner_radius)
     ref = filament_inductance(w, 24, 24)
     assert filament_inductance(w, 16, 16) == pytest.approx(ref, rel=5e-3)  # converged
     assert wheeler_inductance(w) == pytest.approx(ref, rel=0.03)
@@ -116,9 +120,10 @@ def test_wheeler_matches_filament_sum(length, inner_radius):
 def test_wheeler_scales_with_turns_squared():
     w1 = paper_winding()
     root2 = math.sqrt(2.0)                            # thinner wire: same build
-    w2 = Winding(2 * w1.turns, w1.length, w1.inner_radius, 36, w1.bare_diameter / root2,
-                 w1.insulated_diameter / root2, w1.packing)
-    assert w2.build == pytest.approx(w1.build)
+    thin = Wire("thin", w1.wire.bare_diameter / root2, w1.wire.insulated_diameter / root2)
+    w2 = Coil(turns=2 * w1.turns, length=w1.length, inner_radius=w1.inner_radius, wire=thin,
+              packing_factor=w1.packing_factor)
+    assert w2.thickness == pytest.approx(w1.thickness)
     assert wheeler_inductance(w2) == pytest.approx(4 * wheeler_inductance(w1), rel=1e-12)
 
 
@@ -127,16 +132,16 @@ def test_wheeler_scales_with_turns_squared():
 def test_layer_energy_method_matches_turn_by_turn_energy():
     # Independent check of C = 4/(3 n_l²) Σ C_ll: back-and-forth layers, equal volts per
     # turn, energy summed over every pair of facing turns in adjacent layers.
-    w = winding_from_coil(300, 3e-3, 5e-3)
+    w = coil_from(300, 3e-3, 5e-3)
     n_t, n_l = w.turns_per_layer, w.layers
-    w = Winding(n_t * n_l, w.length, w.inner_radius, 36, w.bare_diameter,
-                w.insulated_diameter, w.packing)                    # full layers
+    w = Coil(turns=n_t * n_l, length=w.length, inner_radius=w.inner_radius, wire=w.wire,
+             packing_factor=w.packing_factor)                       # full layers
     v_turn = 1.0 / w.turns
     energy = 0.0
-    pitch = w.build / n_l
+    pitch = w.thickness / n_l
     for i in range(n_l - 1):
         c_tt = turn_to_turn_capacitance(2 * math.pi * (w.inner_radius + (i + 1) * pitch),
-                                        w.bare_diameter, w.insulated_diameter)
+                                        w.wire.bare_diameter, w.wire.insulated_diameter)
         for k in range(n_t):
             idx_i = i * n_t + (k if i % 2 == 0 else n_t - 1 - k)
             idx_j = (i + 1) * n_t + (k if (i + 1) % 2 == 0 else n_t - 1 - k)
@@ -167,9 +172,28 @@ def test_turn_to_turn_capacitance_behaviour():
 ])
 def test_bad_coil_input_raises(kwargs, match):
     with pytest.raises(InputError, match=match):
-        winding_from_coil(**kwargs)
+        coil_from(**kwargs)
 
 
 def test_untabulated_gauge_with_explicit_insulation():
-    w = winding_from_coil(100, 5e-3, 5e-3, wire=33, insulated_diameter=0.21e-3)
-    assert w.bare_diameter == pytest.approx(awg_diameter(33))
+    w = coil_from(100, 5e-3, 5e-3, wire=33, insulated_diameter=0.21e-3)
+    assert w.wire.bare_diameter == pytest.approx(awg_diameter(33))
+
+
+def test_one_wire_table():
+    """The field model's wires are the coil's: tabulated gauges come from WIRES, others from
+    ASTM B258 and the heavy-build table (one lookup, wire_for)."""
+    assert wire_for("AWG36") is WIRES["AWG36"] is Coil().wire
+    assert wire_for(" awg34 ") is WIRES["AWG34"]
+    assert wire_for(30) == Wire("AWG30", awg_diameter(30), heavy_build_diameter(30))
+    # the tables agree to the rounding of their sources
+    for name, w in WIRES.items():
+        gauge = int(name.removeprefix("AWG"))
+        assert w.bare_diameter == pytest.approx(awg_diameter(gauge), rel=5e-3)
+        assert w.insulated_diameter == pytest.approx(heavy_build_diameter(gauge), rel=5e-3)
+
+
+def test_the_field_model_meshes_the_read_outs_coil():
+    from msens.field import parts
+
+    assert parts.Coil is Coil and parts.Wire is Wire and parts.WIRES is WIRES

@@ -18,9 +18,9 @@ from msens.errors import InputError
 from msens.field.build import MeshOptions
 from msens.field.eddy import SKIN_SIZE
 from msens.field.geometry import AirBox, BeadChain, SensorGeometry
-from msens.field.parts import WIRES, BiasMagnet, Coil, SensorUnit, Wire
+from msens.field.parts import BiasMagnet, Coil, SensorUnit
 from msens.params.materials import MAGNET_GRADES, SIGMA_1018
-from msens.readout.coil import awg_diameter, heavy_build_diameter
+from msens.readout.coil import wire_for
 from msens.readout.sensors import SensorKind
 
 
@@ -34,16 +34,6 @@ def mss_setup(study: Study) -> SetupSpec:
 
 def _given(**kw: float | None) -> dict[str, float]:
     return {k: v for k, v in kw.items() if v is not None}
-
-
-def wire_for(name: str) -> Wire:
-    """Heavy-build enamelled wire of an AWG name (``"AWG36"``): the field model's table
-    where it has the gauge, else ASTM B258 bare and heavy-build diameters (msens.readout.coil)."""
-    name = name.upper()
-    if name in WIRES:
-        return WIRES[name]
-    gauge = int(name.removeprefix("AWG"))
-    return Wire(f"AWG{gauge}", awg_diameter(gauge), heavy_build_diameter(gauge))
 
 
 def coil_geometry(spec: CoilSpec, particle: int) -> Coil:

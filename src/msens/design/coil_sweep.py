@@ -54,7 +54,6 @@ from msens.magnetics.transducer import bias_solution
 from msens.magnetics.transducer_cache import transducers_for
 from msens.readout.coil import wheeler_inductance
 from msens.readout.electronics import ElectronicsSpec
-from msens.readout.mss import winding_of
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm
 #: gives < 1e-4 relative error against exact mesh quadrature for the paper's coil, tests).
@@ -122,7 +121,7 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
     r_rng, z_rng = _coil_box(unit, designs, geometry)
     common = {"wave": wave,
               "z_center": geometry.beads.center(particle), "inductance": tr.inductance_H,
-              "wheeler": wheeler_inductance(winding_of(unit.coil))}
+              "wheeler": wheeler_inductance(unit.coil)}
     if not study.field.eddy_currents:
         sol, _ = bias_solution(geometry)
         model = mechanism_potentials(sol, geometry, stress_force=tr.reference_force,
@@ -188,7 +187,7 @@ def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
     r_out = np.array([c.outer_radius for c in coils])
     turns = np.array([c.turns for c in coils], dtype=float)
     resistance = np.array([coil_resistance(c) for c in coils])
-    scale = np.array([wheeler_inductance(winding_of(c)) / ctx.wheeler for c in coils])
+    scale = np.array([wheeler_inductance(c) / ctx.wheeler for c in coils])
     inductance = ctx.inductance * scale
     if ctx.harmonic is None:
         area = (r_out - r_in) * 2 * half

@@ -45,7 +45,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from msens.config.fieldsetup import geometry_from_study, mss_setup, wire_for
+from msens.config.fieldsetup import geometry_from_study, mss_setup
 from msens.config.schema import SensorSpec
 from msens.config.study import Study
 from msens.errors import InputError
@@ -53,6 +53,7 @@ from msens.field.geometry import SensorGeometry
 from msens.field.parts import BiasMagnet, SensorUnit, Tube
 from msens.io.tomlreader import Table, read_document
 from msens.params.materials import MAGNET_GRADES
+from msens.readout.coil import wire_for
 
 SCHEMA = "msens.sweep/1"
 

@@ -1,7 +1,9 @@
 """The parts of a magnetostrictive sensor around the chain: tube, wire, coil, bias magnet.
 
 Dimensions in metres, positions relative to the particle a part is centred on (see
-:mod:`msens.field.geometry` for the coordinates and the whole sensor geometry).
+:mod:`msens.field.geometry` for the coordinates and the whole sensor geometry). The coil and
+its wire are the read-out's (:class:`msens.readout.coil.Coil`, :class:`~msens.readout.coil.Wire`,
+:data:`~msens.readout.coil.WIRES`): one coil type for the field model, the circuit and design.
 """
 
 from __future__ import annotations
@@ -11,44 +13,7 @@ from dataclasses import dataclass, field
 
 from msens.errors import require
 from msens.params.materials import MAGNET_GRADES
-
-
-@dataclass(frozen=True)
-class Wire:
-    """Round enamelled magnet wire.
-
-    Attributes
-    ----------
-    name : str
-    bare_diameter : float
-        Copper diameter, m.
-    insulated_diameter : float
-        Outer diameter over the insulation, m.
-    """
-
-    name: str
-    bare_diameter: float
-    insulated_diameter: float
-
-    def __post_init__(self) -> None:
-        require(0 < self.bare_diameter < self.insulated_diameter,
-                f"wire {self.name!r}: need 0 < bare_diameter < insulated_diameter, got "
-                f"{self.bare_diameter} and {self.insulated_diameter} m")
-
-
-#: AWG 36: bare copper 0.127 mm (ASTM B258, 0.0050 in). Heavy-build (double) film insulation:
-#: overall diameter 0.0060 in max / ~0.152 mm (NEMA MW 1000, heavy build AWG 36).
-WIRES: dict[str, Wire] = {
-    "AWG36": Wire("AWG36", 0.127e-3, 0.152e-3),
-    "AWG34": Wire("AWG34", 0.160e-3, 0.191e-3),
-    "AWG38": Wire("AWG38", 0.101e-3, 0.124e-3),
-}
-
-#: Packing factor of a layered (square-packed) winding: fraction pi/4 of the winding
-#: cross-section filled by insulated round wire. Orthocyclic windings reach pi/(2 sqrt 3) =
-#: 0.907 and wild (random) windings are lower, about 0.7-0.8 (Hagedorn, Sell-Le Blanc &
-#: Fleischer, *Handbook of Coil Winding*, Springer 2018, ch. 2). pi/4 is a documented guess.
-SQUARE_PACKING = math.pi / 4
+from msens.readout.coil import WIRES, Coil, Wire
 
 
 @dataclass(frozen=True)
@@ -68,71 +33,6 @@ class Tube:
         require(0 < self.inner_radius < self.outer_radius,
                 f"tube needs 0 < inner_radius < outer_radius, got {self.inner_radius} and "
                 f"{self.outer_radius} m")
-
-
-@dataclass(frozen=True)
-class Coil:
-    """A pick-up coil wound on a former around the tube, centred on a particle.
-
-    Attributes
-    ----------
-    particle : int
-        The particle at the coil's centre (paper: 13 and 18).
-    turns : int
-        Number of turns N (paper: 1100).
-    length : float
-        Winding length, m (paper: 7 mm).
-    inner_radius : float
-        Winding inner radius, m: former inner radius 6.35 mm + wall 1.6 mm = 7.95 mm.
-    wire : Wire
-    packing_factor : float
-        Fraction of the winding cross-section filled by insulated wire circles (see
-        :data:`SQUARE_PACKING`).
-    axial_offset : float
-        Shift of the coil centre from the particle centre, m (+ = up).
-    """
-
-    particle: int = 13
-    turns: int = 1100
-    length: float = 7e-3
-    inner_radius: float = 7.95e-3
-    wire: Wire = WIRES["AWG36"]
-    packing_factor: float = SQUARE_PACKING
-    axial_offset: float = 0.0
-
-    def __post_init__(self) -> None:
-        require(isinstance(self.turns, int) and self.turns > 0,
-                f"coil at particle {self.particle}: turns must be a positive integer, got "
-                f"{self.turns!r}")
-        require(self.length > 0, f"coil length must be > 0 m, got {self.length}")
-        require(self.inner_radius > 0, f"coil inner_radius must be > 0 m, got "
-                f"{self.inner_radius}")
-        require(0 < self.packing_factor <= math.pi / (2 * math.sqrt(3)) + 1e-12,
-                f"coil packing_factor must be in (0, 0.907] (hexagonal limit), got "
-                f"{self.packing_factor}")
-        require(self.length >= self.wire.insulated_diameter,
-                "coil length must hold at least one turn")
-
-    @property
-    def thickness(self) -> float:
-        """Radial winding depth, m: N (pi d^2/4) / (packing L)."""
-        d = self.wire.insulated_diameter
-        return self.turns * math.pi * d**2 / 4 / (self.packing_factor * self.length)
-
-    @property
-    def outer_radius(self) -> float:
-        """Winding outer radius, m."""
-        return self.inner_radius + self.thickness
-
-    @property
-    def mean_turn_length(self) -> float:
-        """Mean length of one turn, m."""
-        return math.pi * (self.inner_radius + self.outer_radius)
-
-    @property
-    def area(self) -> float:
-        """Winding cross-section in the (r, z) plane, m^2."""
-        return self.thickness * self.length
 
 
 @dataclass(frozen=True)
@@ -212,4 +112,4 @@ class SensorUnit:
                     f"particle {self.coil.particle}")
 
 
-__all__ = ["SQUARE_PACKING", "WIRES", "BiasMagnet", "Coil", "SensorUnit", "Tube", "Wire"]
+__all__ = ["WIRES", "BiasMagnet", "Coil", "SensorUnit", "Tube", "Wire"]

@@ -30,7 +30,7 @@ from msens.field.verification_geometry import (
 )
 from msens.params.materials import STEEL_1018_BH, BHCurve
 from msens.params.units import MU0
-from msens.readout.coil import winding_from_coil
+from msens.readout.coil import coil_from
 
 
 @dataclass(frozen=True)
@@ -186,8 +186,8 @@ PAPER_COIL = {"turns": 1100, "inner_radius": 7.95e-3, "length": 7e-3}
 
 def paper_coil_outer_radius() -> float:
     """Winding outer radius of the paper's coil with layer (square) packing, m (11.58 mm)."""
-    return winding_from_coil(PAPER_COIL["turns"], PAPER_COIL["length"],
-                             PAPER_COIL["inner_radius"], "AWG36", "square").outer_radius
+    return coil_from(PAPER_COIL["turns"], PAPER_COIL["length"], PAPER_COIL["inner_radius"],
+                     "AWG36", "square").outer_radius
 
 
 def reference_inductance(r1: float, r2: float, length: float, turns: int) -> float:

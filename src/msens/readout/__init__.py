@@ -2,7 +2,8 @@
 
 - :mod:`.sensors` — observation operators: bead, rod and four-contact MsS records from the
   chain's contact forces.
-- :mod:`.coil` — the winding of a multilayer pick-up coil: wire, inductance, capacitance.
+- :mod:`.coil` — the pick-up coil (one type for the field model, the circuit and design):
+  wire, geometry, resistance, inductance, capacitance.
 - :mod:`.electronics` — the read-out circuit from the EMF to the DAQ input.
 - :mod:`.daq` — the voltage the DAQ records, sampled.
 - :mod:`.noise` — the circuit's noise at the DAQ.
@@ -16,8 +17,9 @@ _HOMES = {
     "sensors": ("SensorKind", "bead_sensor", "contact_mean", "dynamic_force",
                 "mss_four_contact", "mss_four_contact_rate", "observe", "read_contacts",
                 "rod_sensor", "sensor_contacts", "time_derivative", "time_integral"),
-    "coil": ("Winding", "awg_diameter", "heavy_build_diameter", "turn_to_turn_capacitance",
-             "wheeler_inductance", "winding_capacitance", "winding_from_coil"),
+    "coil": ("WIRES", "Coil", "Wire", "awg_diameter", "coil_from", "heavy_build_diameter",
+             "turn_to_turn_capacitance", "wheeler_inductance", "winding_capacitance",
+             "wire_for"),
     "electronics": ("ElectronicsSpec", "ReadoutCircuit", "bandwidth", "coil_transfer_function",
                     "poles", "readout_circuit", "resonance", "state_space",
                     "transfer_function"),

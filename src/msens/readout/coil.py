@@ -1,16 +1,17 @@
-"""Winding model of a multilayer pick-up coil of round magnet wire.
+"""The pick-up coil: one type (:class:`Coil`) for the field model, the circuit and design.
 
-The canonical description of the coil's winding for the circuit: geometry from turns, length,
-inner radius and wire gauge; copper resistance; Wheeler's air-core inductance (a quick check,
-the field model gives the real L); and an estimate of the winding's self-capacitance.
+A multilayer coil of round magnet wire on a former around the tube, centred on a particle:
+its wire (:class:`Wire`, :data:`WIRES`, :func:`wire_for`), its geometry from turns, length,
+inner radius and packing; copper resistance; Wheeler's air-core inductance (a quick check,
+the field model gives the real L); and an estimate of the winding's self-capacitance. The
+field model meshes the same :class:`Coil` (:mod:`msens.field.parts` uses it).
 
-Packing convention: ``packing`` is the fraction of the winding's (r, z) cross-section that the
-insulated wire circles fill — the same convention as ``msens.field.geometry`` —
-π/4 ≈ 0.785 for a layer-on-layer (square) winding, π/(2√3) ≈ 0.907 for a perfect
-orthocyclic one; wild (random) windings reach about 0.7–0.8 (Hagedorn, Sell-Le Blanc &
-Fleischer, *Handbook of Coil Winding*, Springer 2018, ch. 2). The default is the square
-value π/4: the paper does not say how its coil was wound, π/4 lies inside the range of a wild
-winding, and it matches the field model's default so that both give the same outer radius.
+Packing convention: ``packing_factor`` is the fraction of the winding's (r, z) cross-section
+that the insulated wire circles fill: π/4 ≈ 0.785 for a layer-on-layer (square) winding,
+π/(2√3) ≈ 0.907 for a perfect orthocyclic one; wild (random) windings reach about 0.7–0.8
+(Hagedorn, Sell-Le Blanc & Fleischer, *Handbook of Coil Winding*, Springer 2018, ch. 2). The
+default is the square value π/4, a documented guess: the paper does not say how its coil was
+wound, and π/4 lies inside the range of a wild winding.
 """
 
 from __future__ import annotations
@@ -65,7 +66,7 @@ def heavy_build_diameter(gauge: int) -> float:
     """Maximum overall diameter of heavy-build magnet wire of AWG ``gauge``, m.
 
     Raises :class:`InputError` for gauges not in the table (30–40 even); pass the insulated
-    diameter explicitly to :func:`winding_from_coil` for those.
+    diameter explicitly to :func:`coil_from` (or :func:`wire_for`) for those.
     """
     require(gauge in _HEAVY_BUILD_OD_IN,
             f"no heavy-build diameter tabulated for AWG {gauge}; tabulated: "
@@ -84,71 +85,119 @@ def _parse_wire(wire: str | int) -> int:
 
 
 @dataclass(frozen=True)
-class Winding:
-    """A multilayer solenoidal winding of round magnet wire (all lengths in m).
+class Wire:
+    """Round enamelled magnet wire.
 
     Attributes
     ----------
-    turns : int
-        Number of turns N.
-    length : float
-        Winding length along the axis, m.
-    inner_radius : float
-        Winding inner radius (outside of the former), m.
-    wire_gauge : int
-        AWG number (informative; the diameters below are what count).
+    name : str
     bare_diameter : float
         Copper diameter, m.
     insulated_diameter : float
-        Overall diameter including enamel, m.
-    packing : float
-        Fill fraction of insulated wire circles in the winding cross-section (module notes).
+        Outer diameter over the insulation, m.
     """
 
-    turns: int
-    length: float
-    inner_radius: float
-    wire_gauge: int
+    name: str
     bare_diameter: float
     insulated_diameter: float
-    packing: float = PACKING[DEFAULT_PACKING]
 
     def __post_init__(self) -> None:
-        require(isinstance(self.turns, int | np.integer) and self.turns > 0,
-                f"coil turns must be a positive integer, got {self.turns!r}")
-        require(self.length > 0, f"coil length must be > 0 m, got {self.length}")
-        require(self.inner_radius >= 0, f"coil inner_radius must be >= 0 m, got "
-                f"{self.inner_radius}")
         require(0 < self.bare_diameter < self.insulated_diameter,
-                f"wire diameters must satisfy 0 < bare < insulated, got "
+                f"wire {self.name!r}: need 0 < bare_diameter < insulated_diameter, got "
                 f"{self.bare_diameter} and {self.insulated_diameter} m")
-        require(0 < self.packing <= PACKING["orthocyclic"] + 1e-12,
-                f"coil packing must be in (0, {PACKING['orthocyclic']:.4f}] (hexagonal "
-                f"limit), got {self.packing}")
-        require(self.length >= self.insulated_diameter,
-                f"coil length {self.length} m must hold at least one turn of wire "
-                f"{self.insulated_diameter} m thick")
+
+
+#: The wires the field model's committed artifacts were made with. AWG 36: bare copper
+#: 0.127 mm (ASTM B258, 0.0050 in); heavy-build (double) film insulation: overall diameter
+#: 0.0060 in max / ~0.152 mm (NEMA MW 1000, heavy build AWG 36). Other gauges:
+#: :func:`wire_for` (ASTM B258 bare, :func:`heavy_build_diameter` insulated).
+WIRES: dict[str, Wire] = {
+    "AWG36": Wire("AWG36", 0.127e-3, 0.152e-3),
+    "AWG34": Wire("AWG34", 0.160e-3, 0.191e-3),
+    "AWG38": Wire("AWG38", 0.101e-3, 0.124e-3),
+}
+
+
+def wire_for(wire: str | int, insulated_diameter: float | None = None) -> Wire:
+    """The wire of an AWG name or number (``"AWG36"``, ``36``): :data:`WIRES` where it has
+    the gauge, else the ASTM B258 bare diameter (:func:`awg_diameter`) with the heavy-build
+    insulation (:func:`heavy_build_diameter`) or ``insulated_diameter`` (m) if given."""
+    gauge = _parse_wire(wire)
+    name = f"AWG{gauge}"
+    if insulated_diameter is None and name in WIRES:
+        return WIRES[name]
+    d_ins = heavy_build_diameter(gauge) if insulated_diameter is None else insulated_diameter
+    return Wire(name, awg_diameter(gauge), float(d_ins))
+
+
+@dataclass(frozen=True)
+class Coil:
+    """A pick-up coil wound on a former around the tube, centred on a particle.
+
+    Attributes
+    ----------
+    particle : int
+        The particle at the coil's centre (paper: 13 and 18).
+    turns : int
+        Number of turns N (paper: 1100).
+    length : float
+        Winding length along the axis, m (paper: 7 mm).
+    inner_radius : float
+        Winding inner radius, m: former inner radius 6.35 mm + wall 1.6 mm = 7.95 mm.
+    wire : Wire
+    packing_factor : float
+        Fraction of the winding cross-section filled by insulated wire circles (module
+        notes; default square, π/4).
+    axial_offset : float
+        Shift of the coil centre from the particle centre, m (+ = up).
+    """
+
+    particle: int = 13
+    turns: int = 1100
+    length: float = 7e-3
+    inner_radius: float = 7.95e-3
+    wire: Wire = WIRES["AWG36"]
+    packing_factor: float = PACKING[DEFAULT_PACKING]
+    axial_offset: float = 0.0
+
+    def __post_init__(self) -> None:
+        require(isinstance(self.turns, int) and self.turns > 0,
+                f"coil at particle {self.particle}: turns must be a positive integer, got "
+                f"{self.turns!r}")
+        require(self.length > 0, f"coil length must be > 0 m, got {self.length}")
+        require(self.inner_radius > 0, f"coil inner_radius must be > 0 m, got "
+                f"{self.inner_radius}")
+        require(0 < self.packing_factor <= PACKING["orthocyclic"] + 1e-12,
+                f"coil packing_factor must be in (0, 0.907] (hexagonal limit), got "
+                f"{self.packing_factor}")
+        require(self.length >= self.wire.insulated_diameter,
+                "coil length must hold at least one turn")
 
     @property
-    def build(self) -> float:
-        """Radial depth of the winding, m: N (π d_ins²/4) / (packing · length)."""
-        d = self.insulated_diameter
-        return self.turns * math.pi * d**2 / 4.0 / (self.packing * self.length)
+    def thickness(self) -> float:
+        """Radial winding depth (build), m: N (π d_ins²/4) / (packing · length)."""
+        d = self.wire.insulated_diameter
+        return self.turns * math.pi * d**2 / 4 / (self.packing_factor * self.length)
 
     @property
     def outer_radius(self) -> float:
         """Winding outer radius, m."""
-        return self.inner_radius + self.build
+        return self.inner_radius + self.thickness
 
     @property
     def mean_radius(self) -> float:
         """Mean turn radius (r_in + r_out)/2, m."""
-        return self.inner_radius + 0.5 * self.build
+        return self.inner_radius + 0.5 * self.thickness
 
     @property
     def mean_turn_length(self) -> float:
-        """Length of the mean turn, 2π r_mean, m."""
-        return 2.0 * math.pi * self.mean_radius
+        """Mean length of one turn, π (r_in + r_out), m."""
+        return math.pi * (self.inner_radius + self.outer_radius)
+
+    @property
+    def area(self) -> float:
+        """Winding cross-section in the (r, z) plane, m^2."""
+        return self.thickness * self.length
 
     @property
     def wire_length(self) -> float:
@@ -158,7 +207,7 @@ class Winding:
     @property
     def turns_per_layer(self) -> int:
         """Turns side by side in one layer, floor(length / d_ins)."""
-        return max(1, math.floor(self.length / self.insulated_diameter * (1 + 1e-12)))
+        return max(1, math.floor(self.length / self.wire.insulated_diameter * (1 + 1e-12)))
 
     @property
     def layers(self) -> int:
@@ -168,13 +217,13 @@ class Winding:
     @property
     def copper_area(self) -> float:
         """Copper cross-section of the wire, m²."""
-        return math.pi * self.bare_diameter**2 / 4.0
+        return math.pi * self.wire.bare_diameter**2 / 4.0
 
     def resistance(self, temperature_K: float = 293.15) -> float:
         """DC copper resistance of the winding, Ω.
 
-        R = ρ₂₀ (1 + α (T − 293.15 K)) · N · 2π r_mean / (π d²/4), with ρ₂₀ and α of annealed
-        copper (IEC 60028, :mod:`msens.params.units`). Leads are not included.
+        R = ρ₂₀ (1 + α (T − 293.15 K)) · N · π (r_in + r_out) / (π d²/4), with ρ₂₀ and α of
+        annealed copper (IEC 60028, :mod:`msens.params.units`). Leads are not included.
 
         Parameters
         ----------
@@ -186,10 +235,10 @@ class Winding:
         return rho * self.wire_length / self.copper_area
 
 
-def winding_from_coil(turns: int, length: float, inner_radius: float,
-                      wire: str | int = "AWG36", packing: str | float = DEFAULT_PACKING,
-                      *, insulated_diameter: float | None = None) -> Winding:
-    """Build a :class:`Winding` from the study's coil description.
+def coil_from(turns: int, length: float, inner_radius: float, wire: str | int = "AWG36",
+              packing: str | float = DEFAULT_PACKING, *,
+              insulated_diameter: float | None = None, particle: int = 13) -> Coil:
+    """A :class:`Coil` from a coil description by wire gauge and packing name.
 
     Parameters
     ----------
@@ -199,30 +248,30 @@ def winding_from_coil(turns: int, length: float, inner_radius: float,
     inner_radius : float
         Winding inner radius, m (paper: 12.7 mm former + 1.6 mm wall → 7.95 mm).
     wire : str or int
-        ``"AWG36"`` or an AWG number; bare diameter from :func:`awg_diameter`.
+        ``"AWG36"`` or an AWG number (:func:`wire_for`).
     packing : str or float
         ``"square"`` (default, π/4), ``"orthocyclic"`` (π/(2√3)) or a fill fraction.
     insulated_diameter : float, optional
-        Overall wire diameter, m; default heavy build (:func:`heavy_build_diameter`).
+        Overall wire diameter, m; default that of :func:`wire_for`.
+    particle : int
+        The particle the coil is centred on.
 
     Returns
     -------
-    Winding
+    Coil
     """
-    gauge = _parse_wire(wire)
-    bare = awg_diameter(gauge)
-    d_ins = heavy_build_diameter(gauge) if insulated_diameter is None else insulated_diameter
+    w = wire_for(wire, insulated_diameter)
     if isinstance(packing, str):
         require(packing in PACKING,
                 f"coil packing must be one of {sorted(PACKING)} or a number, got {packing!r}")
         fill = PACKING[packing]
     else:
         fill = float(packing)
-    return Winding(int(turns), float(length), float(inner_radius), gauge, bare,
-                   float(d_ins), fill)
+    return Coil(particle=particle, turns=int(turns), length=float(length),
+                inner_radius=float(inner_radius), wire=w, packing_factor=fill)
 
 
-def wheeler_inductance(winding: Winding) -> float:
+def wheeler_inductance(coil: Coil) -> float:
     """Air-core inductance by Wheeler's multilayer formula, H.
 
     L[μH] = 0.8 a² N² / (6a + 9b + 10c) with a the mean radius, b the length and c the
@@ -231,10 +280,10 @@ def wheeler_inductance(winding: Winding) -> float:
     of similar size). In SI: L = 0.8e-6 / 0.0254 · a² N² / (6a + 9b + 10c), lengths in m.
     A quick check only: the field model's incremental solve gives the real L.
     """
-    a = winding.mean_radius
-    b = winding.length
-    c = winding.build
-    return 0.8e-6 / 0.0254 * a**2 * winding.turns**2 / (6.0 * a + 9.0 * b + 10.0 * c)
+    a = coil.mean_radius
+    b = coil.length
+    c = coil.thickness
+    return 0.8e-6 / 0.0254 * a**2 * coil.turns**2 / (6.0 * a + 9.0 * b + 10.0 * c)
 
 
 def turn_to_turn_capacitance(turn_length: float, bare_diameter: float,
@@ -268,8 +317,7 @@ def turn_to_turn_capacitance(turn_length: float, bare_diameter: float,
     return EPS0 * turn_length * per_length
 
 
-def winding_capacitance(winding: Winding,
-                        permittivity: float = ENAMEL_PERMITTIVITY) -> float:
+def winding_capacitance(coil: Coil, permittivity: float = ENAMEL_PERMITTIVITY) -> float:
     """ESTIMATE of the winding's self-capacitance (terminal to terminal), F.
 
     Multilayer (layers ≥ 2), wound back and forth layer by layer: the voltage between
@@ -282,15 +330,14 @@ def winding_capacitance(winding: Winding,
     Ignores the former, the leads and the real (wild) wire positions, so treat the value as
     an order-of-magnitude estimate (±50 %).
     """
-    n_l = winding.layers
+    n_l = coil.layers
+    bare, insulated = coil.wire.bare_diameter, coil.wire.insulated_diameter
     if n_l == 1:
-        c_tt = turn_to_turn_capacitance(winding.mean_turn_length, winding.bare_diameter,
-                                        winding.insulated_diameter, permittivity)
+        c_tt = turn_to_turn_capacitance(coil.mean_turn_length, bare, insulated, permittivity)
         return 1.366 * c_tt
-    pitch = winding.build / n_l
-    radii = winding.inner_radius + pitch * np.arange(1, n_l)
-    c_ll = sum(winding.turns_per_layer
-               * turn_to_turn_capacitance(2.0 * math.pi * r, winding.bare_diameter,
-                                          winding.insulated_diameter, permittivity)
+    pitch = coil.thickness / n_l
+    radii = coil.inner_radius + pitch * np.arange(1, n_l)
+    c_ll = sum(coil.turns_per_layer
+               * turn_to_turn_capacitance(2.0 * math.pi * r, bare, insulated, permittivity)
                for r in radii)
     return float(4.0 / (3.0 * n_l**2) * c_ll)

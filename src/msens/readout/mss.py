@@ -22,7 +22,7 @@ with the paper's four-contact average.
 
 The transducer and the frequency response are read through their attributes
 (:class:`CoilModel`, :class:`CoilResponse`): this module knows arrays and records, not the
-field model that makes them.
+field model that makes them; the coil is the one :class:`msens.readout.coil.Coil`.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from scipy.integrate import cumulative_trapezoid
 
 from msens.errors import internal, require
 from msens.mechanics.hertz import hertz_approach
-from msens.readout.coil import Winding, winding_capacitance, winding_from_coil
+from msens.readout.coil import Coil, winding_capacitance
 from msens.readout.daq import daq_voltage
 from msens.readout.electronics import ElectronicsSpec, ReadoutCircuit, coil_transfer_function
 from msens.readout.noise import NoiseModel, add_readout_noise, noise_rms
@@ -79,18 +79,6 @@ class CoilResponse(Protocol):
     def approach_at(self, f: np.ndarray) -> np.ndarray: ...
 
     def impedance_at(self, f: np.ndarray) -> np.ndarray: ...
-
-
-class WoundCoil(Protocol):
-    """What the read-out reads of a field-model coil (:class:`msens.field.parts.Coil`)."""
-
-    turns: int
-    length: float
-    inner_radius: float
-    packing_factor: float
-
-    @property
-    def wire(self): ...
 
 
 @dataclass(frozen=True)
@@ -298,19 +286,13 @@ class MssSensor:
     circuit: ReadoutCircuit
 
 
-def winding_of(coil: WoundCoil) -> Winding:
-    """The :mod:`msens.readout.coil` winding of a field-model coil (same wire, packing, size)."""
-    return winding_from_coil(coil.turns, coil.length, coil.inner_radius, coil.wire.name,
-                             coil.packing_factor, insulated_diameter=coil.wire.insulated_diameter)
-
-
-def readout(coil: WoundCoil, resistance: float, inductance: float,
+def readout(coil: Coil, resistance: float, inductance: float,
             electronics: ElectronicsSpec) -> ReadoutCircuit:
     """A coil's read-out circuit: its R (Ω) and bias-point L (H), the winding capacitance
     estimate of :mod:`msens.readout.coil`, the study's cable and DAQ input. The one place a
     coil's circuit is built, for runs, diagnoses and design sweeps alike."""
     return ReadoutCircuit(resistance=resistance, inductance=inductance,
-                          winding_capacitance=winding_capacitance(winding_of(coil)),
+                          winding_capacitance=winding_capacitance(coil),
                           cable_capacitance=electronics.cable_capacitance_f,
                           input_resistance=electronics.input_resistance_ohm,
                           input_capacitance=electronics.input_capacitance_f)
@@ -443,7 +425,6 @@ __all__ = [
     "ContactRates",
     "MssRecord",
     "MssSensor",
-    "WoundCoil",
     "contact_forces_of",
     "contact_rates",
     "emf_from_rates",

@@ -64,8 +64,8 @@ SKIN_SIZE = 40e-6
 
 __all__ = ["SKIN_SIZE", "HarmonicOperator", "HarmonicSolution",
            "conductivity", "conductivity_mass", "dipole_moment",
-           "dissipated_power", "flux_linkage", "mean_field_z", "skin_depth", "solve_harmonic",
-           "winding_impedance"]
+           "dissipated_power", "harmonic_flux_linkage", "mean_field_z", "skin_depth",
+           "solve_harmonic", "winding_impedance"]
 
 
 @dataclass(frozen=True)
@@ -414,8 +414,10 @@ def dipole_moment(sol: HarmonicSolution, region: str) -> complex:
     return complex(TWO_PI * np.sum((mz + 0.5 * q.r[el] * j) * q.w[el]))
 
 
-def flux_linkage(sol: HarmonicSolution, region: str, turns: float, area: float) -> complex:
-    """Flux linkage of a winding, Λ = (N/S) ∫_region 2π r A_φ dS, phasor, Wb.
+def harmonic_flux_linkage(sol: HarmonicSolution, region: str, turns: float,
+                          area: float) -> complex:
+    """Flux linkage of a winding in a time-harmonic solution, Λ = (N/S) ∫_region 2π r A_φ dS,
+    phasor, Wb (the static one: :func:`msens.field.post.flux_linkage`).
 
     Parameters
     ----------
@@ -444,4 +446,5 @@ def winding_impedance(sol: HarmonicSolution, region: str, turns: float, area: fl
     require(bool(np.all(j == j[0])) and j[0] != 0,
             f"winding '{region}' must carry a uniform nonzero source current density")
     current = j[0] * area / turns
-    return complex(r_dc + 1j * sol.omega * flux_linkage(sol, region, turns, area) / current)
+    return complex(r_dc + 1j * sol.omega * harmonic_flux_linkage(sol, region, turns, area)
+                   / current)

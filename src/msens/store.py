@@ -346,7 +346,8 @@ class Store:
     def _reject(path: Path, reason: str) -> None:
         hint = (f" (to trust it as it is instead: python -m msens.store stamp {path})"
                 if "written before" in reason else "")
-        _log.warning("%s %s: not used; it is computed again%s", path, reason, hint)
+        _log.warning("%s %s: not used (msens computes it again unless a later cache folder "
+                     "holds a valid copy)%s", path, reason, hint)
 
     # ------------------------------------------------------------------- size bound
 

@@ -327,3 +327,18 @@ def test_a_cache_that_cannot_be_written(tmp_path, caplog):
     assert "used but not kept" in caplog.text
     with pytest.raises(InputError, match=r"a\.json.*make that folder writable"):
         s.write_json("a.json", {"v": 1})
+
+
+def test_design_results_are_verified_and_never_evicted(tmp_path, caplog):
+    from msens.design.cache import ResultCache, content_key
+
+    cache = ResultCache(tmp_path / "cache")
+    assert cache.store.max_bytes is None  # a resumed sweep needs every result
+    key = content_key("design", 1)
+    cache.put(key, {"peak_voltage_V": 0.70, "status": "ok"})
+    assert cache.get(key) == {"peak_voltage_V": 0.70, "status": "ok"}
+    path = cache.path(key)
+    path.write_text(path.read_text().replace("0.7", "2.44"))
+    with caplog.at_level("WARNING", logger=LOG):
+        assert cache.get(key) is None  # the runner computes the design again
+    assert key in caplog.text

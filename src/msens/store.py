@@ -227,6 +227,7 @@ class Store:
                     self._reject(path, str(exc))
                     continue
                 self._used(path)
+                _log.debug("%s: verified", path)
                 return payload
         return None
 
@@ -267,6 +268,7 @@ class Store:
                 self._reject(path, str(exc))
                 continue
             self._used(path)
+            _log.debug("%s: verified", path)
             return path
         return None
 

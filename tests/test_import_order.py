@@ -24,7 +24,8 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "msens"
 
 #: Stage of every top-level unit, lowest first.
 STAGES = {
-    0: ("errors", "version", "parallel", "meshing", "vocabulary", "_lazy", "progress"),
+    0: ("errors", "version", "parallel", "meshing", "vocabulary", "_lazy", "progress",
+        "numba_cache"),
     1: ("params", "io", "store"),
     2: ("mechanics", "readout", "signals"),
     3: ("chain", "field"),

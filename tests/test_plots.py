@@ -272,3 +272,39 @@ def test_diagnosis_figure_says_no_effect_named():
         assert not any("with none" in t for t in legend)
     finally:
         plots.close(fig)
+
+
+def test_diagnosis_and_run_figures_share_the_time_origin(result, tmp_path):
+    """The same MsS pulse peaks at the same time since striker impact in diagnosis.png and
+    in sensor_records.png (the diagnosis used to plot record time: 45 µs against 89 µs)."""
+    from msens.diagnose.report import figure, title
+    from msens.diagnose.workflow import diagnose
+    from msens.io.read import read_waveform
+
+    study = api.load(default_study_path())
+    data = tmp_path / "shots.npz"
+    api.synth(study, data, shots=2)
+    d = diagnose(read_waveform(data), study, effects=["daq_lowpass"])
+    diag, run = figure(d), plots.sensor_records(result)
+    try:
+        for k, sensor in enumerate(result.setups[0].sensors):
+            ax = diag.axes[1 + k]
+            assert ax.get_title(loc="left") == sensor_name(sensor.sensor.kind,
+                                                           sensor.sensor.particle)
+            measured = ax.lines[0]
+            t_diag = measured.get_xdata()[np.argmax(np.abs(measured.get_ydata()))]
+            line = next(ln for ln in run.axes[0].lines
+                        if ln.get_label() == ax.get_title(loc="left"))
+            t_run = line.get_xdata()[np.argmax(np.abs(line.get_ydata()))]
+            assert t_diag == pytest.approx(t_run, abs=1.0)  # µs
+        assert diag.axes[-1].get_xlabel() == run.axes[-1].get_xlabel() == TIME_LABEL
+        # one verdict, in words
+        text = title(d)
+        assert diag.get_suptitle() == text
+        assert "_" not in text and "@" not in text
+        if d.explained and d.effect == "none":
+            assert "explains the measurement within the noise" in text
+            assert "mostly" not in text and "residual is" not in text
+    finally:
+        plots.close(diag)
+        plots.close(run)

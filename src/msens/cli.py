@@ -173,6 +173,13 @@ _DOCS: dict[str, tuple[str, str, str]] = {
         "recommendation.json and a Pareto figure to --out (default out/<study>-design/); "
         "its cache/ folder resumes an interrupted sweep.",
         "msens design paper-mss --sweep studies/sweep-coil.toml"),
+    "uq": (
+        "prediction bands and Sobol indices over uncertain inputs",
+        "Propagate the study's uncertain inputs (an msens.uncertainty/1 file; the built-in "
+        "studies have one) through the model: the prediction as bands around the msens run "
+        "numbers, and Sobol indices that say which input to measure better. Writes uq.json "
+        "and figures to --out.",
+        "msens uq --out out/uq\nmsens uq paper-table2 --samples 64 --out out/uq-table2"),
 }
 
 
@@ -551,6 +558,9 @@ _FIRST = {"check-waveform": "reading {n} file(s)", "convert": "reading {source}"
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``msens`` console script; returns the exit status."""
     os.environ.setdefault("MPLBACKEND", "Agg")
+    from msens.numba_cache import use_user_cache
+
+    use_user_cache()  # compiled code in the user cache folder: it survives reinstalling
     logging_state = None
     try:
         parser = _parser()

@@ -52,7 +52,8 @@ def data(tmp_path_factory):
 
 def test_diagnose_names_the_soft_wall(data, tmp_path, capsys):
     out = tmp_path / "out"
-    assert main(["diagnose", str(data / "shot.csv"), "--out", str(out)]) == 0
+    assert main(["diagnose", str(data / "shot.csv"), "--study", "paper-table2", "--out",
+                 str(out)]) == 0
     report = json.loads((out / "diagnosis.json").read_text())
     assert report["effect"] == "wall_stiffness"
     assert report["parameters"]["wall_youngs_modulus_pa"] == pytest.approx(70e9, rel=0.15)
@@ -65,7 +66,8 @@ def test_diagnose_names_the_soft_wall(data, tmp_path, capsys):
 
 def test_feature_only_mode_on_table2(tmp_path):
     out = tmp_path / "t2"
-    assert main(["diagnose", "--reference", "bead", "--out", str(out)]) == 0
+    assert main(["diagnose", "--study", "paper-table2", "--reference", "bead", "--out",
+                 str(out)]) == 0
     report = json.loads((out / "diagnosis.json").read_text())
     assert report["mode"] == "features" and report["n_observations"] == 4
     assert report["misfit_after"] <= report["misfit_before"]
@@ -88,6 +90,8 @@ def test_bad_input_exits_2(data, tmp_path, args, capsys):
     parts = text.split("[[setup]]")  # header, bead, rod, mss (+ calibration, reference)
     (data / "rods.toml").write_text(parts[0] + "[[setup]]" + parts[2])
     argv = [a.format(data=data) for a in args] + ["--out", str(tmp_path / "o")]
+    if "--study" not in argv:  # the bead setups (the default study is the MsS one)
+        argv += ["--study", "paper-table2"]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "msens: error:" in err and "Traceback" not in err

@@ -64,7 +64,8 @@ def test_run_figures_in_each_format_summary_unchanged(tmp_path):
 
 def test_cli_diagnose_and_compare_write_the_chosen_format(tmp_path):
     out = tmp_path / "diag"
-    assert main(["diagnose", "--reference", "bead", "--out", str(out), "--format", "pdf"]) == 0
+    assert main(["diagnose", "--study", "paper-table2", "--reference", "bead", "--out", str(out),
+                 "--format", "pdf"]) == 0
     assert _is(out / "diagnosis.pdf", "pdf") and not (out / "diagnosis.png").exists()
     json.loads((out / "diagnosis.json").read_text())
     data = tmp_path / "shots.npz"

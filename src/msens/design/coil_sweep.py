@@ -27,6 +27,7 @@ ratio, and the EMF and DAQ voltage from :func:`msens.design.metrics.dynamic_desi
 from __future__ import annotations
 
 import io
+import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -58,8 +59,11 @@ from msens.readout.electronics import ElectronicsSpec
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm
 #: gives < 1e-4 relative error against exact mesh quadrature for the paper's coil, tests).
 TABLE_SPACING = 0.1e-3
-#: Designs evaluated (and cached) per task.
+#: Designs evaluated (and cached) per task, at most.
 CHUNK = 2048
+#: Tasks a sweep is cut into at least (when it has that many designs): the progress bar
+#: moves, and an interrupted sweep resumes from the last finished task.
+MIN_CHUNKS = 8
 
 
 @dataclass(frozen=True)
@@ -252,9 +256,14 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
     if cpath is not None:
         ctx = load_context(cpath)
     else:
-        ctx = build_context(study, geometry, particle, designs)
+        from msens.progress import heartbeat
+
+        with heartbeat(logging.getLogger(__name__),
+                       "coil sweep: field model and tables of the source potentials"):
+            ctx = build_context(study, geometry, particle, designs)
         cache.store.write_file(cname, lambda tmp: save_context(ctx, tmp))
-    chunks = [tuple(designs[k:k + CHUNK]) for k in range(0, len(designs), CHUNK)]
+    size = max(1, min(CHUNK, -(-len(designs) // MIN_CHUNKS)))
+    chunks = [tuple(designs[k:k + size]) for k in range(0, len(designs), size)]
     tasks = [(content_key("coil-chunk/2", ckey, [d.values for d in c]),
               CoilChunk(ctx, unit, c, geometry, study.electronics)) for c in chunks]
     fresh = sum(len(c) for c, (key, _) in zip(chunks, tasks, strict=True)

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -15,6 +16,7 @@ from msens.diagnose.effects import get as get_effect
 from msens.diagnose.fit import EffectFit, fit_effect
 from msens.diagnose.predict import Predictor
 from msens.errors import InputError
+from msens.progress import heartbeat
 
 _log = logging.getLogger(__name__)
 
@@ -49,9 +51,14 @@ def fit_candidates(effects: Sequence[Effect], ctx: Context, base: ModelState,
     fits = []
     with tqdm(effects, desc="candidate effects", unit=" effect", leave=False,
               disable=not _log.isEnabledFor(logging.INFO)) as bar:
-        for e in bar:
+        for i, e in enumerate(bar):
             bar.set_postfix_str(e.name)
-            fits.append(fit_effect(e, ctx, base, predictor, objective, weights))
+            # a line per candidate and a heartbeat while it fits (some take minutes)
+            with heartbeat(_log, f"candidate {i + 1}/{len(effects)} {e.name}"):
+                start = time.perf_counter()
+                fits.append(fit_effect(e, ctx, base, predictor, objective, weights))
+            _log.info("candidate %d/%d %s fitted in %.1f s", i + 1, len(effects), e.name,
+                      time.perf_counter() - start)
     return fits
 
 

@@ -474,20 +474,24 @@ def run_field_model(geometry: SensorGeometry, *,
     """
     _log.info("field model: mesh (cached on disk) and nonlinear bias solve")
     t0 = time.perf_counter()
-    axi, path = load_mesh(geometry, options, store)
-    t1 = time.perf_counter()
-    sol = solve(bias_problem(geometry, axi))
+    from msens.progress import heartbeat
+
+    with heartbeat(_log, "field model: mesh and bias solve"):
+        axi, path = load_mesh(geometry, options, store)
+        t1 = time.perf_counter()
+        sol = solve(bias_problem(geometry, axi))
     t2 = time.perf_counter()
     _log.info("field model: %d dofs, %d Newton iterations, %.1f s", sol.dofs, sol.iterations,
               t2 - t0)
-    coils = coil_results(sol, geometry) if inductance else tuple(
-        CoilResult(u.coil.particle, u.coil.turns, coil_resistance(u.coil), math.nan, math.nan,
-                   u.coil.inner_radius, u.coil.outer_radius, u.coil.length)
-        for u in geometry.iter_units())
-    t3 = time.perf_counter()
-    beads = bead_fields(sol, geometry)
-    contacts = contact_forces(sol, geometry)
-    z, bz = axis_profile(sol, geometry)
+    with heartbeat(_log, "field model: coil inductances, bead fields, contact forces"):
+        coils = coil_results(sol, geometry) if inductance else tuple(
+            CoilResult(u.coil.particle, u.coil.turns, coil_resistance(u.coil), math.nan,
+                       math.nan, u.coil.inner_radius, u.coil.outer_radius, u.coil.length)
+            for u in geometry.iter_units())
+        t3 = time.perf_counter()
+        beads = bead_fields(sol, geometry)
+        contacts = contact_forces(sol, geometry)
+        z, bz = axis_profile(sol, geometry)
     t4 = time.perf_counter()
     report = FieldReport(
         geometry=geometry, coils=coils, beads=beads, contacts=contacts, axis_z_m=z,

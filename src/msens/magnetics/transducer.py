@@ -312,14 +312,18 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
     require(math.isfinite(force) and force > 0, f"stress_force must be > 0 N, got {force}")
     law = law_for_steel(geometry.steel) if law is None else law
     timings: dict[str, float] = {}
+    from msens.progress import heartbeat
+
     _log.info("transducers: field mesh and nonlinear bias solve")
     t0 = time.perf_counter()
-    sol, path = bias_solution(geometry, options=options, store=store, max_iter=max_iter)
+    with heartbeat(_log, "transducers: mesh and bias solve"):
+        sol, path = bias_solution(geometry, options=options, store=store, max_iter=max_iter)
     timings["mesh_and_bias_solve"] = time.perf_counter() - t0
     _log.info("transducers: bead stress, Villari and contact-approach sources, their "
               "potentials (%d dofs)", sol.dofs)
-    model = mechanism_potentials(sol, geometry, stress_force=force, law=law,
-                                 material=material, approach=approach, timings=timings)
+    with heartbeat(_log, "transducers: sources and their potentials"):
+        model = mechanism_potentials(sol, geometry, stress_force=force, law=law,
+                                     material=material, approach=approach, timings=timings)
     t0 = time.perf_counter()
     pforce = particle_forces(sol, geometry)
     timings["magnetic_forces"] = time.perf_counter() - t0

@@ -17,6 +17,10 @@ package it wraps the locator numba would have chosen (same folder, so ``NUMBA_CA
 honoured) and replaces the source stamp; for every other function it declines, leaving
 numba's choice unchanged. With ``NUMBA_CACHE_LOCATOR_CLASSES`` set numba ignores the
 locator list, so the guard cannot act: a warning says so.
+
+Where: in the user cache folder (:func:`msens.numba_cache.use_user_cache`, unless
+``NUMBA_CACHE_DIR`` is set), so the compiled kernel survives reinstalling msens: the stamp
+is the files' content, and a reinstall puts them at the same path.
 """
 
 from __future__ import annotations
@@ -26,8 +30,12 @@ import hashlib
 import warnings
 from pathlib import Path
 
-import numba
-from numba.core import caching
+from msens.numba_cache import use_user_cache
+
+use_user_cache()  # before numba reads its configuration
+
+import numba  # noqa: E402
+from numba.core import caching  # noqa: E402
 
 #: The folder whose ``*.py`` files the kernel is compiled from.
 PACKAGE_DIR = Path(__file__).resolve().parent

@@ -407,7 +407,7 @@ def mechanism_share(tr, history, response=None) -> dict:
     EMFs are the frequency-domain ones (:func:`msens.magnetics.eddy_readout.mechanism_emfs`); the
     rigid-translation and open-contact parts stay magnetostatic estimates."""
     from msens.magnetics.emf import (
-        contact_forces_of,
+        contact_columns,
         contact_rates,
         emf_from_rates,
         open_contact_emf,
@@ -427,7 +427,7 @@ def mechanism_share(tr, history, response=None) -> dict:
     total = sum(energy.values()) or 1.0
     out = {m: {"peak_emf_V": float(np.max(np.abs(e))), "energy_share": energy[m] / total}
            for m, e in emfs.items()}
-    opened = open_contact_emf(tr, rates, contact_forces_of(history.approach, tr.contacts))
+    opened = open_contact_emf(tr, rates, contact_columns(history.approach, tr.contacts))
     out["approach"]["open_contacts"] = {
         "peak_emf_V": float(np.max(np.abs(opened))),
         "energy_share": float(np.trapezoid(opened**2, history.t)) / (energy["approach"] or 1.0)}

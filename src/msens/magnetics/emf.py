@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from msens.magnetics.transducer import Mechanism, Transducer
-from msens.readout.mss import ContactRates, contact_forces_of, contact_rates, emf_from_rates
+from msens.readout.mss import ContactRates, contact_columns, contact_rates, emf_from_rates
 
 
 def rigid_translation_emf(transducer: Transducer, rates: ContactRates) -> np.ndarray:
@@ -96,7 +96,7 @@ def emf(transducer: Transducer, t: np.ndarray, force: np.ndarray,
 
 __all__ = [
     "ContactRates",
-    "contact_forces_of",
+    "contact_columns",
     "contact_rates",
     "emf",
     "emf_from_rates",

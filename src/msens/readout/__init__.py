@@ -26,7 +26,7 @@ _HOMES = {
     "daq": ("daq_voltage",),
     "noise": ("NoiseModel", "add_readout_noise", "noise_rms", "thermal_covariance",
               "thermal_noise_psd"),
-    "mss": ("ContactRates", "MssRecord", "MssSensor", "contact_forces_of", "contact_rates",
+    "mss": ("ContactRates", "MssRecord", "MssSensor", "contact_columns", "contact_rates",
             "emf_from_rates", "mss_signals", "noise_model", "readout", "voltage_on"),
 }
 

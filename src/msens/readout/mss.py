@@ -100,14 +100,15 @@ class ContactRates:
     approach: np.ndarray
 
 
-def contact_forces_of(force: np.ndarray, contacts: np.ndarray,
+def contact_columns(force: np.ndarray, contacts: np.ndarray,
                       columns: np.ndarray | None = None) -> np.ndarray:
-    """The columns of ``contacts`` from a chain's contact forces, zeros where absent.
+    """The columns of ``contacts`` from a chain's per-contact records (forces, approaches),
+    zeros where absent.
 
     Parameters
     ----------
     force : ndarray, shape (nt, m)
-        Contact forces, N (or any per-contact record, e.g. approaches in m).
+        Per-contact records: contact forces (N), approaches (m), ...
     contacts : ndarray of int, shape (n_c,)
         1-based contact numbers wanted.
     columns : ndarray of int, shape (m,), optional
@@ -148,7 +149,7 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
     stiffness : float
         Hertz prefactor A, N/m^1.5.
     columns : ndarray of int, shape (m,), optional
-        Contact number of each column of ``force`` (see :func:`contact_forces_of`).
+        Contact number of each column of ``force`` (see :func:`contact_columns`).
     approach : ndarray, shape (nt, m), optional
         The chain's contact approaches δ_c(t), m (negative: open), same columns as
         ``force``. Without it δ_c = ([F_c]_+/A)^{2/3}, whose slope in F is infinite at
@@ -168,9 +169,9 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
     require(np.ndim(force) == 2 and np.shape(force)[0] == t.size,
             f"force must have shape (nt={t.size}, n_contacts), got "
             f"{np.shape(force)}")
-    fc = contact_forces_of(force, contacts, columns)
+    fc = contact_columns(force, contacts, columns)
     delta = hertz_approach(fc, stiffness) if approach is None else \
-        contact_forces_of(approach, contacts, columns)
+        contact_columns(approach, contacts, columns)
     if equivalent is not None:
         delta = equivalent(delta)
     return ContactRates(t=t, force=np.gradient(fc, t, axis=0),
@@ -375,16 +376,16 @@ def mss_signals(sensor: MssSensor, t: np.ndarray, force: np.ndarray, sample_rate
     tr = sensor.transducer
     t = np.asarray(t, dtype=float)
     contacts = np.asarray(tr.contacts, dtype=int)
-    fc = contact_forces_of(force, contacts, columns)
+    fc = contact_columns(force, contacts, columns)
     stiff = tr.contact_stiffness
     delta = (hertz_approach(fc, stiff) if approach is None
-             else contact_forces_of(approach, contacts, columns))
+             else contact_columns(approach, contacts, columns))
     # the nonlinear contact maps, if any: what the linear sources read
     equivalent = tr.equivalent_approach(delta)
     rates = contact_rates(t, fc, contacts, stiff, columns=contacts, approach=equivalent)
     total = float(np.sum(tr.sensitivity("both")))
     if response is None:
-        base = fc[0] if static is None else contact_forces_of(np.asarray(static)[None, :],
+        base = fc[0] if static is None else contact_columns(np.asarray(static)[None, :],
                                                                contacts)[0]
         delta0 = tr.equivalent_approach(hertz_approach(base, stiff))
         flux = ((fc - base) @ tr.sensitivity_villari
@@ -425,7 +426,7 @@ __all__ = [
     "ContactRates",
     "MssRecord",
     "MssSensor",
-    "contact_forces_of",
+    "contact_columns",
     "contact_rates",
     "emf_from_rates",
     "emf_spectrum",

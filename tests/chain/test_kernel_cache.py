@@ -125,5 +125,6 @@ def test_the_kernel_compiles_only_from_files_of_its_package():
             names = ([a.name for a in node.names] if isinstance(node, ast.Import)
                      else [node.module] if isinstance(node, ast.ImportFrom) else [])
             for name in names:
-                assert name.split(".")[0] in allowed or name.startswith(allowed[2]), \
-                    (path.name, name)
+                # msens.numba_cache only says where numba's cache lives (nothing compiled)
+                assert name.split(".")[0] in allowed or name.startswith(allowed[2]) \
+                    or name == "msens.numba_cache", (path.name, name)

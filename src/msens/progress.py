@@ -1,0 +1,78 @@
+"""Feedback on long stages: a heartbeat while a stage runs, and the honest time estimates.
+
+A stage that may run longer than a few seconds without a message of its own (the chain
+kernel's first compilation, a nonlinear field solve, a diagnosis candidate's fit) runs
+inside :func:`heartbeat`: a background thread logs ``<stage>: still working, 15 s`` every
+:data:`HEARTBEAT_S` seconds until it ends, so the ``msens`` command is never silent for
+long. The messages go to the ``msens`` loggers at INFO (the command shows them on stderr;
+``-q`` hides them; a library user sees nothing unless they configure logging).
+
+This module imports only the standard library: the command line reads its constants
+before it loads numpy or numba.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+#: Seconds between two heartbeat lines.
+HEARTBEAT_S = 5.0
+
+#: Wall time of the chain kernel's first compilation on an idle 2-core machine, s (numba,
+#: every variant the kernel has; measured 95 s for issue 37). It happens once per
+#: install: the compiled code is kept in the user cache folder
+#: (:func:`msens.chain.kernel.cache_guard.default_cache_dir`). A loaded machine takes
+#: several times longer.
+KERNEL_COMPILE_S = 95.0
+
+
+def duration_text(seconds: float) -> str:
+    """``seconds`` as a person says it: ``"about 40 s"``, ``"about 1.5 min"``."""
+    if seconds < 90:
+        return f"about {seconds:.0f} s"
+    return f"about {seconds / 60:.1f} min".replace(".0 min", " min")
+
+
+#: :data:`KERNEL_COMPILE_S` in words, for messages and help texts.
+COMPILE_ESTIMATE_TEXT = duration_text(KERNEL_COMPILE_S)
+
+
+@contextmanager
+def heartbeat(logger: logging.Logger, stage: str, *, every: float = HEARTBEAT_S,
+              note: str = "") -> Iterator[None]:
+    """Log ``<stage>: still working, <t> s<note>`` every ``every`` seconds while the
+    ``with`` block runs.
+
+    Parameters
+    ----------
+    logger : logging.Logger
+        Where the lines go (at INFO); nothing is started unless it is enabled for INFO.
+    stage : str
+        What is running, e.g. ``"setup paper-mss: simulating the chain"``.
+    every : float
+        Seconds between lines (> 0).
+    note : str
+        Appended to each line, e.g. ``" (compiling the chain kernel on first use)"``.
+    """
+    if not logger.isEnabledFor(logging.INFO):
+        yield
+        return
+    done = threading.Event()
+    start = time.perf_counter()
+
+    def beat() -> None:
+        while not done.wait(every):
+            logger.info("%s: still working, %.0f s%s", stage, time.perf_counter() - start,
+                        note)
+
+    thread = threading.Thread(target=beat, name="msens-heartbeat", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        done.set()
+        thread.join()

@@ -288,7 +288,20 @@ def _parser() -> argparse.ArgumentParser:
                      help="Dask distributed scheduler address (default: local processes)")
     des.add_argument("--workers", type=int, default=None,
                      help="local worker processes (default: all CPUs)")
-    for command in (run, field, comp, diag, des):
+    uq = _sub(sub, "uq")
+    uq.add_argument("study", nargs="?", help="study .toml file (default: built-in)")
+    uq.add_argument("--inputs", default=None, metavar="FILE",
+                    help="uncertain inputs (msens.uncertainty/1; default: the built-in "
+                         "file of a built-in study)")
+    uq.add_argument("--out", required=True, help="output directory")
+    uq.add_argument("--samples", type=int, default=128,
+                    help="base samples N, a power of two: N (inputs + 2) runs (default 128)")
+    uq.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    uq.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="Dask distributed scheduler address (default: local processes)")
+    uq.add_argument("--workers", type=int, default=None,
+                    help="local worker processes (default: all CPUs)")
+    for command in (run, field, comp, diag, des, uq):
         # the same choices as msens.plots.FORMATS (not imported here: matplotlib is slow)
         command.add_argument("--format", dest="fig_format", choices=("png", "pdf", "svg"),
                              default="png", help="figure file format (default png)")
@@ -514,6 +527,20 @@ def _design(args: argparse.Namespace) -> int:
     return 0
 
 
+def _uq(args: argparse.Namespace) -> int:
+    from msens import api
+    from msens.uq import run_uq
+    from msens.uq.report import format_table
+
+    study = api.load(args.study) if args.study else api.load_default()
+    result = run_uq(study, Path(args.out), inputs=args.inputs, samples=args.samples,
+                    seed=args.seed, scheduler=args.scheduler, workers=args.workers,
+                    fig_format=args.fig_format, progress=not args.quiet)
+    print(format_table(result.report))
+    print(f"\nwrote {', '.join(str(p) for p in result.written)}")
+    return 0
+
+
 def _check_waveform(args: argparse.Namespace) -> int:
     from msens.io.columns import column_map
     from msens.io.read import main_check
@@ -548,7 +575,7 @@ def _internal_error(exc: BaseException, *, debug: bool) -> int:
 
 _COMMANDS = {"check-waveform": _check_waveform, "convert": _convert, "run": _run,
              "study": _study, "field": _field, "verify": _verify, "synth": _synth,
-             "compare": _compare, "diagnose": _diagnose, "design": _design}
+             "compare": _compare, "diagnose": _diagnose, "design": _design, "uq": _uq}
 
 #: What the first line says each command does first (before its libraries load).
 _FIRST = {"check-waveform": "reading {n} file(s)", "convert": "reading {source}",

@@ -308,3 +308,49 @@ def test_diagnosis_and_run_figures_share_the_time_origin(result, tmp_path):
     finally:
         plots.close(diag)
         plots.close(run)
+
+
+def _sweep(n_turns=(400, 600, 800, 1000, 1200), lengths=(7e-3, 8e-3, 9e-3, 10e-3)):
+    """A coil sweep whose SNR is set by the turns (five clusters) with a little scatter."""
+    import itertools
+
+    from msens.design.sweep import Design
+
+    rng = np.random.default_rng(3)
+    designs, rows = [], []
+    for i, (n, length) in enumerate(itertools.product(n_turns, lengths)):
+        designs.append(Design(i, (("coil.length_m", length), ("coil.turns", n))))
+        rows.append({"status": "ok", "snr": 4e4 * (n / 400) * (1 + 0.05 * rng.random()),
+                     "precompression_N": 2.0,
+                     "bandwidth_Hz": 3e5 * 400 / n * (1 + 0.05 * rng.random()),
+                     "resonance_Hz": 2e5 * 400 / n})
+    return designs, rows
+
+
+def test_pareto_snr_in_db_clusters_named_star_open():
+    from msens.design.report import groups, parameter_text, pareto_figure
+
+    designs, rows = _sweep()
+    snr = np.array([r["snr"] for r in rows])
+    key, values = groups(designs, 20 * np.log10(snr))
+    assert key == "coil.turns" and values == [d.values[1][1] for d in designs]
+    assert parameter_text("coil.length_m", 7e-3) == "coil length = 7 mm"
+    best = int(np.argmax(snr))
+    fig = pareto_figure(designs, rows, best)
+    try:
+        ax = fig.axes[0]
+        assert ax.get_ylabel().endswith("(dB)")
+        assert ax.get_ylim()[1] < 200  # dB, not a ratio of 40 000 .. 200 000
+        points = np.concatenate([np.asarray(c.get_offsets())[:, 1] for c in ax.collections])
+        np.testing.assert_allclose(np.sort(points), np.sort(20 * np.log10(snr)))
+        legend = [t.get_text() for t in fig.legends[0].get_texts()]
+        assert [f"coil turns = {n}" for n in (400, 600, 800, 1000, 1200)] == legend[:5]
+        assert f"recommended (design {best})" in legend
+        (star,) = [ln for ln in ax.lines if ln.get_marker() == "*"]
+        (front,) = [ln for ln in ax.lines if ln.get_label() == "Pareto front"]
+        # open, and over the front's point it marks, which stays visible inside it
+        assert star.get_markerfacecolor() == "none"
+        assert star.get_zorder() > front.get_zorder()
+        assert star.get_ydata()[0] in front.get_ydata()
+    finally:
+        plots.close(fig)

@@ -202,7 +202,7 @@ def range_edges(designs: Sequence[Design], best: int) -> list[tuple[str, float, 
 
 
 #: Objectives plotted in decibels: amplitude ratios (20 log10).
-DECIBELS = {"snr": "SNR (dB): peak DAQ voltage over noise rms"}
+DECIBELS = {"snr": "SNR: peak DAQ voltage over noise rms (dB)"}
 #: Most groups a swept parameter may have to colour the designs by (see :func:`groups`).
 MAX_GROUPS = 8
 
@@ -273,23 +273,24 @@ def groups(designs: Sequence[Design], y: np.ndarray) -> tuple[str, list] | None:
     return best
 
 
-def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
-                best: int | None, objective: str = "snr",
-                verified: Sequence[int] | None = None) -> None:
+def pareto_figure(designs: Sequence[Design], rows: Sequence[dict], best: int | None,
+                  objective: str = "snr", verified: Sequence[int] | None = None):
     """The objective against precompression and against bandwidth, Pareto fronts marked
     (and the designs verified with the contact maps, positions ``verified``, ringed).
 
     The designs are coloured by the swept parameter that explains most of the objective's
     spread (:func:`groups`), named in the legend; a signal-to-noise ratio is plotted in dB.
-    The recommended design is an open star drawn over its own point, which stays visible.
-    Written in the format of ``path``'s suffix (png, pdf or svg) at :data:`msens.io.output.DPI`.
+    The recommended design (``best``, a design index) is an open star drawn over its own
+    point, which stays visible.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from msens.io.output import DPI
 
     ok = [i for i, r in enumerate(rows) if r["status"] == "ok"]
     s, y_label = plotted_objective([rows[i][objective] for i in ok], objective)
@@ -339,6 +340,19 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
         title += (f"; linear contact sources, the best {len(verified)} verified with their "
                   "own contact maps")
     fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
+                best: int | None, objective: str = "snr",
+                verified: Sequence[int] | None = None) -> None:
+    """Write :func:`pareto_figure` in the format of ``path``'s suffix (png, pdf or svg) at
+    :data:`msens.io.output.DPI`, the same bytes on every rerun."""
+    import matplotlib.pyplot as plt
+
+    from msens.io.output import DPI
+
+    fig = pareto_figure(designs, rows, best, objective, verified)
     buf = io.BytesIO()
     fmt = Path(path).suffix.lstrip(".") or "png"
     # no version or date stamp: reruns write identical bytes
@@ -352,5 +366,5 @@ def pareto_plot(designs: Sequence[Design], rows: Sequence[dict], path: Path,
 
 
 __all__ = ["DECIBELS", "LABELS", "METRICS", "column_name", "csv_text", "groups",
-           "parameter_name", "parameter_text", "pareto_mask", "pareto_plot",
+           "parameter_name", "parameter_text", "pareto_figure", "pareto_mask", "pareto_plot",
            "plotted_objective", "range_edges", "ranked", "recommend", "verification"]

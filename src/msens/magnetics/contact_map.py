@@ -510,10 +510,13 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     began = time.perf_counter()
     tasks = [(geometry, c, coils, options, store, start) for c in contacts]
     per_contact: dict[int, tuple[ContactMap, ...]] = {}
-    for i, maps in run_tasks(_contact_task, tasks, workers=workers):
-        per_contact[contacts[i]] = maps
-        _log.info("contact map %d/%d (contact %d) after %.0f s", len(per_contact),
-                  len(contacts), contacts[i], time.perf_counter() - began)
+    from msens.progress import heartbeat
+
+    with heartbeat(_log, f"contact maps {key}"):  # each map takes a minute or more
+        for i, maps in run_tasks(_contact_task, tasks, workers=workers):
+            per_contact[contacts[i]] = maps
+            _log.info("contact map %d/%d (contact %d) after %.0f s", len(per_contact),
+                      len(contacts), contacts[i], time.perf_counter() - began)
     tables = {coil.particle: [per_contact[c][k] for c in contacts]
               for k, coil in enumerate(coils)}
     data = {"key": key, "version": MAP_VERSION, "transducer": transducer_key,

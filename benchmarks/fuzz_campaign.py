@@ -1,4 +1,5 @@
-"""Fuzz campaign over the msens commands: hostile study files, waveform files and sweep specs.
+"""Fuzz campaign over the msens commands: hostile study files, waveform files, sweep specs,
+command-line arguments and Python API calls.
 
 Each case runs ``msens.cli.main`` in a forked child (the parent has imported msens and
 compiled the chain kernel once) with a wall-clock limit and a memory limit; the outcome is
@@ -8,7 +9,16 @@ classified as
 - ``input``: exit 2 with one ``msens: error:`` line,
 - ``internal``: exit 1 with msens's internal-error line (a bug),
 - ``traceback``: an exception escaped ``main`` (a bug),
-- ``timeout``: over the time limit; ``crash``: the child died (signal, memory).
+- ``timeout``: over the time limit; ``crash``: the child died (signal, memory);
+- ``unresolved-ok``: exit 0 from ``msens run`` whose summary reports a TOF or AR that its
+  record cannot hold (a pulse narrower than two samples, a TOF that is not positive, or a
+  missing feature without a note saying why): confident nonsense (issue 38).
+
+Besides mutated studies, waveform files and sweeps, the campaign draws hostile command-line
+arguments (``--scheduler``, ``--workers``, ``--out``, ``--shots``, ``--columns``...) and
+Python API calls (``msens.api.load(None)``, ``synth(study, "x.csv", shots=2.5)``...), and
+studies mutated only in the keys that decide whether a record resolves the pulse (sample
+rates, record length, bead count, drop height, damping).
 
 The cases are random but seeded (``--seed``), so a campaign is reproducible. Usage::
 
@@ -69,7 +79,7 @@ def run_case(argv: list[str], timeout: float, mem_gb: float) -> dict:
             sys.stdout, sys.stderr = out, err
             tb = ""
             try:
-                code = msens.cli.main(argv)
+                code = msens.cli.main(argv) if isinstance(argv, list) else _api_case(argv)
             except SystemExit as exc:
                 code = exc.code if isinstance(exc.code, int) else 1
             except BaseException:
@@ -106,10 +116,14 @@ def run_case(argv: list[str], timeout: float, mem_gb: float) -> dict:
         return {"outcome": "crash", "seconds": seconds, "cpu_seconds": cpu, "status": status}
     err = res["stderr"]
     errors = [line for line in err.splitlines() if line.startswith("msens: error:")]
+    nonsense = _unresolved(argv) if res["code"] == 0 and not res["traceback"] else None
     if res["traceback"]:
         outcome = "traceback"
     elif "msens: internal error" in err:
         outcome = "internal"
+    elif res["code"] == 0 and nonsense:
+        outcome = "unresolved-ok"
+        errors = [nonsense]
     elif res["code"] == 0:
         outcome = "ok"
     elif res["code"] == 2 and len(errors) == 1 and "Traceback" not in err:
@@ -119,6 +133,49 @@ def run_case(argv: list[str], timeout: float, mem_gb: float) -> dict:
     return {"outcome": outcome, "seconds": seconds, "cpu_seconds": cpu, "code": res["code"],
             "message": errors[0] if errors else err.strip().splitlines()[-1:] and
             err.strip().splitlines()[-1], "traceback": res["traceback"]}
+
+
+def _api_case(expr: str) -> int:
+    """Evaluate a Python API call (an expression over ``api``, ``study``, ``work``, ``Path``)
+    in the child: 0 if it returns, 2 with one ``msens: error:`` line on InputError; any
+    other exception propagates (a traceback: a bug)."""
+    from msens import api
+    from msens.errors import InputError
+
+    env = {"api": api, "Path": Path, "work": Path(os.environ["MSENS_FUZZ_WORK"]),
+           "math": math}
+    env["study"] = api.load(env["work"] / "tiny.toml")
+    try:
+        eval(expr, env)  # the campaign's own generated expressions
+    except InputError as exc:
+        print(f"msens: error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def _unresolved(argv) -> str | None:
+    """Why an exit-0 ``msens run`` reports features its record cannot hold, or None."""
+    if not isinstance(argv, list) or not argv or argv[0] != "run" or "--out" not in argv:
+        return None
+    summary = Path(argv[argv.index("--out") + 1]) / "summary.json"
+    try:
+        rows = json.loads(summary.read_text())["rows"]
+        text = Path(argv[1]).read_text()
+        rate = tomllib.loads(text).get("simulation", {}).get("sample_rate_hz")
+    except (OSError, ValueError, KeyError, IndexError, TypeError):
+        return None
+    for r in rows:
+        tof, ar, width = r.get("tof_us"), r.get("ar"), r.get("width_us")
+        if tof is None or ar is None:
+            if not r.get("note"):
+                return f"{r.get('sensor')}@{r.get('particle')}: TOF/AR missing without a note"
+            continue
+        if not tof > 0:
+            return f"{r.get('sensor')}@{r.get('particle')}: TOF {tof} us is not positive"
+        if isinstance(rate, int | float) and width is not None and width * 1e-6 * rate < 2:
+            return (f"{r.get('sensor')}@{r.get('particle')}: pulse width {width} us spans "
+                    f"fewer than two samples at {rate} Hz")
+    return None
 
 
 # --------------------------------------------------------------------------- mutations
@@ -191,7 +248,8 @@ def damage_bytes(data: bytes, rng: random.Random, text: bool) -> tuple[bytes, li
     for _ in range(rng.choice([1, 1, 2, 4])):
         if not b:
             break
-        kinds = ["byte", "cut", "line", "number", "header"] if text else ["byte", "cut", "zero"]
+        kinds = (["byte", "cut", "line", "number", "header", "cr"] if text
+                 else ["byte", "cut", "zero"])
         kind = rng.choice(kinds)
         at = rng.randrange(len(b))
         if kind == "byte":
@@ -200,6 +258,8 @@ def damage_bytes(data: bytes, rng: random.Random, text: bool) -> tuple[bytes, li
             del b[at:]
         elif kind == "zero":
             b[at:at + 64] = bytes(len(b[at:at + 64]))
+        elif kind == "cr":  # classic Mac line endings: the whole file is one "line"
+            b = bytearray(bytes(b).replace(b"\r\n", b"\n").replace(b"\n", b"\r"))
         elif kind == "line":
             lines = bytes(b).split(b"\n")
             i = rng.randrange(len(lines))
@@ -258,6 +318,112 @@ def transform_record(waveform, rng: random.Random):
     return Waveform(t, d, ch, waveform.metadata), note
 
 
+#: Scheduler addresses: malformed, other protocols, unreachable.
+ADDRESSES = ["garbage", "", " ", "tcp://", "tcp://:8786", "inproc://x", "tls://127.0.0.1:8786",
+             "ucx://127.0.0.1:1", "127.0.0.1", "tcp://127.0.0.1:1", "tcp://127.0.0.1:99999",
+             "tcp://[::1]:1", "localhost:0", "x" * 3000, "tcp://a b:1", "http://example.org",
+             "tcp://127.0.0.1:-1", "\u00e9t\u00e9:1"]
+#: Output paths: empty, folders, devices, unwritable places, very long names, bad suffixes.
+OUTS = ["", ".", "/", "/proc/self/msens-fuzz.csv", "/proc/x/y.csv", "/dev/null", "/dev/full",
+        "/sys/msens.csv", "x.txt", "noext", "a/" * 200 + "x.csv", "y" * 300 + ".csv",
+        "/mnt/msens-full/x.csv", "/mnt/msens-ro/x.csv", "~nobody/x.csv"]
+NUMBERS = ["0", "-3", "2.5", "1e9", "nan", "inf", "-0", "10001", "x", "", "999999999999999999999"]
+
+
+def cli_case(rng: random.Random, work: Path, i: int) -> tuple[str, list[str]]:
+    """A command line with one or two hostile arguments."""
+    tiny, mss = str(work / "tiny.toml"), str(work / "tiny-mss.toml")
+    sweep, record = str(work / "sweep-coil.toml"), str(work / "record.csv")
+    out = str(work / f"a{i}")
+    command = rng.choice(["run", "design", "synth", "convert", "check-waveform", "compare",
+                          "diagnose", "field"])
+    if command == "run":
+        argv = ["run", tiny, "--out", out, "--no-figures"]
+        extra = rng.choice([["--scheduler", rng.choice(ADDRESSES)], ["--out", rng.choice(OUTS)],
+                            ["--format", rng.choice(["png", "jpg", "", "PDF"])]])
+    elif command == "design":
+        argv = ["design", mss, "--sweep", sweep, "--out", out, "-q"]
+        extra = rng.choice([["--scheduler", rng.choice(ADDRESSES)],
+                            ["--workers", rng.choice(NUMBERS)], ["--out", rng.choice(OUTS)],
+                            ["--sweep", rng.choice(["/dev/zero", "/tmp", "", record])]])
+    elif command == "synth":
+        argv = ["synth", tiny, "--out", str(work / f"syn{i}.csv")]
+        extra = rng.choice([["--out", rng.choice(OUTS)], ["--shots", rng.choice(NUMBERS)],
+                            ["--noise", rng.choice(NUMBERS)], ["--seed", rng.choice(NUMBERS)],
+                            ["--setup", rng.choice(["", "nope", "x" * 500])]])
+    elif command == "convert":
+        argv = ["convert", record, str(work / f"conv{i}.npz")]
+        extra = []
+        argv[2] = rng.choice([*OUTS, str(work / f"conv{i}.tdms")])
+    elif command == "check-waveform":
+        argv = ["check-waveform", rng.choice([record, "/dev/zero", "/proc/self/status", "/tmp",
+                                              "", str(work / "missing.csv")])]
+        extra = rng.choice([[], ["--columns", rng.choice(
+            ["", "time", "x" * 5000, "time=Time:s," * 400, "time=time_s,bead@1e30=bead@10"])]])
+    elif command == "compare":
+        argv = ["compare", tiny, record, "--out", out]
+        extra = rng.choice([["--out", rng.choice(OUTS)], ["--format", "jpg"]])
+    elif command == "diagnose":
+        argv = ["diagnose", record, "--study", tiny, "--out", out]
+        extra = rng.choice([["--passes", rng.choice(NUMBERS)], ["--reference", "nope"],
+                            ["--out", rng.choice(OUTS)]])
+    else:
+        argv = ["field", tiny, "--out", out]
+        extra = []
+    argv += extra
+    return f"{command} {' '.join(a[:40] for a in extra)}", argv
+
+
+def api_case(rng: random.Random) -> tuple[str, str]:
+    """A Python API call with a hostile argument (an expression for :func:`_api_case`)."""
+    bad = rng.choice(["None", "3", "2.5", "''", "'x.csv'", "[]", "{}", "math.nan", "True",
+                      "b'x'", "Path('/dev/zero')", "Path('/proc/self/x.csv')", "-1", "10**30",
+                      "'x' * 5000", "object()"])
+    calls = [f"api.load({bad})", f"api.synth(study, {bad})",
+             f"api.synth(study, work / 'api.csv', shots={bad})",
+             f"api.synth(study, work / 'api.csv', noise={bad})",
+             f"api.synth(study, work / 'api.csv', seed={bad})",
+             f"api.synth(study, work / 'api.csv', setup={bad})",
+             f"api.synth({bad}, work / 'api.csv')", f"api.run({bad})",
+             f"api.run(study, scheduler={bad})",
+             f"api.design(study, work / 'sweep-coil.toml', work / 'api-d', workers={bad})",
+             f"api.design(study, work / 'sweep-coil.toml', work / 'api-d', scheduler={bad})",
+             f"api.design(study, {bad}, work / 'api-d')",
+             f"api.replace(study, {{'chain.beads': {bad}}})",
+             f"api.compare(study, {bad}, work / 'api-c')",
+             f"__import__('msens.field.geometry').field.geometry.BeadChain(contact_layer={bad})",
+             f"__import__('msens.field.geometry').field.geometry.BeadChain(count={bad})"]
+    expr = rng.choice(calls)
+    # the good value of a call that only fails by its hostile argument would run a study:
+    # keep those that are plainly valid out (a tiny run is fine, but not a design)
+    return expr.split("(")[0], expr
+
+
+#: Keys deciding whether a record resolves the pulse, and hostile values for them.
+RESOLVE_KEYS = {
+    ("simulation", "sample_rate_hz"): [1e3, 1e4, 5e4, 1e5, 2e5, 5e5, 1e6],
+    ("simulation", "t_end_s"): [2e-5, 5e-5, 1e-4, 1.5e-4, 2e-4, 4e-4, 1e-3, 0.1, 1.0],
+    ("chain", "beads"): [2, 3, 5, 40, 100, 300],
+    ("striker", "drop_height_m"): [1e-6, 1e-4, 0.5, 2.0, 3.0, 10.0],
+    ("chain", "gamma_contact_kg_per_s"): [0.0, 20.0, 60.0, 200.0, 1000.0],
+    ("electronics", "sample_rate_hz"): [1e3, 1e5, 1e6],
+}
+
+
+def resolve_case(doc: dict, rng: random.Random) -> tuple[dict, list[str]]:
+    """``doc`` with one to three resolvability keys set to hostile values."""
+    doc = copy.deepcopy(doc)
+    notes = []
+    for key in rng.sample(sorted(RESOLVE_KEYS), rng.choice([1, 1, 2, 3])):
+        value = rng.choice(RESOLVE_KEYS[key])
+        doc.setdefault(key[0], {})[key[1]] = value
+        notes.append(f"{key[0]}.{key[1]}={value:g}")
+    if doc["simulation"]["t_end_s"] * doc["simulation"]["sample_rate_hz"] > 2e6:
+        doc["simulation"]["t_end_s"] = 2e6 / doc["simulation"]["sample_rate_hz"]
+        notes.append("t_end_s capped at 2e6 samples")
+    return doc, notes
+
+
 # --------------------------------------------------------------------------- the campaign
 
 def cases(args: argparse.Namespace, work: Path):
@@ -283,19 +449,37 @@ def cases(args: argparse.Namespace, work: Path):
     design_study = ROOT / "tests" / "data" / "tiny-mss.toml"
     tiny = work / "tiny.toml"
     tiny.write_text(TWENTY)
+    (work / "tiny-mss.toml").write_text(design_study.read_text())
+    (work / "sweep-coil.toml").write_text(dumps(sweeps["sweep-coil"]))
+    os.environ["MSENS_FUZZ_WORK"] = str(work)
     record = api.synth(api.load(tiny), work / "record.csv", shots=2, noise=0.01, seed=5)
     good = read_waveform(record)
     for suffix in (".npz", ".tdms"):
         write_waveform(good, work / f"record{suffix}")
     n = args.cases
-    plan = (["study:paper-mss"] * int(0.17 * n) + ["study:paper-table2"] * int(0.13 * n)
-            + ["study:tiny"] * int(0.25 * n) + ["wave:csv"] * int(0.12 * n)
-            + ["wave:npz"] * int(0.05 * n) + ["wave:tdms"] * int(0.05 * n)
-            + ["wave:record"] * int(0.10 * n) + ["sweep"] * int(0.13 * n))
+    plan = (["study:paper-mss"] * int(0.08 * n) + ["study:paper-table2"] * int(0.08 * n)
+            + ["study:tiny"] * int(0.17 * n) + ["resolve"] * int(0.10 * n)
+            + ["wave:csv"] * int(0.10 * n) + ["wave:npz"] * int(0.04 * n)
+            + ["wave:tdms"] * int(0.04 * n) + ["wave:record"] * int(0.07 * n)
+            + ["sweep"] * int(0.10 * n) + ["cli"] * int(0.12 * n) + ["api"] * int(0.10 * n))
     plan += ["study:tiny"] * (n - len(plan))
     rng.shuffle(plan)
     for i, what in enumerate(plan):
         out = work / f"out{i}"
+        if what == "cli":
+            note, argv = cli_case(rng, work, i)
+            yield f"cli:{argv[0]}", note, argv
+            continue
+        if what == "api":
+            name, expr = api_case(rng)
+            yield f"api:{name}", expr, expr
+            continue
+        if what == "resolve":
+            doc, notes = resolve_case(shipped["tiny"], rng)
+            path = work / f"rs{i}.toml"
+            path.write_text(dumps(doc))
+            yield what, "; ".join(notes), ["run", str(path), "--out", str(out), "--no-figures"]
+            continue
         if what.startswith("study:"):
             name = what.split(":")[1]
             doc, notes = mutate(shipped[name], rng)
@@ -369,8 +553,10 @@ def main() -> int:
     p.add_argument("--stop-at", type=float, default=None,
                    help="stop (and report) after this many seconds")
     args = p.parse_args()
-    work = Path(args.work)
+    work = Path(args.work).resolve()
     work.mkdir(parents=True, exist_ok=True)
+    args.out = str(Path(args.out).resolve())
+    os.chdir(work)  # relative hostile outputs ("noext", "x.txt") land in the work folder
     os.environ.setdefault("MPLBACKEND", "Agg")
     import logging
 

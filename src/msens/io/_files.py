@@ -16,6 +16,22 @@ MAX_DATA_BYTES = 1 << 30
 MAX_TEXT_BYTES = 4 << 20
 
 
+def check_path(value: object, what: str = "file") -> Path:
+    """``value`` as a :class:`~pathlib.Path` if it is a non-empty ``str`` or path-like,
+    else InputError naming what was given (``compare(study, 3)``, ``load(None)``)."""
+    if not isinstance(value, str | os.PathLike):
+        raise InputError(f"{what} must be a path (str or pathlib.Path), got "
+                         f"{type(value).__name__} {shorten(value)}")
+    text = os.fspath(value)
+    if not isinstance(text, str):
+        raise InputError(f"{what} must be a text path, got {shorten(text)}")
+    if text.strip() == "":
+        raise InputError(f"{what} path is empty")
+    if "\0" in text:
+        raise InputError(f"{what} path {shorten(text)} holds a NUL character")
+    return Path(text)
+
+
 def read_bytes(path: str | os.PathLike[str], *, limit: int = MAX_DATA_BYTES,
                what: str = "file") -> bytes:
     """Whole content of the regular file ``path``.
@@ -38,12 +54,7 @@ def read_bytes(path: str | os.PathLike[str], *, limit: int = MAX_DATA_BYTES,
     InputError
         Missing, not a regular file, too large, or unreadable (naming the path and reason).
     """
-    if not isinstance(path, str | os.PathLike):
-        raise InputError(f"{what} must be a path (str or pathlib.Path), got "
-                         f"{type(path).__name__} {shorten(path)}")
-    p = Path(path)
-    if str(path) == "":
-        raise InputError(f"{what} path is empty")
+    p = check_path(path, what)
     if not p.exists():
         raise InputError(f"{p}: {what} not found")
     if not p.is_file():

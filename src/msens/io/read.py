@@ -20,6 +20,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from msens.errors import InputError
+from msens.io._files import check_path
 from msens.io.columns import ColumnMap
 from msens.io.csv import read_csv, write_csv
 from msens.io.mapped import MappedFile, read_mapped
@@ -75,9 +76,9 @@ def read_waveform(path: str | os.PathLike[str],
     """
     if isinstance(path, MappedFile):
         return read_mapped(path.path, path.columns if columns is None else columns)
+    p = check_path(path, "waveform file")
     if columns is not None:
-        return read_mapped(path, columns)
-    p = Path(path)
+        return read_mapped(p, columns)
     return _READERS[_suffix(p)](p)
 
 
@@ -105,7 +106,7 @@ def write_waveform(
         For an unknown suffix, a missing folder, or an existing file without
         ``overwrite``.
     """
-    p = Path(path)
+    p = check_path(path, "waveform file")
     _WRITERS[_suffix(p)](waveform, p, overwrite=overwrite)
     return p
 

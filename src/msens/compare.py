@@ -430,9 +430,7 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
             entry["record"] = "integrated DAQ voltage, V s"
         channels.append(entry)
     out = {"setup": setup.setup.name, "shots": len(shots),
-           "model_processing": {"lowpass_hz": FEATURE_CUTOFF_HZ,
-                                "description": MODEL_PROCESSING},
-           "channels": channels}
+           "model_processing": model_processing(), "channels": channels}
     parts = sorted(s.sensor.particle for s in setup.sensors)
     if len(parts) >= 2:
         d = centre_distance(setup.chain.length, parts[0], parts[-1])
@@ -450,6 +448,12 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
                                              "std": float(np.std(speeds, ddof=1))
                                              if len(speeds) > 1 else 0.0}}
     return out
+
+
+def model_processing() -> dict:
+    """What a workflow that reads the model's features as measured ones does to them beyond
+    ``msens run`` (the ``model_processing`` of ``compare.json`` and ``diagnosis.json``)."""
+    return {"lowpass_hz": FEATURE_CUTOFF_HZ, "description": MODEL_PROCESSING}
 
 
 def processing_line(report: dict) -> str:

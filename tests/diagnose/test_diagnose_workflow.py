@@ -137,6 +137,9 @@ def test_disagreement_sits_in_the_reflected_pulse_for_a_wall_effect(bench):
     speed = d.disagreement["features"]["speed_m_per_s"]
     assert abs(speed["residual"]) < 0.01 * speed["model"]
     assert d.effect == "wall_stiffness"
+    # the model's features are read as the measured ones: the output says how
+    assert d.disagreement["model_processing"]["lowpass_hz"] == 250e3
+    assert "msens run" in d.disagreement["model_processing"]["description"]
 
 
 def test_study_not_matching_the_sensors_is_an_input_error(bench):

@@ -59,7 +59,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from msens.calibrate import DissipationFit
-from msens.compare import setup_spec_channels
+from msens.compare import model_processing, setup_spec_channels
 from msens.config.schema import SetupSpec
 from msens.config.study import Study
 from msens.diagnose.candidates import (
@@ -194,7 +194,8 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     ens = objective.ensemble
     names = [f"{s.kind.value}@{s.particle}" for s in setup.sensors]
     disagreement = {"where": worst_window(windows), "windows": windows,
-                    "features": feature_residuals(base_result, waveform)}
+                    "features": feature_residuals(base_result, waveform),
+                    "model_processing": model_processing()}
     return Diagnosis(
         mode="waveform", setup=setup.name, effect=winner.effect if winner else "none",
         parameters=dict(winner.parameters) if winner else {},
@@ -302,7 +303,7 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
         added=tuple((k, dict(v)) for k, v in added),
         refit=(), gamma_contact=gc, gamma_wall=gw,
         disagreement={"where": f"{worst['feature']} at {worst['channel']}",
-                      "features": table},
+                      "features": table, "model_processing": model_processing()},
         simulations=predictor.simulations, elapsed_s=time.perf_counter() - start,
         verdict=verdict(float(objective.rss(records1).sum()), n, rows, float("inf")),
         noise={"source": "the published shot-to-shot std of each feature"},

@@ -283,7 +283,9 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
     """
     from msens import budget
 
-    budget.check(study)  # before any work: refuse what would exhaust memory or time
+    _log.info("study %s: checking its memory and time budget", study.name)
+    with heartbeat(_log, f"study {study.name}: checking its budget"):
+        budget.check(study)  # before any work: refuse what would exhaust memory or time
     t = output_times(study)
     fit = fit if fit is not None else calibrate_dissipation(study, t)
     gc = fit.gamma_c if fit is not None else study.chain.gamma_contact

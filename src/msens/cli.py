@@ -366,7 +366,10 @@ def _study_path(name: str | None) -> Path:
 def _load_study(name: str | None, sets: Sequence[str] = ()):
     """Read a study (a file or a built-in name) and apply ``--set`` changes."""
     changes = parse_sets(sets)  # checked before the (slower) study import
-    from msens.config.study import load_study
+    from msens.progress import heartbeat
+
+    with heartbeat(_log, "loading the study reader"):  # imports numpy, scipy, numba
+        from msens.config.study import load_study
 
     study = load_study(_study_path(name))
     if changes:
@@ -390,6 +393,15 @@ def _output_file(value: object, option: str, suffixes: tuple[str, ...] | None = 
     return path
 
 
+def _api():
+    """:mod:`msens.api`, imported with a heartbeat (seconds on a busy machine)."""
+    from msens.progress import heartbeat
+
+    with heartbeat(_log, "loading the model code"):
+        from msens import api
+    return api
+
+
 def _out(args: argparse.Namespace, study, command: str) -> Path:
     """``--out``, or its default: ``out/<study>/`` for run, else ``out/<study>-<command>/``."""
     if args.out is not None:
@@ -403,7 +415,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.out is not None:
         preflight.output_dir(args.out)
     study = _load_study(args.study, args.sets)
-    from msens import api
+    api = _api()
 
     out = _out(args, study, "run")
     target = api.prepare_outputs(out, figures=not args.no_figures, fig_format=args.fig_format)
@@ -438,7 +450,7 @@ def _field(args: argparse.Namespace) -> int:
     if args.out is not None:
         preflight.output_dir(args.out)
     study = _load_study(args.study, args.sets)
-    from msens import api
+    api = _api()
 
     report = api.field(study, _out(args, study, "field"), fig_format=args.fig_format)
     print(report)
@@ -458,7 +470,7 @@ def _synth(args: argparse.Namespace) -> int:
     if args.out is not None:  # the suffix and the file, before any work
         _output_file(args.out, "--out", overwrite=args.overwrite)
     study = _load_study(args.study, args.sets)
-    from msens import api
+    api = _api()
 
     out = Path(args.out) if args.out else Path("out") / f"{study.name}-synth.csv"
     _output_file(out, "--out", overwrite=args.overwrite)
@@ -484,7 +496,7 @@ def _compare(args: argparse.Namespace) -> int:
         preflight.output_dir(args.out)
     data = _data(args.data, args.columns)
     study = _load_study(args.study, args.sets)
-    from msens import api
+    api = _api()
 
     report, written = api.compare(study, data, _out(args, study, "compare"),
                                   fig_format=args.fig_format)
@@ -502,7 +514,7 @@ def _diagnose(args: argparse.Namespace) -> int:
         preflight.output_dir(args.out)
     data = _data(args.data, args.columns) if args.data else None
     study = _load_study(args.study, args.sets)
-    from msens import api
+    api = _api()
 
     report, written = api.diagnose(study, data, _out(args, study, "diagnose"),
                                    reference=args.reference, passes=args.passes,
@@ -518,7 +530,7 @@ def _design(args: argparse.Namespace) -> int:
     if args.out is not None:
         preflight.output_dir(args.out)
     study = _load_study(args.study, args.sets)
-    from msens import api
+    api = _api()
 
     result = api.design(study, Path(args.sweep), _out(args, study, "design"),
                         scheduler=args.scheduler, workers=args.workers,
@@ -528,7 +540,7 @@ def _design(args: argparse.Namespace) -> int:
 
 
 def _uq(args: argparse.Namespace) -> int:
-    from msens import api
+    api = _api()
     from msens.uq import run_uq
     from msens.uq.report import format_table
 

@@ -353,17 +353,24 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, store: Store | Non
     if data is not None:
         return report_from_json(data)
     freqs = [float(f) for f in frequencies]
-    if scheduler is None:
-        rep = _report_task((geometry, options, store, freqs, steel, magnets, grid, start))
-    else:
-        from msens.parallel import run_tasks
+    import logging
 
-        chunks = [c for c in np.array_split(np.asarray(freqs[1:]), _workers(scheduler))
-                  if c.size]
-        tasks = [(geometry, options, store, [0.0, *c.tolist()], steel, magnets, grid, None)
-                 for c in chunks]
-        parts = dict(run_tasks(_report_task, tasks, scheduler=scheduler))
-        rep = join_reports([parts[i] for i in range(len(tasks))])
+    from msens.progress import heartbeat
+
+    log = logging.getLogger(__name__)
+    log.info("eddy-current responses (cached: no): %d frequencies", len(freqs))
+    with heartbeat(log, "eddy-current responses"):  # minutes of complex solves
+        if scheduler is None:
+            rep = _report_task((geometry, options, store, freqs, steel, magnets, grid, start))
+        else:
+            from msens.parallel import run_tasks
+
+            chunks = [c for c in np.array_split(np.asarray(freqs[1:]), _workers(scheduler))
+                      if c.size]
+            tasks = [(geometry, options, store, [0.0, *c.tolist()], steel, magnets, grid,
+                      None) for c in chunks]
+            parts = dict(run_tasks(_report_task, tasks, scheduler=scheduler))
+            rep = join_reports([parts[i] for i in range(len(tasks))])
     rep.details["transducer_key"] = tkey
     store.write_json(name, report_to_json(rep), optional=True)
     return rep

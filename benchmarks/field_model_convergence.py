@@ -49,7 +49,7 @@ def run(geometry: SensorGeometry, mesh_dir: str, options: MeshOptions | None = N
     t2 = time.perf_counter()
     beads = {b.particle: b.B_center_T[1] for b in sm.bead_fields(sol, geometry)}
     forces = {(c.upper, c.lower): c.magnetic_force_N
-              for c in sm.contact_forces(sol, geometry, SENSOR_CONTACTS)}
+              for c in sm.magnetic_contact_forces(sol, geometry, SENSOR_CONTACTS)}
     return {"Bz": [beads[p] for p in SENSOR_BEADS],
             "force": [forces[c] for c in SENSOR_CONTACTS],
             "mean_force_13": float(np.mean([forces[c] for c in FOUR_13])),

@@ -33,7 +33,7 @@ def runs(tmp_path_factory):
         axi, path = sm.load_mesh(g, store=Store.at(mesh_dir))
         sol = sm.solve(sm.bias_problem(g, axi))
         bz = np.array([b.B_center_T[1] for b in sm.bead_fields(sol, g)])
-        force = np.array([c.magnetic_force_N for c in sm.contact_forces(sol, g)])
+        force = np.array([c.magnetic_force_N for c in sm.magnetic_contact_forces(sol, g)])
         out[name] = (bz, force, path, sol)
     return out
 

@@ -26,7 +26,7 @@ def quantities(geometry, mesh_dir, options=None):
     sol = sm.solve(sm.bias_problem(geometry, axi), max_iter=40)
     bz = np.array([b.B_center_T[1] for b in sm.bead_fields(sol, geometry)
                    if 11 <= b.particle <= 20])
-    f = np.array([c.magnetic_force_N for c in sm.contact_forces(sol, geometry, CONTACTS)])
+    f = np.array([c.magnetic_force_N for c in sm.magnetic_contact_forces(sol, geometry, CONTACTS)])
     return bz, f
 
 

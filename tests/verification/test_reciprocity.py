@@ -43,7 +43,7 @@ from msens.magnetics.approach import (
 from msens.magnetics.mechanisms import adjoint_check, coil_linkage, mechanism_potentials
 from msens.magnetics.potentials import bias_residual
 from msens.magnetics.steel_law import law_for_steel
-from msens.magnetics.villari import coil_flux_linkage, nonlinear_flux_change
+from msens.magnetics.villari import dof_flux_linkage, nonlinear_flux_change
 from msens.store import Store
 
 COARSE = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8, wedge_factor=4.0)
@@ -94,8 +94,8 @@ def test_direct_solution_flux_is_linear_in_source(small):
     coil = g.sensors[0].coil
     el, mu0_dm = model.villari_sources[3]
     op = model.operator
-    one = coil_flux_linkage(sol, op.solve_magnetisation(el, mu0_dm), coil)
-    three = coil_flux_linkage(sol, op.solve_magnetisation(el, 3.0 * mu0_dm), coil)
+    one = dof_flux_linkage(sol, op.solve_magnetisation(el, mu0_dm), coil)
+    three = dof_flux_linkage(sol, op.solve_magnetisation(el, 3.0 * mu0_dm), coil)
     assert three == pytest.approx(3.0 * one, rel=1e-12)
 
 
@@ -130,7 +130,7 @@ def test_approach_against_nonlinear_resolve(small):
         resolve = approach_flux_change(sol, g, c, coil, 1e-9)
         assert resolve == pytest.approx(link[nb + k], rel=1e-5)
     # pressing the beads together draws more bias flux through the coil: |Λ| grows
-    lam = coil_flux_linkage(sol, sol.a, coil)
+    lam = dof_flux_linkage(sol, sol.a, coil)
     near = [int(np.flatnonzero(model.contacts == c)[0]) for c in (12, 13)]
     assert np.all(np.sign(link[nb + np.array(near)]) == np.sign(lam))
 
@@ -149,7 +149,7 @@ def test_approach_is_linear_over_the_pulse(small, load):
     link = coil_linkage(model, coil)
     stiffness = hertz_stiffness(g.beads.diameter / 2)
     delta = (load / stiffness) ** (2 / 3) - (g.beads.contact_load / stiffness) ** (2 / 3)
-    lam0 = coil_flux_linkage(sol, sol.a, coil)
+    lam0 = dof_flux_linkage(sol, sol.a, coil)
 
     def linear(c):
         return link[model.particles.size + int(np.flatnonzero(model.contacts == c)[0])]

@@ -272,7 +272,7 @@ def virtual_work_force(sol: FieldSolution, bodies: Sequence[str], delta: float =
     return -(energies[0] - energies[1]) / (2 * delta)
 
 
-def flux_linkage(sol: FieldSolution, coil_region: str, coil: Coil) -> float:
+def coil_flux_linkage(sol: FieldSolution, coil_region: str, coil: Coil) -> float:
     """Λ = (N/S) ∫_coil 2π r A dS, Wb."""
     el = sol.problem.mesh.subdomains[coil_region]
     q = sol.disc.quad
@@ -410,7 +410,7 @@ def bead_fields(sol: FieldSolution, geometry: SensorGeometry) -> tuple[BeadField
     return tuple(out)
 
 
-def contact_forces(sol: FieldSolution, geometry: SensorGeometry,
+def magnetic_contact_forces(sol: FieldSolution, geometry: SensorGeometry,
                    contacts: Sequence[tuple[int, int]] | None = None
                    ) -> tuple[ContactForce, ...]:
     """Magnetic static compression at each (upper, lower) contact (default: all modelled)."""
@@ -439,8 +439,8 @@ def coil_results(sol: FieldSolution, geometry: SensorGeometry) -> tuple[CoilResu
         air_sol = solve(MagnetostaticProblem(axi, air))
         out.append(CoilResult(
             particle=c.particle, turns=c.turns, resistance_ohm=coil_resistance(c),
-            inductance_H=flux_linkage(inc, name, c),
-            air_core_inductance_H=flux_linkage(air_sol, name, c),
+            inductance_H=coil_flux_linkage(inc, name, c),
+            air_core_inductance_H=coil_flux_linkage(air_sol, name, c),
             inner_radius_m=c.inner_radius, outer_radius_m=c.outer_radius, length_m=c.length))
     return tuple(out)
 
@@ -490,7 +490,7 @@ def run_field_model(geometry: SensorGeometry, *,
             for u in geometry.iter_units())
         t3 = time.perf_counter()
         beads = bead_fields(sol, geometry)
-        contacts = contact_forces(sol, geometry)
+        contacts = magnetic_contact_forces(sol, geometry)
         z, bz = axis_profile(sol, geometry)
     t4 = time.perf_counter()
     report = FieldReport(
@@ -504,9 +504,25 @@ def run_field_model(geometry: SensorGeometry, *,
 
 
 __all__ = [
-    "MAGNET_NOTE", "BeadField", "CoilResult", "ContactForce", "FieldReport", "axis_profile",
-    "bead_fields", "bias_problem", "coil_current_density", "coil_resistance", "coil_results",
-    "contact_forces", "flux_density_at", "flux_linkage",
-    "group_force", "load_mesh",
-    "regions_for", "run_field_model", "shell_function", "total_energy", "virtual_work_force",
+    "MAGNET_NOTE",
+    "BeadField",
+    "CoilResult",
+    "ContactForce",
+    "FieldReport",
+    "axis_profile",
+    "bead_fields",
+    "bias_problem",
+    "coil_current_density",
+    "coil_flux_linkage",
+    "coil_resistance",
+    "coil_results",
+    "flux_density_at",
+    "group_force",
+    "load_mesh",
+    "magnetic_contact_forces",
+    "regions_for",
+    "run_field_model",
+    "shell_function",
+    "total_energy",
+    "virtual_work_force",
 ]

@@ -30,7 +30,7 @@ from msens.field.parts import Coil
 from msens.field.sensor_model import shell_function
 from msens.field.solve import FieldSolution
 from msens.magnetics.potentials import bias_residual, nonlinear_resolve
-from msens.magnetics.villari import coil_flux_linkage
+from msens.magnetics.villari import dof_flux_linkage
 from msens.mechanics.hertz import hertz_approach, hertz_sphere_sphere
 from msens.params.materials import BEAD_STEEL, ElasticMaterial
 
@@ -158,7 +158,7 @@ def morphed_flux_linkage(sol: FieldSolution, geometry: SensorGeometry,
         p[1] -= delta * phi
     a = nonlinear_resolve(sol, _morphed_quadrature(sol, p), tol=tol, max_iter=max_iter)
     # the coil does not move: its quadrature on the morphed mesh is the original one
-    return coil_flux_linkage(sol, a, coil)
+    return dof_flux_linkage(sol, a, coil)
 
 
 def approach_flux_change(sol: FieldSolution, geometry: SensorGeometry, contact: int,

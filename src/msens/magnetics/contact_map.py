@@ -52,7 +52,7 @@ from msens.field.sensor_model import bias_problem, load_mesh, shell_function
 from msens.field.solve import FieldSolution, MagnetostaticProblem, solve
 from msens.magnetics.approach import _morphed_quadrature
 from msens.magnetics.potentials import nonlinear_resolve
-from msens.magnetics.villari import coil_flux_linkage
+from msens.magnetics.villari import dof_flux_linkage
 from msens.parallel import default_workers, pools_allowed, run_tasks
 from msens.store import Store, content_key
 
@@ -200,7 +200,7 @@ def state_fluxes(model: LayerModel, state: State, delta: float, coils: Sequence[
     """Flux linkage Λ of each coil in a contact state by one full nonlinear re-solve, Wb,
     shape (n_coils,)."""
     sol, a = state_potential(model, state, delta, others, tol=tol, max_iter=max_iter)
-    return np.array([coil_flux_linkage(sol, a, c) for c in coils])
+    return np.array([dof_flux_linkage(sol, a, c) for c in coils])
 
 
 def state_potential(model: LayerModel, state: State, delta: float,
@@ -224,7 +224,7 @@ def _branch_fluxes(model: LayerModel, state: State, deltas: Sequence[float],
     out, a = [], None
     for d in deltas:
         sol, a = state_potential(model, state, d, start=a, **kw)
-        out.append([coil_flux_linkage(sol, a, c) for c in coils])
+        out.append([dof_flux_linkage(sol, a, c) for c in coils])
     return np.array(out)
 
 

@@ -34,8 +34,8 @@ from msens.magnetics.villari import (
     StressSampler,
     bead_state,
     bead_stress,
-    coil_flux_linkage,
     contact_sensitivity,
+    dof_flux_linkage,
     villari_sources,
 )
 from msens.params.materials import BEAD_STEEL, ElasticMaterial
@@ -261,7 +261,7 @@ def adjoint_check(model: MechanismPotentials, coil: Coil, linkage: np.ndarray
     app = [2 * math.pi * float(state.incremental.a @ r) for r in model.approach_rhs]
     adj = np.array(vil + app)
     scale = float(np.max(np.abs(linkage))) or 1.0
-    inductance = coil_flux_linkage(sol, state.incremental.a, coil)
+    inductance = dof_flux_linkage(sol, state.incremental.a, coil)
     return inductance, float(np.max(np.abs(adj - linkage))) / scale
 
 

@@ -46,9 +46,9 @@ from msens.field.geometry import SensorGeometry
 from msens.field.sensor_model import (
     bias_problem,
     coil_resistance,
-    contact_forces,
     group_force,
     load_mesh,
+    magnetic_contact_forces,
 )
 from msens.field.solve import FieldSolution, solve
 from msens.io.hashing import canonical as _canonical
@@ -236,12 +236,12 @@ def magnetic_precompression(transducers: Mapping[int, Transducer] | list[Transdu
 def particle_forces(sol: FieldSolution, geometry: SensorGeometry) -> np.ndarray:
     """Static magnetic force on every particle, N, + toward the wall, shape (count,).
 
-    From the eggshell contact compressions C_c of :func:`contact_forces` (minus the force on
-    all modelled beads above contact c): the force on bead p is C_p - C_{p-1}; the last
+    From the eggshell contact compressions C_c of :func:`magnetic_contact_forces` (minus the
+    force on all modelled beads above contact c): the force on bead p is C_p - C_{p-1}; the last
     modelled bead's lower compression is minus the force on all modelled beads.
     """
     b = geometry.beads
-    comp = {c.upper: c.magnetic_force_N for c in contact_forces(sol, geometry)}
+    comp = {c.upper: c.magnetic_force_N for c in magnetic_contact_forces(sol, geometry)}
     comp[b.last] = -group_force(sol, [f"bead_{p}" for p in b.particles])
     out = np.zeros(b.count)
     for p in b.particles:

@@ -232,7 +232,7 @@ def bead_state(sol: FieldSolution, coil: Coil) -> BeadState:
     return BeadState(coil=coil, h_coil=internal_field_strength(inc), incremental=inc)
 
 
-def coil_flux_linkage(sol: FieldSolution, a: np.ndarray, coil: Coil) -> float:
+def dof_flux_linkage(sol: FieldSolution, a: np.ndarray, coil: Coil) -> float:
     """Λ = (N/S) ∫_coil 2π r A dS of dofs ``a`` on ``sol``'s mesh, Wb."""
     return region_linkage(sol, a, f"coil_{coil.particle}", coil.turns, coil.area)
 
@@ -258,11 +258,17 @@ def nonlinear_flux_change(sol: FieldSolution, elements: np.ndarray, mu0_dm: np.n
         shift = np.zeros((*q.w.shape, 2))
         shift[elements] = eps * mu0_dm
         a = nonlinear_resolve(sol, q, shift, tol=tol, max_iter=max_iter)
-        lam.append(coil_flux_linkage(sol, a, coil))
+        lam.append(dof_flux_linkage(sol, a, coil))
     return (lam[0] - lam[1]) / (2 * scale)
 
 
 __all__ = [
-    "BeadState", "StressSampler", "bead_state", "bead_stress", "coil_flux_linkage",
-    "contact_sensitivity", "nonlinear_flux_change", "villari_sources",
+    "BeadState",
+    "StressSampler",
+    "bead_state",
+    "bead_stress",
+    "contact_sensitivity",
+    "dof_flux_linkage",
+    "nonlinear_flux_change",
+    "villari_sources",
 ]

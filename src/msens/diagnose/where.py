@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from msens.compare import model_record, shot_records, smooth
+from msens.compare import model_record, shot_records
 from msens.config.schema import SetupSpec
 from msens.diagnose.objective import FeatureObjective, WaveformObjective
 from msens.diagnose.predict import feature_records, model_features_of
 from msens.io.waveform import Waveform
-from msens.signals.features import centre_distance
+from msens.signals.features import centre_distance, smooth
 
 #: Half-width of the incident / reflected windows, in incident pulse widths (FWHM).
 WINDOW_WIDTHS = 1.5

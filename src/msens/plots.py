@@ -273,7 +273,7 @@ def table2(rows: list[dict], study: str | None = None) -> Figure:
                             color="C3")
         lim = np.nanmax(np.abs(np.concatenate([ours, paper, std, [1.0]])))
         ax.set_xlim(-1.3 * lim, 1.45 * lim)
-        ax.set_xlabel(f"{name}: (model − experiment) / experiment (%)")
+        ax.set_xlabel(f"{name}: model error (%)")
         ax.grid(alpha=0.3, axis="x")
         # a rule between setups
         for i in range(1, n):
@@ -284,7 +284,8 @@ def table2(rows: list[dict], study: str | None = None) -> Figure:
     handles, names = axes[0].get_legend_handles_labels()
     fig.legend(handles, names, loc="outside lower center", ncol=3, fontsize=8,
                frameon=False)
-    title = "Time of flight and amplitude ratio against the paper's experiment"
+    title = ("Time of flight and amplitude ratio: model error against the paper's "
+             "experiment,\n(model − experiment) / experiment")
     fig.suptitle(f"{title}, study {study}" if study else title, fontsize=10)
     return fig
 

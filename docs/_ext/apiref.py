@@ -13,14 +13,53 @@ import inspect
 import sys
 from pathlib import Path
 
-#: Subpackages whose ``__all__`` is documented, in the data flow's order.
-SUBPACKAGES = ("io", "chain", "field", "diagnose", "design")
+import plaintext
+
+#: The data flow's order of the subpackages (design.md §3); a subpackage not named here
+#: follows, alphabetically. Every subpackage with a non-empty ``__all__`` gets a page.
+ORDER = ("params", "io", "mechanics", "readout", "signals", "chain", "field", "magnetics",
+         "config", "workflows", "diagnose", "design", "uq")
 
 
-def _first_line(obj) -> str:
-    doc = inspect.getdoc(obj) or ""
+def subpackages() -> list[str]:
+    """The subpackages of msens that list public names in ``__all__``, in :data:`ORDER`."""
+    import pkgutil
+
+    import msens
+
+    names = [m.name for m in pkgutil.iter_modules(msens.__path__) if m.ispkg]
+    found = [n for n in names if _names(importlib.import_module(f"msens.{n}"))]
+    return sorted(found, key=lambda n: (ORDER.index(n) if n in ORDER else len(ORDER), n))
+
+
+def _is_data(obj) -> bool:
+    return not (inspect.ismodule(obj) or inspect.isclass(obj) or callable(obj))
+
+
+def _attribute_doc(package: str, name: str) -> str:
+    """The ``#:`` comment documenting constant ``name`` in the module of ``package`` that
+    defines it ('' when none does)."""
+    import pkgutil
+
+    from sphinx.pycode import ModuleAnalyzer
+
+    module = importlib.import_module(package)
+    candidates = [package] + [f"{package}.{m.name}" for m in
+                              pkgutil.iter_modules(getattr(module, "__path__", []))]
+    for modname in candidates:
+        try:
+            docs = ModuleAnalyzer.for_module(modname).find_attr_docs()
+        except Exception:  # a module without source: nothing to read
+            continue
+        if ("", name) in docs:
+            return "\n".join(docs[("", name)]).strip()
+    return ""
+
+
+def _first_line(obj, package: str = "", name: str = "") -> str:
+    doc = _attribute_doc(package, name) if _is_data(obj) else (inspect.getdoc(obj) or "")
     line = doc.strip().split("\n\n")[0].replace("\n", " ").strip()
-    return line.replace("|", "\\|")
+    return plaintext.escape(line)
 
 
 def _names(module) -> list[str]:
@@ -35,13 +74,16 @@ _DOCUMENTED: set[int] = set()
 def _entry(public: str, obj) -> list[str]:
     if inspect.ismodule(obj):
         return []  # a submodule in __all__: its names are reached through it
+    if _is_data(obj):  # a constant: its #: comment, found where it is defined
+        package, _, name = public.rpartition(".")
+        doc = _attribute_doc(package, name) or "(a constant of this package)"
+        body = [f"   {plaintext.escape(line)}" if line else "" for line in doc.splitlines()]
+        return [f".. py:data:: {public}", "", *body, ""]
     options = ["   :no-index:"] if id(obj) in _DOCUMENTED else []
     _DOCUMENTED.add(id(obj))
     if inspect.isclass(obj):
         return [f".. autoclass:: {public}", "   :members:", *options, ""]
-    if callable(obj):
-        return [f".. autofunction:: {public}", *options, ""]
-    return [f".. autodata:: {public}", "   :annotation:", *options, ""]
+    return [f".. autofunction:: {public}", *options, ""]
 
 
 def _page(title: str, modname: str, module, intro: list[str]) -> str:
@@ -55,7 +97,7 @@ def _page(title: str, modname: str, module, intro: list[str]) -> str:
         role = ("mod" if inspect.ismodule(obj) else "class" if inspect.isclass(obj)
                 else "func" if callable(obj) else "data")
         target = obj.__name__ if inspect.ismodule(obj) else public
-        out += [f"   * - :{role}:`~{target}`", f"     - {_first_line(obj)}"]
+        out += [f"   * - :{role}:`~{target}`", f"     - {_first_line(obj, modname, name)}"]
         entries += _entry(public, obj)
     return "\n".join([*out, "", *entries]) + "\n"
 
@@ -72,11 +114,14 @@ def write_api(target_dir: str | Path) -> list[str]:
         ["The names a user needs, importable as ``msens.<name>``; everything else is in the",
          "subpackages below. ``import msens`` is cheap: each name loads on first use.",
          "``msens.__version__`` is the installed version.", ""])}
-    for sub in SUBPACKAGES:
+    for number, sub in enumerate(subpackages(), start=1):
         module = importlib.import_module(f"msens.{sub}")
         doc = (inspect.getdoc(module) or "").split("\n\n")[0].replace("\n", " ")
-        pages[f"api-{sub}"] = _page(f"``msens.{sub}``", f"msens.{sub}", module,
-                                    [doc, ""] if doc else [])
+        pages[f"api-sub-{number:02d}-{sub}"] = _page(f"``msens.{sub}``", f"msens.{sub}",
+                                                     module, [doc, ""] if doc else [])
+    for stale in target_dir.glob("api-*.rst"):  # a subpackage that lost its __all__
+        if stale.stem not in pages:
+            stale.unlink()
     for name, text in pages.items():
         path = target_dir / f"{name}.rst"
         if not path.exists() or path.read_text() != text:

@@ -3,7 +3,10 @@
 - ``_generated/study-reference.rst`` from the study readers and the schema
   (:mod:`studyref`);
 - ``_generated/api-*.rst`` from ``msens.__all__`` and the subpackages' ``__all__``
-  (:mod:`apiref`).
+  (:mod:`apiref`);
+
+and makes the plain-text mathematics of docstrings (``|B|``, ``x**2``) safe for reST
+(:mod:`plaintext`).
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import apiref
+import plaintext
 import studyref
 
 
@@ -22,4 +26,6 @@ def _generate(app) -> None:
 
 def setup(app):
     app.connect("builder-inited", _generate)
+    # numpydoc registers its own handler at priority 500: escape before it parses
+    app.connect("autodoc-process-docstring", plaintext.process_docstring, priority=400)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

@@ -22,9 +22,10 @@ from msens.results import StudyResult
 from msens.workflows.common import check_format as _check_format
 from msens.workflows.common import figure_names as _figure_names
 from msens.workflows.common import provenance
-from msens.workflows.compare import check_measurement as _check_measurement
 from msens.workflows.compare import compare as compare
 from msens.workflows.compare import format_comparison as format_comparison
+from msens.workflows.diagnose import diagnose as diagnose
+from msens.workflows.diagnose import format_diagnosis as format_diagnosis
 
 
 def load(path: str | Path) -> Study:
@@ -273,67 +274,3 @@ def format_design(result) -> str:
     from msens.design import format_result
 
     return format_result(result)
-
-
-def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | None = None,
-             passes: int = 1, fig_format: str = "png") -> tuple[dict, list[Path]]:
-    """Name the effect the model of ``study`` misses; write ``diagnosis.json`` and
-    ``diagnosis.<fig_format>`` (png, pdf or svg) into ``out``.
-
-    Either ``data`` (a measured waveform; its sensors choose the study's setup) or
-    ``reference`` (a setup name: its ``[reference]`` rows are the measurement) is given.
-    """
-    import json
-
-    from msens import budget
-    from msens.diagnose import diagnose_passes, diagnose_reference
-    from msens.diagnose.report import FILES
-    from msens.diagnose.report import write as write_diagnosis
-    from msens.errors import InputError
-    from msens.io.read import read_waveform
-
-    if (data is None) == (reference is None):
-        raise InputError("diagnose needs either DATA (a waveform file) or --reference SETUP, "
-                         "not both")
-    if not 1 <= passes <= 7:
-        raise InputError(f"--passes must be from 1 to 7, got {passes}")
-    target = OutputDir(out)
-    target.check(_figure_names(FILES, _check_format(fig_format)))
-    budget.check(study)
-    if data is not None:
-        waveform = read_waveform(data)
-        _check_measurement(study, waveform, str(getattr(data, "path", data)))
-        results = diagnose_passes(waveform, study, passes=passes)
-    else:
-        results, added = [], []
-        for _ in range(passes):
-            d = diagnose_reference(study, reference, added=tuple(added))
-            results.append(d)
-            if d.effect == "none":
-                break
-            added.append((d.effect, d.parameters))
-    written = write_diagnosis(results, target, provenance=provenance(study),
-                              fig_format=fig_format)
-    report = json.loads(written[0].read_text())
-    return report, written
-
-
-def format_diagnosis(report: dict) -> str:
-    """Plain-text summary of ``diagnosis.json``."""
-    lines = [f"setup {report['setup']} ({report['mode']}): disagreement mostly at the "
-             f"{report['disagreement']['where']}",
-             f"{'effect':<24} {'score (dBIC)':>13} {'misfit':>10}  parameters"]
-    for c in report["candidates"]:
-        pars = ", ".join(f"{k}={v:.4g}" for k, v in c["parameters"].items())
-        flag = ("" if c.get("plausible", True) else "  [implausible]") + \
-            ("" if c.get("significant", True) else "  [below floor]")
-        lines.append(f"{c['effect']:<24} {c['score']:>13.1f} {c['misfit']:>10.4g}  {pars}"
-                     + flag)
-    for i, p in enumerate(report["passes"], 1):
-        pars = ", ".join(f"{k}={v:.4g}" for k, v in p["parameters"].items())
-        lines.append(f"pass {i}: {p['effect']}" + (f" ({pars})" if pars else "")
-                     + f"; misfit {p['misfit_before']:.4g} -> {p['misfit_after']:.4g}; "
-                     + ("explained" if p.get("explained") else "NOT explained"))
-    if "summary" in report["passes"][-1]:
-        lines.append(f"verdict: {report['passes'][-1]['summary']}")
-    return "\n".join(lines)

@@ -8,9 +8,12 @@ So far:
 - :mod:`.compare` — a measured waveform against the model of a study: the checks of the
   measurement (also the first step of a diagnosis), ``compare.json``, the overlay figure and
   the text table.
+- :mod:`.diagnose` — the effect the model misses, from a waveform or a setup's reference
+  rows: ``diagnosis.json``, its figure and the text table.
 
-The functions named like their modules (``compare``) are not listed here (an attribute of the
-package cannot be both); import them from their modules or call them through :mod:`msens`.
+The functions named like their modules (``compare``, ``diagnose``) are not listed here (an
+attribute of the package cannot be both); import them from their modules or call them through
+:mod:`msens`.
 """
 
 from msens._lazy import attribute, names
@@ -18,6 +21,7 @@ from msens._lazy import attribute, names
 _HOMES = {
     "common": ("check_format", "figure_names", "provenance"),
     "compare": ("check_measurement", "format_comparison"),
+    "diagnose": ("format_diagnosis", "reference_passes"),
 }
 
 __all__ = names(_HOMES)

@@ -39,7 +39,9 @@ class SensorResult:
         (Eq. 5), up to its unknown conversion factor. For a physics MsS, the predicted DAQ
         voltage, V, on the chain's time grid.
     features : PulseFeatures
-        Scalar features of ``force``.
+        Scalar features of ``force``; for a physics MsS, of what the DAQ records (its
+        integrated voltage in newtons, :attr:`msens.readout.mss.MssRecord.daq_force`), by the
+        one feature pipeline (:func:`msens.signals.features.model_features`).
     mss : MssRecord or None
         For a physics MsS: flux change, EMF and DAQ voltage (:mod:`msens.readout.mss`).
     note : str or None

@@ -48,6 +48,12 @@ def test_builtin_inputs_of_the_main_study(study):
         assert i.physical[0] <= lo <= i.nominal <= hi <= i.physical[1], i.name
 
 
+def test_builtin_inputs_of_paper_table2():
+    inputs = load_inputs(None, api.load_paper_table2())
+    assert len(inputs.propagated) == 7 and not inputs.held
+    assert {i.route for i in inputs.inputs} == {CHAIN}
+
+
 def test_values_are_the_inverse_cdf(study):
     u = np.array([[0.0, 0.5], [1.0, 0.25]])
     d = Distribution("uniform", (2.0, 4.0))

@@ -29,6 +29,18 @@ def test_heartbeat_logs_while_the_block_runs(caplog):
     assert not caplog.records
 
 
+def test_nested_heartbeats_only_the_inner_one_speaks(caplog):
+    log = logging.getLogger("msens.test")
+    with caplog.at_level(logging.INFO, logger="msens"):
+        with progress.heartbeat(log, "outer", every=0.03):
+            with progress.heartbeat(log, "inner", every=0.03):
+                time.sleep(0.2)
+            time.sleep(0.2)
+    said = [r.getMessage().split(":")[0] for r in caplog.records]
+    first_outer = said.index("outer")
+    assert "inner" in said[:first_outer] and "inner" not in said[first_outer:]
+
+
 def test_heartbeat_is_silent_when_quiet(caplog):
     log = logging.getLogger("msens.test")
     with caplog.at_level(logging.WARNING, logger="msens"):

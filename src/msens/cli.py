@@ -420,8 +420,13 @@ def _run(args: argparse.Namespace) -> int:
     out = _out(args, study, "run")
     target = api.prepare_outputs(out, figures=not args.no_figures, fig_format=args.fig_format)
     result = api.run(study, scheduler=args.scheduler)
-    written = api.write_outputs(result, target, figures=not args.no_figures,
-                                fig_format=args.fig_format)
+    from msens.progress import heartbeat
+
+    _log.info("run: writing summary.json%s to %s", "" if args.no_figures else " and figures",
+              out)
+    with heartbeat(_log, "run: writing the outputs"):
+        written = api.write_outputs(result, target, figures=not args.no_figures,
+                                    fig_format=args.fig_format)
     print(api.format_summary(result))
     print(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
     return 0

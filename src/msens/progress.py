@@ -57,17 +57,25 @@ def heartbeat(logger: logging.Logger, stage: str, *, every: float = HEARTBEAT_S,
         Seconds between lines (> 0).
     note : str
         Appended to each line, e.g. ``" (compiling the chain kernel on first use)"``.
+
+    Heartbeats nest: while an inner stage's heartbeat runs, the outer one keeps quiet.
     """
     if not logger.isEnabledFor(logging.INFO):
         yield
         return
     done = threading.Event()
     start = time.perf_counter()
+    token = object()
+    with _LOCK:
+        _ACTIVE.append(token)
 
     def beat() -> None:
         while not done.wait(every):
-            logger.info("%s: still working, %.0f s%s", stage, time.perf_counter() - start,
-                        note)
+            with _LOCK:
+                innermost = _ACTIVE[-1] is token
+            if innermost:  # an inner stage's heartbeat speaks for both
+                logger.info("%s: still working, %.0f s%s", stage,
+                            time.perf_counter() - start, note)
 
     thread = threading.Thread(target=beat, name="msens-heartbeat", daemon=True)
     thread.start()
@@ -76,3 +84,10 @@ def heartbeat(logger: logging.Logger, stage: str, *, every: float = HEARTBEAT_S,
     finally:
         done.set()
         thread.join()
+        with _LOCK:
+            _ACTIVE.remove(token)
+
+
+#: The running heartbeats, innermost last (only the innermost one logs).
+_ACTIVE: list[object] = []
+_LOCK = threading.Lock()

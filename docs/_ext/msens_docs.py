@@ -1,7 +1,7 @@
 """Sphinx extension of the msens docs: writes the generated pages before the sources are read.
 
-- ``_generated/study-reference.rst`` from the study readers and the schema
-  (:mod:`studyref`);
+- ``_generated/study-reference.rst`` and ``_generated/sweep-reference.rst`` from the
+  study and sweep readers and their records (:mod:`studyref`);
 - ``_generated/api-*.rst`` from ``msens.__all__`` and the subpackages' ``__all__``
   (:mod:`apiref`);
 
@@ -21,6 +21,7 @@ import studyref
 def _generate(app) -> None:
     docs = Path(app.srcdir)
     studyref.write_rst(docs.parent, docs / "_generated" / "study-reference.rst")
+    studyref.write_sweep_rst(docs / "_generated" / "sweep-reference.rst")
     apiref.write_api(docs / "_generated")
 
 

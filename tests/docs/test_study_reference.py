@@ -78,3 +78,29 @@ def test_the_page_lists_every_key_with_its_unit(studyref, keys, tmp_path):
         if not key.table.startswith("setup[]."):  # shown once, under the top-level tables
             assert f"``{key.name}``" in page, key.dotted
     assert "kg/(s m^0.5)" in page and "(undocumented)" not in page
+
+
+def test_every_sweep_key_has_a_unit_and_a_description(studyref, tmp_path):
+    """The sweep-file reference (msens.sweep/1): every parameter of COIL_PARAMETERS and
+    MAGNET_PARAMETERS and every key the reader asks for is documented, with a unit."""
+    import importlib
+
+    sweep = importlib.import_module("msens.design.sweep")
+    keys = studyref.sweep_reference()
+    assert studyref.missing(keys) == []
+    dotted = {k.dotted for k in keys}
+    assert {f"coil.{n}" for n in sweep.COIL_PARAMETERS} <= dotted
+    assert {f"magnet.{n}" for n in sweep.MAGNET_PARAMETERS} <= dotted
+    assert {"model.verify", "recommend.min_bandwidth_Hz", "sensor"} <= dotted
+    page = studyref.write_sweep_rst(tmp_path / "sweep-reference.rst").read_text()
+    assert "``radial_gap_m``" in page and "(undocumented)" not in page
+
+
+@pytest.mark.parametrize("path", ["studies/sweep-coil.toml", "studies/sweep-magnet.toml"])
+def test_every_key_of_the_shipped_sweeps_is_documented(studyref, path):
+    dotted = {k.dotted for k in studyref.sweep_reference()}
+    doc = tomllib.loads((ROOT / path).read_text())
+    used = {f"{t}.{k}" if isinstance(v, dict) and t in ("coil", "magnet", "model",
+                                                          "recommend") else t
+            for t, v in doc.items() for k in (v if isinstance(v, dict) else [None])}
+    assert used - dotted == set()

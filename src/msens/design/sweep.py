@@ -86,7 +86,22 @@ OBJECTIVES = ("snr", "peak_voltage_V", "peak_emf_V", "bandwidth_Hz")
 @dataclass(frozen=True)
 class Recommend:
     """How the recommended design is chosen: the best ``objective`` (largest magnitude)
-    among the designs meeting every given limit."""
+    among the designs meeting every given limit (the ``[recommend]`` table).
+
+    Attributes
+    ----------
+    objective : str
+        What to maximise: ``"snr"`` (peak DAQ voltage over the read-out's noise rms, the
+        default), ``"peak_voltage_V"``, ``"peak_emf_V"`` or ``"bandwidth_Hz"``.
+    min_bandwidth_hz : float or None
+        Smallest read-out bandwidth a recommended design may have, Hz.
+    max_precompression_n : float or None
+        Largest static magnetic compression of a contact a recommended design may cause, N.
+    min_snr : float or None
+        Smallest signal-to-noise ratio (peak DAQ voltage over noise rms). Unit: 1.
+    min_resonance_hz : float or None
+        Lowest read-out resonance a recommended design may have, Hz.
+    """
 
     objective: str = "snr"
     min_bandwidth_hz: float | None = None
@@ -115,16 +130,19 @@ class SweepSpec:
     Attributes
     ----------
     name : str
+        The sweep's name (for reports).
     source : str
+        Where the sweep was read from.
     sensor : int
-        Particle of the varied MsS sensor.
+        Particle of the varied MsS sensor (0 or absent: the study's first MsS). Unit:
+        particle number.
     axes : tuple of (str, tuple)
         ``("coil.turns", (600, 1100))`` ... in design order.
     bead_padding : int or None
         Beads modelled on either side of the outermost sensor in a magnet sweep's model;
         None (default): the study's whole field model, as ``msens run``. A padded model is
         faster but its end beads carry the field's ends: with strong magnets their pull can
-        put an end contact in tension that the whole chain does not have.
+        put an end contact in tension that the whole chain does not have. Unit: beads.
     contact_map : bool or None
         ``[model] contact_map``: the nonlinear contact maps on or off for this sweep; None
         (default): the study's ``[field] contact_map``. Off, a magnet design is a few times
@@ -135,8 +153,15 @@ class SweepSpec:
         again with the study's maps (each solving its own); the recommendation is made
         among them. 0 (default): none; more than the sweep's designs: all of them.
         ``"auto"`` (:data:`VERIFY_AUTO`): the best screened designs one at a time, until
-        no unverified design screens above the best verified one.
+        no unverified design screens above the best verified one. Unit: designs.
     recommend : Recommend
+        The ``[recommend]`` table.
+    schema : str
+        The file's format, ``"msens.sweep/1"`` (the TOML key ``schema``, required; not a
+        field of the record).
+    radial_gap_m : float
+        ``[magnet] radial_gap_m`` (a sweep parameter, not a field): the air gap between the
+        tube and the pole pieces' inner radius (pole_inner_radius = tube outer radius + gap), m.
     """
 
     name: str

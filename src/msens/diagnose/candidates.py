@@ -102,6 +102,20 @@ def judge(effect: Effect, ctx: Context, base: ModelState, params: Mapping[str, f
     return plausible, significant, tuple(notes)
 
 
+def bound_notes(effect: Effect, ctx: Context, base: ModelState, params: Mapping[str, float],
+                at_bound: Sequence[str]) -> tuple[str, ...]:
+    """Why a fit at an end of its searched range is not named, one note per parameter."""
+    space = {p.name: p for p in effect.space(ctx, base)}
+    out = []
+    for name in at_bound:
+        p = space[name]
+        v = float(params[name])
+        end = "upper" if abs(v - p.upper) <= abs(v - p.lower) else "lower"
+        out.append(f"at bound: {name} = {v:.4g} at the {end} end of its searched range "
+                   f"[{p.lower:.4g}, {p.upper:.4g}]: the search, not the data, stopped it")
+    return tuple(out)
+
+
 def score_candidates(fits: list[EffectFit], rss0: np.ndarray, n_obs: np.ndarray, ctx: Context,
                      base: ModelState) -> tuple[list[Candidate], float]:
     # rss are chi^2 already (residuals over the fit-free noise), per sensor
@@ -112,23 +126,29 @@ def score_candidates(fits: list[EffectFit], rss0: np.ndarray, n_obs: np.ndarray,
         effect = get_effect(f.effect)
         chi = float(f.rss.sum())
         plausible, significant, notes = judge(effect, ctx, base, f.parameters)
+        notes += bound_notes(effect, ctx, base, f.parameters, f.at_bound)
         cands.append(Candidate(
             effect=f.effect, parameters=f.parameters,
             baseline=effect.baseline(ctx, base), chi2=chi, misfit=chi / n,
             score=chi0 - chi - f.n_parameters * np.log(n), n_parameters=f.n_parameters,
-            plausible=plausible, significant=significant, notes=notes))
+            plausible=plausible, significant=significant, notes=notes,
+            intervals=dict(f.intervals), at_bound=tuple(f.at_bound)))
     cands.sort(key=lambda c: -c.score)
     return cands, chi0 / n
 
 
 def decide(cands: list[Candidate], fits: list[EffectFit], threshold: float
            ) -> tuple[Candidate | None, EffectFit | None]:
-    """The best-scoring candidate that is plausible and significant and whose score beats
-    by ``threshold`` both the baseline and every plausible change below its floor (when a
-    negligible change explains the data better, nothing practical is missing)."""
+    """The best-scoring candidate that is plausible, significant and not at a bound of its
+    search, and whose score beats by ``threshold`` both the baseline and every plausible
+    change below its floor (when a negligible change explains the data better, nothing
+    practical is missing), and that scores above every plausible fit pinned at a bound
+    (when an effect pushed to the end of its searched range fits better, the data want
+    something the library does not hold, and a lesser effect is not the answer)."""
     negligible = max((c.score for c in cands if c.plausible and not c.significant),
                      default=0.0)
+    pinned = max((c.score for c in cands if c.plausible and c.at_bound), default=-np.inf)
     for c in cands:
-        if c.plausible and c.significant and c.score - max(negligible, 0.0) > threshold:
+        if c.nameable and c.score - max(negligible, 0.0) > threshold and c.score > pinned:
             return c, next(f for f in fits if f.effect == c.effect)
     return None, None

@@ -30,7 +30,13 @@ class Candidate:
     significant : bool
         The change from the baseline reaches the effect's practical-significance floor.
     notes : tuple of str
-        Why the candidate is implausible or below its floor (empty otherwise).
+        Why the candidate is implausible, below its floor or at a bound (empty otherwise).
+    intervals : dict
+        Per continuous parameter, its 95 % interval (lower, upper), SI, from the curvature
+        of the fit (:func:`msens.diagnose.fit.curvature_covariance`).
+    at_bound : tuple of str
+        Parameters whose fit is at an end of their searched range: the candidate is not
+        named (the search, not the data, stopped it).
     """
 
     effect: str
@@ -43,13 +49,43 @@ class Candidate:
     plausible: bool = True
     significant: bool = True
     notes: tuple[str, ...] = ()
+    intervals: dict = field(default_factory=dict)
+    at_bound: tuple[str, ...] = ()
+
+    @property
+    def nameable(self) -> bool:
+        """Plausible, significant and not at a bound of its search."""
+        return self.plausible and self.significant and not self.at_bound
 
     def to_json(self) -> dict:
         """The candidate's entry in ``diagnosis.json``."""
         return {"effect": self.effect, "misfit": self.misfit, "score": self.score,
                 "parameters": self.parameters, "baseline": self.baseline,
+                "intervals": intervals_json(self.parameters, self.intervals, self.at_bound),
+                "at_bound": bool(self.at_bound),
                 "n_parameters": self.n_parameters, "plausible": self.plausible,
                 "significant": self.significant, "notes": list(self.notes)}
+
+
+#: What the reported intervals are.
+INTERVAL_DEFINITION = ("95 % interval of each continuous parameter from the curvature of "
+                       "the fit's chi^2 at its optimum (covariance 2 H^-1 of a finite-"
+                       "difference Hessian in the search variables, log10 for scale "
+                       "parameters; widened by the reduced chi^2 when it exceeds 1; the "
+                       "likelihood's variance holds the noise and the model's own "
+                       "uncertainty), clipped to the searched range; integer parameters "
+                       "have none. at_bound: the optimum is within 0.5 % of the searched "
+                       "span from one of its ends")
+
+
+def intervals_json(parameters: dict, intervals: dict, at_bound: tuple[str, ...]) -> dict:
+    """``{name: {"value", "lower", "upper", "at_bound"}}`` of the fitted parameters
+    (``lower``/``upper`` None for integer parameters)."""
+    out = {}
+    for k, v in parameters.items():
+        lo, hi = intervals.get(k, (None, None))
+        out[k] = {"value": v, "lower": lo, "upper": hi, "at_bound": k in at_bound}
+    return out
 
 
 @dataclass(frozen=True)
@@ -133,18 +169,47 @@ class Diagnosis:
         at = (f"; the residual is {where['residual_over_noise']:.2g} x the noise at the "
               f"{where['window']} window of {where['channel']}" if where else "")
         if self.effect == "none":
+            closest = self.closest_at_bound()
+            near = ""
+            if closest is not None:
+                pinned = ", ".join(f"{k} = {closest.parameters[k]:.4g}"
+                                   for k in closest.at_bound)
+                near = (f"; the closest, {closest.effect}, has its fit at the bound of its "
+                        f"searched range ({pinned})")
             if self.explained:
-                return "nothing is missing: the model explains the data within the noise"
-            return "no plausible library effect explains the data" + at
+                return ("nothing is missing: the model explains the data within the noise"
+                        + near)
+            return "no plausible library effect explains the data" + at + near
         if self.explained:
             return f"{self.effect} explains the data within the noise"
         return f"{self.effect} is supported but does not explain the data" + at
 
+    def closest_at_bound(self) -> Candidate | None:
+        """With no effect named: the best-scoring candidate that would have been named but
+        for a fit at a bound of its search (None otherwise)."""
+        if self.effect != "none":
+            return None
+        return next((c for c in self.candidates if c.plausible and c.significant
+                     and c.at_bound and c.score > self.threshold), None)
+
+    def named_candidate(self) -> Candidate | None:
+        """The candidate of the named effect (None for none)."""
+        return next((c for c in self.candidates if c.effect == self.effect), None)
+
     def to_json(self) -> dict:
         """The content of ``diagnosis.json``."""
+        named = self.named_candidate()
+        closest = self.closest_at_bound()
         return {
             "effect": self.effect,
             "parameters": self.parameters,
+            "parameter_intervals": intervals_json(
+                self.parameters, named.intervals if named else {}, ()),
+            "interval_definition": INTERVAL_DEFINITION,
+            "closest_at_bound": None if closest is None else {
+                "effect": closest.effect, "score": closest.score,
+                "parameters": intervals_json(closest.parameters, closest.intervals,
+                                             closest.at_bound)},
             "explained": self.explained,
             "summary": self.summary(),
             "misfit_before": self.misfit_before,
@@ -161,7 +226,9 @@ class Diagnosis:
                                  "out; features: over the published std)",
             "score_definition": "BIC(baseline) - BIC(effect) = chi2_0 - chi2 - k ln N",
             "naming_rule": "the best-scoring candidate whose parameters are inside their "
-                           "physical ranges, whose change reaches the effect's "
+                           "physical ranges and not at a bound of their searched ranges, "
+                           "that scores above every plausible fit at a bound, "
+                           "whose change reaches the effect's "
                            "practical-significance floor, and whose score exceeds the "
                            "threshold and the best plausible below-floor candidate's score "
                            "by the threshold",

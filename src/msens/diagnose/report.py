@@ -31,6 +31,7 @@ def report(passes: Sequence[Diagnosis]) -> dict:
     """``diagnosis.json``: the first pass in full, and a summary of every pass."""
     out = passes[0].to_json()
     out["passes"] = [{"effect": d.effect, "parameters": d.parameters,
+                      "parameter_intervals": d.to_json()["parameter_intervals"],
                       "explained": d.explained, "summary": d.summary(),
                       "misfit_before": d.misfit_before, "misfit_after": d.misfit_after,
                       "best_score": d.candidates[0].score if d.candidates else None,
@@ -58,15 +59,15 @@ def _parameter_text(key: str, value: float) -> tuple[str, str]:
 
 def effect_text(d: Diagnosis) -> str:
     """The named effect in words with its fitted parameters, e.g. "striker impact speed
-    0.371 m/s", "static compression of a run of contacts: first contact 12, count 3,
-    precompression force 2.1 N"; "no effect" when none was named."""
+    0.371 m/s", "static compression of a run of contacts (first contact 12, contact count 3,
+    precompression force 2.1 N)"; "no effect" when none was named."""
     if d.effect == "none":
         return "no effect"
     what = _effect_name(d)
     pars = [_parameter_text(k, v) for k, v in d.parameters.items()]
     if len(pars) == 1:
         return f"{what} {pars[0][1]}"
-    return f"{what}: " + ", ".join(f"{n} {v}" for n, v in pars) if pars else what
+    return f"{what} ({', '.join(f'{n} {v}' for n, v in pars)})" if pars else what
 
 
 def _effect_name(d: Diagnosis) -> str:

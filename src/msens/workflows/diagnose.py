@@ -109,16 +109,31 @@ def format_diagnosis(report: dict) -> str:
              f"{report['disagreement']['where']}",
              f"{'effect':<24} {'score (dBIC)':>13} {'misfit':>10}  parameters"]
     for c in report["candidates"]:
-        pars = ", ".join(f"{k}={v:.4g}" for k, v in c["parameters"].items())
+        pars = _parameters_text(c["parameters"], c.get("intervals", {}))
         flag = ("" if c.get("plausible", True) else "  [implausible]") + \
-            ("" if c.get("significant", True) else "  [below floor]")
+            ("" if c.get("significant", True) else "  [below floor]") + \
+            ("  [at bound]" if c.get("at_bound") else "")
         lines.append(f"{c['effect']:<24} {c['score']:>13.1f} {c['misfit']:>10.4g}  {pars}"
                      + flag)
     for i, p in enumerate(report["passes"], 1):
-        pars = ", ".join(f"{k}={v:.4g}" for k, v in p["parameters"].items())
+        pars = _parameters_text(p["parameters"], p.get("parameter_intervals", {}))
         lines.append(f"pass {i}: {p['effect']}" + (f" ({pars})" if pars else "")
                      + f"; misfit {p['misfit_before']:.4g} -> {p['misfit_after']:.4g}; "
                      + ("explained" if p.get("explained") else "NOT explained"))
     if "summary" in report["passes"][-1]:
         lines.append(f"verdict: {report['passes'][-1]['summary']}")
+    if any(c.get("intervals") for c in report["candidates"]):
+        lines.append("[lo, hi]: 95 % interval from the curvature of the fit; [at bound]: the "
+                     "fit sits at an end of its searched range and is not named")
     return "\n".join(lines)
+
+
+def _parameters_text(parameters: dict, intervals: dict) -> str:
+    """``name=value [lo, hi]`` per parameter (the interval where there is one)."""
+    out = []
+    for k, v in parameters.items():
+        iv = intervals.get(k) or {}
+        lo, hi = iv.get("lower"), iv.get("upper")
+        out.append(f"{k}={v:.4g}" + (f" [{lo:.4g}, {hi:.4g}]" if lo is not None
+                                      and hi is not None else ""))
+    return ", ".join(out)

@@ -1,0 +1,166 @@
+"""Honest parameters: intervals from the curvature of the fit, fits at a bound not named."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from msens.diagnose.candidates import decide
+from msens.diagnose.diagnosis import Candidate, Diagnosis
+from msens.diagnose.effects.base import Effect, Parameter
+from msens.diagnose.fit import (
+    Z_LEVEL,
+    at_bounds,
+    curvature_covariance,
+    fit_effect,
+    parameter_intervals,
+)
+from msens.workflows.diagnose import format_diagnosis
+
+
+def _quadratic(x0: np.ndarray, cov: np.ndarray, chi0: float = 0.0):
+    inv = np.linalg.inv(cov)
+
+    def crit(xs):
+        return np.array([chi0 + (x - x0) @ inv @ (x - x0) for x in xs])
+    return crit
+
+
+def test_curvature_of_a_known_chi2_gives_its_covariance():
+    # chi^2 = (x - a)^T C^-1 (x - a): the covariance is C (correlated, different scales)
+    a = np.array([0.3, -2.0])
+    cov = np.array([[0.01**2, 0.6 * 0.01 * 0.2], [0.6 * 0.01 * 0.2, 0.2**2]])
+    lower, upper = np.array([0.0, -5.0]), np.array([1.0, 5.0])
+    got = curvature_covariance(_quadratic(a, cov), a, lower, upper)
+    np.testing.assert_allclose(got, cov, rtol=1e-6, atol=1e-12)
+    (lo0, hi0), (lo1, hi1) = parameter_intervals(a, got, lower, upper)
+    assert (lo0, hi0) == pytest.approx((0.3 - Z_LEVEL * 0.01, 0.3 + Z_LEVEL * 0.01))
+    assert (lo1, hi1) == pytest.approx((-2.0 - Z_LEVEL * 0.2, -2.0 + Z_LEVEL * 0.2))
+
+
+def test_a_poor_fit_widens_the_interval_by_its_reduced_chi2():
+    a, cov = np.array([0.5]), np.array([[1e-4]])
+    lower, upper = np.array([0.0]), np.array([1.0])
+    # chi^2 at the optimum is 4 x its degrees of freedom: the variance is 4 x larger
+    got = curvature_covariance(_quadratic(a, cov, chi0=4.0 * 99), a, lower, upper, n_obs=100)
+    assert got[0, 0] == pytest.approx(4e-4, rel=1e-6)
+    good = curvature_covariance(_quadratic(a, cov, chi0=90.0), a, lower, upper, n_obs=100)
+    assert good[0, 0] == pytest.approx(1e-4, rel=1e-6)
+
+
+def test_curvature_at_an_end_of_the_range_uses_the_inner_side():
+    a, cov = np.array([1.0]), np.array([[0.05**2]])
+    got = curvature_covariance(_quadratic(a, cov), a, np.array([0.0]), np.array([1.0]))
+    assert got[0, 0] == pytest.approx(0.05**2, rel=1e-6)
+    assert at_bounds(a, np.array([0.0]), np.array([1.0])).tolist() == [True]
+    assert at_bounds(np.array([0.9]), np.array([0.0]), np.array([1.0])).tolist() == [False]
+
+
+def test_a_flat_direction_gets_the_searched_span():
+    def crit(xs):
+        return np.array([(x[0] - 0.5) ** 2 / 1e-4 for x in xs])  # x[1] does not matter
+    got = curvature_covariance(crit, np.array([0.5, 3.0]), np.array([0.0, 0.0]),
+                               np.array([1.0, 10.0]))
+    assert got[0, 0] == pytest.approx(1e-4, rel=1e-6)
+    assert np.sqrt(got[1, 1]) == pytest.approx(10.0, rel=1e-6)
+
+
+class _Predictor:
+    """Records of toy states: the state is the parameter value itself."""
+
+    def records(self, states):
+        return [np.array([s]) for s in states]
+
+
+class _Objective:
+    """chi^2 = ((x - truth) / sd)^2 on one 'sensor'."""
+
+    def __init__(self, truth: float, sd: float):
+        self.truth, self.sd = truth, sd
+        self.n_obs = np.array([np.inf])
+
+    def rss(self, records):
+        return np.array([((records[0] - self.truth) / self.sd) ** 2])
+
+
+def _toy(log: bool = False) -> Effect:
+    lo, hi = (0.1, 10.0) if log else (0.0, 1.0)
+    return Effect(name="toy", description="a toy effect",
+                  space=lambda ctx, base: (Parameter("x_m", lo, hi, log=log),),
+                  baseline=lambda ctx, base: {"x_m": lo},
+                  apply=lambda ctx, base, p: float(p["x_m"]))
+
+
+def test_fit_effect_reports_the_curvature_interval():
+    fit = fit_effect(_toy(), None, None, _Predictor(), _Objective(0.437, 0.01), np.ones(1))
+    assert fit.parameters["x_m"] == pytest.approx(0.437, abs=1e-4)
+    lo, hi = fit.intervals["x_m"]
+    assert lo == pytest.approx(0.437 - Z_LEVEL * 0.01, abs=2e-4)
+    assert hi == pytest.approx(0.437 + Z_LEVEL * 0.01, abs=2e-4)
+    assert fit.at_bound == ()
+
+
+def test_fit_effect_interval_of_a_log_parameter_is_asymmetric_in_si():
+    # chi^2 quadratic in the value: in log10 the interval maps back around the optimum
+    fit = fit_effect(_toy(log=True), None, None, _Predictor(), _Objective(2.0, 0.05),
+                     np.ones(1))
+    lo, hi = fit.intervals["x_m"]
+    assert lo < 2.0 < hi
+    assert hi - lo == pytest.approx(2 * Z_LEVEL * 0.05, rel=0.03)
+
+
+def test_a_fit_pinned_at_a_bound_is_flagged():
+    fit = fit_effect(_toy(), None, None, _Predictor(), _Objective(1.3, 0.05), np.ones(1))
+    assert fit.parameters["x_m"] == pytest.approx(1.0, abs=1e-3)
+    assert fit.at_bound == ("x_m",)
+    assert fit.intervals["x_m"][1] == pytest.approx(1.0)
+
+
+def _cand(effect: str, score: float, **kw) -> Candidate:
+    return Candidate(effect=effect, parameters={"remanence_factor": 1.5}, baseline={},
+                     chi2=1.0, misfit=1.0, score=score, n_parameters=1, **kw)
+
+
+def test_a_fit_at_a_bound_is_not_named_and_the_verdict_says_so():
+    pinned = _cand("magnet_remanence", 300.0, at_bound=("remanence_factor",),
+                   intervals={"remanence_factor": (1.45, 1.5)})
+    other = _cand("wall_dissipation", 40.0)
+    # the pinned fit is not named, and it fits so much better than the next that the
+    # next is not the answer either
+    assert decide([pinned, other], [], 10.0) == (None, None)
+    assert decide([pinned], [], 10.0) == (None, None)
+    d = Diagnosis(mode="waveform", setup="mss", effect="none", parameters={},
+                  misfit_before=2.0, misfit_after=2.0, candidates=(pinned,), threshold=10.0,
+                  n_obs=100, sigma=(1.0,), added=(), refit=(), gamma_contact=1.0,
+                  gamma_wall=0.0, disagreement={"where": "x", "windows": []}, simulations=1,
+                  elapsed_s=0.0, verdict={"explained": False, "windows": []}, noise={},
+                  before=None, after=None)
+    assert "closest, magnet_remanence, has its fit at the bound" in d.summary()
+    js = d.to_json()
+    assert js["closest_at_bound"]["effect"] == "magnet_remanence"
+    assert js["candidates"][0]["at_bound"] is True
+    assert js["candidates"][0]["intervals"]["remanence_factor"] == {
+        "value": 1.5, "lower": 1.45, "upper": 1.5, "at_bound": True}
+    report = {**js, "passes": [{"effect": "none", "parameters": {}, "misfit_before": 2.0,
+                                "misfit_after": 2.0, "explained": False,
+                                "summary": d.summary()}]}
+    text = format_diagnosis(report)
+    assert "[at bound]" in text and "remanence_factor=1.5 [1.45, 1.5]" in text
+
+
+def test_a_named_effect_reports_its_interval():
+    c = dataclasses.replace(_cand("magnet_remanence", 50.0),
+                            parameters={"remanence_factor": 1.1},
+                            intervals={"remanence_factor": (1.05, 1.16)})
+    d = Diagnosis(mode="waveform", setup="mss", effect="magnet_remanence",
+                  parameters={"remanence_factor": 1.1}, misfit_before=2.0, misfit_after=1.0,
+                  candidates=(c,), threshold=10.0, n_obs=100, sigma=(1.0,), added=(),
+                  refit=(), gamma_contact=1.0, gamma_wall=0.0,
+                  disagreement={"where": "x", "windows": []}, simulations=1, elapsed_s=0.0,
+                  verdict={"explained": True, "windows": []}, noise={}, before=None,
+                  after=None)
+    iv = d.to_json()["parameter_intervals"]["remanence_factor"]
+    assert (iv["lower"], iv["value"], iv["upper"]) == (1.05, 1.1, 1.16)
+    assert d.to_json()["closest_at_bound"] is None

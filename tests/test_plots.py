@@ -14,6 +14,7 @@ from msens import api, plots, plots_mss
 from msens.config.study import default_study_path
 from msens.io.output import DPI, OutputDir
 from msens.vocabulary import TIME_LABEL, sensor_name
+from msens.workflows.run import figure_makers
 
 # a file's first bytes, by format
 MAGIC = {"png": b"\x89PNG", "pdf": b"%PDF", "svg": b"<?xml"}
@@ -53,7 +54,7 @@ def _time_axes(fig) -> list[str]:
                                   "mss_voltage.png", "mss_integrated.png",
                                   "sensitivity_profile.png", "magnetic_precompression.png"])
 def test_every_run_figure_writes_each_format_with_units(result, tmp_path, name):
-    makers = api._figure_makers(result)
+    makers = figure_makers(result)
     assert name in makers
     fig = makers[name]()
     try:
@@ -354,3 +355,15 @@ def test_pareto_snr_in_db_clusters_named_star_open():
         assert star.get_ydata()[0] in front.get_ydata()
     finally:
         plots.close(fig)
+
+
+@pytest.mark.parametrize(("tag", "name"), [
+    ("mss@13", "coil at particle 13"), ("bead@18", "bead sensor at particle 18"),
+    ("rod@13 (top)", "rod sensor at particle 13 (top)"), ("elsewhere", "elsewhere")])
+def test_vocabulary_names_data_keys(tag, name):
+    from msens.vocabulary import channel_name, contact_name
+
+    assert channel_name(tag) == name
+    assert contact_name(11) == "contact 11 (particles 11, 12)"
+    assert contact_name(11, particles=False) == "contact 11"
+    assert TIME_LABEL == "time since striker impact (µs)"

@@ -24,6 +24,8 @@ Data files keep their own keys (``"mss@13"`` in JSON, ``c11`` nowhere in figures
 
 from __future__ import annotations
 
+import re
+
 #: What t = 0 is, in every figure.
 TIME_ORIGIN = "time since striker impact"
 #: The time axis of every figure of a record.
@@ -57,13 +59,14 @@ def coil_name(particle: int) -> str:
     return sensor_name("mss", particle)
 
 
+_TAG = re.compile(r"([a-z]+)@(\d+)")
+
+
 def channel_name(tag: str) -> str:
-    """Figure name of a data key "kind@particle" ("mss@13" -> "coil at particle 13");
-    any other text is returned unchanged."""
-    kind, sep, particle = tag.partition("@")
-    if sep and particle.isdigit():
-        return sensor_name(kind, int(particle))
-    return tag
+    """Figure name of a data key "kind@particle" ("mss@13" -> "coil at particle 13"), also
+    inside a longer text ("bead@13 (top)" -> "bead sensor at particle 13 (top)"); any other
+    text is returned unchanged."""
+    return _TAG.sub(lambda m: sensor_name(m[1], int(m[2])), tag)
 
 
 def contact_name(c: int, *, particles: bool = True) -> str:

@@ -164,6 +164,12 @@ def test_command_writes_strict_json_and_figures(tmp_path, capsys):
     assert set(o["sobol"]) == {"striker.drop_height_m", "electronics.cable_capacitance_F"}
     assert {"S1", "S1_conf", "ST", "ST_conf"} <= set(o["sobol"]["striker.drop_height_m"])
     assert report["waveforms"]["paper-mss/mss@13"]["unit"] == "V"
+    cover = {(r["position"], r["output"].rsplit("/", 1)[1]): r
+             for r in report["reference_coverage"]}
+    assert set(cover) == {(p, f) for p in ("top", "bottom") for f in ("tof_us", "ar")}
+    top = cover[("top", "tof_us")]
+    assert top["experiment"] == 287.3 and top["output"] == "paper-mss/mss@13/tof_us"
+    assert top["inside"] == (top["band_5_95"][0] <= 287.3 <= top["band_5_95"][1])
     for f in ("uq_waveforms.png", "uq_sobol.png"):
         assert (tmp_path / "out" / f).stat().st_size > 10_000
     assert "paper-mss/mss@13/tof_us" in capsys.readouterr().out

@@ -41,7 +41,7 @@ def feature_label(name: str) -> tuple[str, str]:
 
 
 def to_json(result: Propagation, nominal: dict[str, float], *, provenance: dict,
-            study: str) -> dict:
+            study) -> dict:
     """The content of ``uq.json``.
 
     Parameters
@@ -50,8 +50,8 @@ def to_json(result: Propagation, nominal: dict[str, float], *, provenance: dict,
     nominal : dict
         Each output at the nominal input values (the ``msens run`` prediction).
     provenance : dict
-    study : str
-        The study's name.
+    study : Study
+        The propagated study (its name and published reference rows).
     """
     names = [p.name for p in result.inputs.propagated]
     outputs = {}
@@ -79,7 +79,7 @@ def to_json(result: Propagation, nominal: dict[str, float], *, provenance: dict,
                         **{f"p{round(q * 100):02d}": band[i, ::step].tolist()
                            for i, q in enumerate(QUANTILES)}}
     return {
-        "schema": "msens.uq/1", "study": study, "inputs_file": result.inputs.source,
+        "schema": "msens.uq/1", "study": study.name, "inputs_file": result.inputs.source,
         "provenance": provenance,
         "method": {"sampling": "Saltelli scheme on a scrambled Sobol' sequence "
                                "(SALib.sample.sobol, first-order and total indices)",
@@ -91,8 +91,34 @@ def to_json(result: Propagation, nominal: dict[str, float], *, provenance: dict,
                  "field_solves": 0, "seconds": result.seconds, "workers": result.workers},
         "inputs": [p.to_json() for p in result.inputs.inputs],
         "held_at_nominal": {p.name: p.held_reason for p in result.inputs.held},
-        "outputs": outputs, "waveforms": waveforms,
+        "outputs": outputs, "reference_coverage": reference_coverage(study, result),
+        "waveforms": waveforms,
     }
+
+
+def reference_coverage(study, result: Propagation) -> list[dict]:
+    """Each published experiment number of the study (``[[reference.row]]``: TOF and AR with
+    their std over shots) beside the prediction's 5-95 % band: is it inside?"""
+    out = []
+    for ref in study.reference:
+        setup = next((s for s in study.setups if s.name == ref.setup), None)
+        if setup is None:
+            continue
+        particles = sorted(s.particle for s in setup.sensors)
+        pick = {"top": particles[0], "bottom": particles[-1]}.get(ref.position)
+        sensor = next((s for s in setup.sensors if s.particle == pick), None)
+        if sensor is None:
+            continue
+        for feature, value, std in (("tof_us", ref.tof_us, ref.tof_std_us),
+                                    ("ar", ref.ar, ref.ar_std)):
+            name = f"{setup.name}/{sensor.kind.value}@{sensor.particle}/{feature}"
+            if name not in result.features:
+                continue
+            lo, _, hi = result.band(name)
+            out.append({"setup": ref.setup, "position": ref.position, "output": name,
+                        "experiment": value, "experiment_std": std, "band_5_95": [lo, hi],
+                        "inside": bool(lo <= value <= hi)})
+    return out
 
 
 def _is_voltage(name: str, result: Propagation) -> bool:
@@ -117,6 +143,11 @@ def format_table(report: dict) -> str:
         lines.append(f"{k:<44} {nom:>10.4g} {_num(q['p05']):>10} {_num(q['p50']):>10} "
                      f"{_num(q['p95']):>10}  {top[0]} ({top[1]['ST']:.2f})"
                      + (f" [{o['sobol_note']}]" if "sobol_note" in o else ""))
+    for r in report.get("reference_coverage", []):
+        lo, hi = r["band_5_95"]
+        lines.append(f"experiment {r['output']}: {r['experiment']:.4g} (std "
+                     f"{r['experiment_std']:.2g}) {'inside' if r['inside'] else 'OUTSIDE'} "
+                     f"the 5-95 % band {lo:.4g}..{hi:.4g}")
     if held:
         lines.append("held at nominal (the bands are conditional on their values): "
                      + "; ".join(held))
@@ -199,5 +230,5 @@ def sobol_figure(result: Propagation):
     return fig
 
 
-__all__ = ["FEATURES", "SOBOL_FEATURES", "feature_label", "format_table", "sobol_figure",
-           "to_json", "waveform_figure"]
+__all__ = ["FEATURES", "SOBOL_FEATURES", "feature_label", "format_table", "reference_coverage",
+           "sobol_figure", "to_json", "waveform_figure"]

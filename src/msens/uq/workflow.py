@@ -147,7 +147,7 @@ def run_uq(study: Study, out: str | Path, *, inputs: str | Path | None = None,
     finally:
         if bar is not None:
             bar.close()
-    report = rep.to_json(result, nominal, provenance=provenance(study), study=study.name)
+    report = rep.to_json(result, nominal, provenance=provenance(study), study=study)
     written = [target.write_json("uq.json", report)]
     for name, make in ((names[1], lambda: rep.waveform_figure(result)),
                        (names[2], lambda: rep.sobol_figure(result))):

@@ -5,6 +5,7 @@
 - ``_generated/api-*.rst`` from ``msens.__all__`` and the subpackages' ``__all__``
   (:mod:`apiref`);
 
+runs ``msens verify`` for the validation page (``_generated/verify.txt``),
 and makes the plain-text mathematics of docstrings (``|B|``, ``x**2``) safe for reST
 (:mod:`plaintext`).
 """
@@ -18,8 +19,19 @@ import plaintext
 import studyref
 
 
+def _verify_table(target: Path) -> None:
+    """``msens verify``'s table, computed now: the validation page includes it."""
+    from msens.field.verify import format_table, run_all
+
+    text = format_table(run_all()) + "\n"
+    if not target.exists() or target.read_text() != text:
+        target.write_text(text)
+
+
 def _generate(app) -> None:
     docs = Path(app.srcdir)
+    (docs / "_generated").mkdir(exist_ok=True)
+    _verify_table(docs / "_generated" / "verify.txt")
     studyref.write_rst(docs.parent, docs / "_generated" / "study-reference.rst")
     studyref.write_sweep_rst(docs / "_generated" / "sweep-reference.rst")
     apiref.write_api(docs / "_generated")

@@ -37,3 +37,15 @@ def test_license_and_citation():
 def test_changelog_follows_keep_a_changelog():
     text = (ROOT / "CHANGELOG.md").read_text()
     assert text.startswith("# Changelog") and "## [Unreleased]" in text
+
+
+def test_readme_python_example_runs(capsys):
+    """The README's Python block runs as written (the built-in study, committed caches)."""
+    text = (ROOT / "README.md").read_text()
+    code = re.search(r"## Python\n\n```python\n(.*?)```", text, re.S).group(1)
+    namespace: dict = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    coil = namespace["coil"]
+    assert 0.1 < coil["peak_voltage_V"] < 2.0  # volts at the DAQ of coil 13
+    record = namespace["record"]
+    assert record.voltage.shape == record.t_daq.shape

@@ -181,7 +181,7 @@ def test_eddy_skin_size_that_would_mesh_forever(tmp_path, capsys):
                     "skin_size_m = 1e-6\n")
     code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
                         capsys, seconds=10)
-    assert_input_error(code, err, "'field.skin_size_m'", "smallest skin_size_m", "8.3e-06")
+    assert_input_error(code, err, "'field.skin_size_m'", "smallest skin_size_m", "1.7e-05")
 
 
 def test_steel_conductivity_needs_eddy_currents(tiny, tmp_path, capsys):
@@ -300,3 +300,54 @@ def test_range_messages_quote_the_value_exactly(tiny, tmp_path, capsys):
 def test_synth_out_empty(tmp_path, capsys):
     code, err = run_cli(["synth", str(TINY_MSS), "--out", ""], capsys, seconds=5)
     assert_input_error(code, err, "--out is empty")
+
+
+# --------------------------------------------------------------------------- faults
+
+def test_full_disk_at_the_lock_file(tiny, tmp_path, capsys, monkeypatch):
+    """A full disk failed at the output folder's lock (an OSError: internal error)."""
+    from msens.io import dirlock
+
+    def full(fd, data):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(dirlock.os, "write", full)
+    code, err = _run(tiny, tmp_path, capsys)
+    assert_input_error(code, err, "lock file", "No space left on device")
+
+
+def test_full_disk_while_writing_results(tiny, tmp_path, capsys, monkeypatch):
+    """Whichever result file hits the full disk is named; no temporary file is left."""
+    from msens.io import atomic
+
+    real = atomic.os.fsync
+
+    def full(fd):
+        real(fd)
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(atomic.os, "fsync", full)
+    code, err = _run(tiny, tmp_path, capsys)
+    assert_input_error(code, err, str(tmp_path / "o"), "cannot write",
+                       "No space left on device")
+    assert not [p for p in (tmp_path / "o").iterdir() if TEMP_MARK in p.name]
+
+
+@pytest.mark.skipif(os.geteuid() != 0 or not Path("/proc/mounts").exists(),
+                    reason="needs root to mount a read-only tmpfs")
+def test_read_only_folder(tiny, tmp_path, capsys):
+    import subprocess
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(ro)],
+                      capture_output=True).returncode != 0:
+        pytest.skip("mount not permitted here")
+    try:
+        path = tiny()
+        code, err = run_cli(["run", str(path), "--out", str(ro / "o"), "--no-figures"], capsys)
+        assert_input_error(code, err, str(ro / "o"), "Read-only file system")
+        code, err = run_cli(["synth", str(path), "--out", str(ro / "x.csv")], capsys)
+        assert_input_error(code, err, str(ro / "x.csv"), "Read-only file system")
+    finally:
+        subprocess.run(["umount", str(ro)], check=False)

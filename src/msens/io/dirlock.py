@@ -59,8 +59,13 @@ def acquire(directory: str | os.PathLike[str]) -> str:
         raise InputError(f"--out '{directory}' is in use by another msens command (process "
                          f"{holder}); wait for it to finish or choose another --out "
                          "directory") from None
-    os.ftruncate(fd, 0)
-    os.write(fd, f"{os.getpid()}\n".encode())
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+    except OSError as exc:  # a full disk: nothing else would be written there either
+        os.close(fd)
+        raise InputError(f"--out '{directory}': cannot write its lock file {LOCK_NAME} "
+                         f"({exc.strerror or exc})") from None
     _held[key] = [fd, 1]
     return key
 

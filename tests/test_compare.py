@@ -43,12 +43,17 @@ def test_self_comparison_has_zero_error(result, name):
 
 @pytest.mark.parametrize("name", ["bead", "rod", "mss"])
 def test_eq11_factor_recovers_known_gain(result, name):
-    """Noisy shots (1% noise, offsets, jitter): K * true gain = 1 within 1%."""
+    """Noisy shots (1% noise, offsets, jitter): the gain is synth's true gain within 1 %
+    (one convention: measured = gain x model), and K is its inverse."""
     waveform = synthesize(_setup(result, name), RigEffects(shots=5, noise=0.01, seed=7))
     report = compare(result, waveform)
+    assert report["gain_convention"].startswith("measured = gain x model")
     for ch in report["channels"]:
         truth = float(waveform.metadata[truth_gain_key(ch["kind"], ch["particle"])])
-        assert ch["measured"]["gain"]["mean"] * truth == pytest.approx(1.0, abs=0.01)
+        gain = ch["measured"]["gain_measured_per_model"]["mean"]
+        assert gain == pytest.approx(truth, rel=0.01)
+        assert ch["measured"]["conversion_factor_K"]["mean"] * truth == pytest.approx(
+            1.0, abs=0.01)
 
 
 def test_synth_is_reproducible(result):
@@ -94,10 +99,13 @@ def test_channel_without_sensor_is_named(result):
         compare(result, w)
 
 
-@pytest.mark.parametrize(("name", "unit"), [("bead", "N/V"), ("mss", "N/(V s)")])
-def test_gain_unit_and_truncated_record(result, name, unit):
+@pytest.mark.parametrize(("name", "unit", "gain_unit"),
+                         [("bead", "N/V", "V/N"), ("mss", "N/(V s)", "V/(N/s)")])
+def test_gain_unit_and_truncated_record(result, name, unit, gain_unit):
     waveform = synthesize(_setup(result, name), RigEffects(seed=2))
-    assert compare(result, waveform)["channels"][0]["gain_unit"] == unit
+    ch = compare(result, waveform)["channels"][0]
+    assert ch["K_unit"] == unit
+    assert ch["gain_measured_per_model_unit"] == gain_unit
     cut = Waveform(waveform.time[:2500], waveform.data[:2500], waveform.channels)
     with pytest.raises(InputError, match="no reflected pulse in the record"):
         compare(result, cut)
@@ -107,7 +115,8 @@ def test_gain_unit_and_truncated_record(result, name, unit):
 def test_format_comparison_shows_gain_unit(unit):
     stat = {"mean": 1.5, "std": 0.0}
     report = {"setup": "s", "shots": 1, "channels": [{
-        "channel": "mss@13", "gain_unit": unit, "model": {"tof_us": 288.0, "ar": 0.7},
-        "measured": {k: stat for k in ("gain", "tof_us", "ar", "nrmse", "correlation")}}]}
+        "channel": "mss@13", "K_unit": unit, "model": {"tof_us": 288.0, "ar": 0.7},
+        "measured": {k: stat for k in ("conversion_factor_K", "tof_us", "ar", "nrmse",
+                                       "correlation")}}]}
     row = api.format_comparison(report).splitlines()[3]
     assert row.startswith(f"mss@13     {1.5:>10} {unit:<7} ")

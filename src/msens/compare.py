@@ -47,7 +47,8 @@ from msens.signals.features import (
     wave_speed,
 )
 from msens.signals.processing import integrate_drift_corrected
-from msens.synth import UNITS, UNITS_KEY, is_physics_mss
+from msens.synth import GAIN_CONVENTION, GAIN_KEY, UNITS, UNITS_KEY, is_physics_mss
+from msens.synth import gain_unit as measured_gain_unit
 
 
 def lowpassed_features(records: np.ndarray, t: np.ndarray) -> PulseFeatures:
@@ -338,7 +339,10 @@ def _metrics(record: ShotRecord, setup: SetupResult, sensor: SensorResult,
     f = record.features
     unit = _peak_unit(sensor)
     out = {
-        "gain": record.gain,
+        # one convention with synth and diagnose: measured = gain x model; K (Eq. 11) is
+        # its inverse
+        GAIN_KEY: 1.0 / record.gain,
+        "conversion_factor_K": record.gain,
         "tof_us": float(f.tof) * 1e6,
         "ar": float(f.ar),
         "width_us": float(f.width) * 1e6,
@@ -382,8 +386,11 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
     dict
         ``{"setup", "shots", "model_processing", "channels": [{"channel", "kind",
         "particle", "model": {...}, "run": {...}, "measured": {metric: {"mean", "std"}},
-        "gain_unit", "record"}], "speed": {...}}`` — the content of ``compare.json``. Gains
-        are N/V (bead, rod), N/(V s) (four-contact MsS) or V/V (physics MsS). The model's
+        "gain_measured_per_model_unit", "K_unit", "record"}], "gain_convention",
+        "speed": {...}}`` — the content of ``compare.json``. ``gain_measured_per_model``
+        (measured = gain x model, as synth's ``truth_gain_*`` and diagnose's gains) is in
+        V/N (bead, rod), V/(N/s) (four-contact MsS) or V/V (physics MsS);
+        ``conversion_factor_K``, its inverse (paper Eq. 11), in N/V, N/(V s) or V/V. The model's
         features come from the pipeline of ``msens run``
         (:func:`msens.signals.features.model_features`) with one difference, named in
         ``model_processing``: the records are low-passed as the measured ones are
@@ -424,12 +431,16 @@ def compare(result: StudyResult, waveform: Waveform) -> dict:
             "run": {"tof_us": float(f.tof) * 1e6, "ar": float(f.ar),
                     "width_us": float(f.width) * 1e6},
             "measured": _stats(per_shot),
-            "gain_unit": gain_unit(sensor),
+            f"{GAIN_KEY}_unit": measured_gain_unit(sensor),
+            "K_unit": gain_unit(sensor),
         }
         if is_physics_mss(sensor):
             entry["record"] = "integrated DAQ voltage, V s"
         channels.append(entry)
     out = {"setup": setup.setup.name, "shots": len(shots),
+           "gain_convention": f"{GAIN_CONVENTION} ({GAIN_KEY}, as synth's truth_gain_*); "
+                              "conversion_factor_K = 1 / gain, model per measured volt "
+                              "(paper Eq. 11)",
            "model_processing": model_processing(), "channels": channels}
     parts = sorted(s.sensor.particle for s in setup.sensors)
     if len(parts) >= 2:

@@ -29,6 +29,15 @@ from msens.results import SensorResult, SetupResult
 #: Metadata key and value saying what unit the channels' samples are in.
 UNITS_KEY = "units"
 UNITS = "V"
+#: The one convention for a channel's gain in msens (synth's ``truth_gain_*``, compare's and
+#: diagnose's fitted gains): measured volts = gain x the model's record, so the gain is in
+#: V/N (bead, rod), V per N/s (four-contact MsS) or V/V (physics MsS). The paper's
+#: conversion factor K (Eq. 11, model per measured volt) is its inverse.
+GAIN_KEY = "gain_measured_per_model"
+#: Metadata key naming the convention in a synthetic file (files written before it have
+#: the same convention).
+GAIN_CONVENTION_KEY = "gain_convention"
+GAIN_CONVENTION = "measured = gain x model"
 
 
 @dataclass(frozen=True)
@@ -98,8 +107,15 @@ def gain_bounds(sensor: SensorResult, effects: RigEffects) -> tuple[float, float
 
 
 def truth_gain_key(kind: str, particle: int) -> str:
-    """Metadata key holding a synthetic channel's true gain."""
+    """Metadata key holding a synthetic channel's true gain (:data:`GAIN_CONVENTION`)."""
     return f"truth_gain_{kind}_{particle}"
+
+
+def gain_unit(sensor: SensorResult) -> str:
+    """Unit of a channel's gain (:data:`GAIN_CONVENTION`): measured volts per model unit."""
+    if is_physics_mss(sensor):
+        return "V/V"
+    return "V/(N/s)" if sensor.sensor.kind is SensorKind.MSS else "V/N"
 
 
 def _log_uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
@@ -125,7 +141,8 @@ def synthesize(setup: SetupResult, effects: RigEffects = RigEffects(), *,
         Channels ``<kind>@<particle>[#k]``, volts, on the model's sample grid shifted so
         that t = 0 is the trigger. Metadata: ``units: V``, the effects and the truth
         (``truth_gain_<kind>_<particle>``: the gain of :func:`gain_bounds`, V/N, V per N/s
-        or V/V; ``truth_trigger_delay_s``, ``truth_delay_s_<k>``: impact to trigger, s).
+        or V/V, measured = gain x model as ``gain_convention`` says;
+        ``truth_trigger_delay_s``, ``truth_delay_s_<k>``: impact to trigger, s).
     """
     rng = np.random.default_rng(effects.seed)
     t = setup.history.t
@@ -141,7 +158,8 @@ def synthesize(setup: SetupResult, effects: RigEffects = RigEffects(), *,
     columns, channels = [], []
     meta = {UNITS_KEY: UNITS, "synthetic": "true", "seed": str(effects.seed),
             "setup": setup.setup.name, "shots": str(effects.shots),
-            "noise_fraction": repr(effects.noise), "truth_trigger_delay_s": repr(delay)}
+            "noise_fraction": repr(effects.noise), "truth_trigger_delay_s": repr(delay),
+            GAIN_CONVENTION_KEY: GAIN_CONVENTION}
     for s, g in zip(sensors, gains, strict=True):
         meta[truth_gain_key(s.sensor.kind.value, s.sensor.particle)] = repr(g)
     jitters = rng.uniform(-effects.jitter_s, effects.jitter_s, effects.shots)

@@ -133,6 +133,11 @@ class Diagnosis:
         record time plus the baseline's fitted trigger delay), ``t_after_us`` (the same with
         the corrected model's delay), ``data``, ``before``, ``after`` (V; the shots' mean),
         or for features mode the feature table.
+    calibration : dict
+        Waveform mode: the record calibration profiled out of the final model's fit, per
+        channel: ``gain_measured_per_model`` (measured = gain x model, synth's and
+        compare's convention) with its unit, DC offset (V) and the impact-to-trigger delay
+        (s). Empty in feature mode.
     """
 
     mode: str
@@ -157,6 +162,7 @@ class Diagnosis:
     before: ModelState = field(repr=False)
     after: ModelState = field(repr=False)
     overlay: list = field(repr=False, default_factory=list)
+    calibration: dict = field(default_factory=dict)
 
     @property
     def explained(self) -> bool:
@@ -240,5 +246,6 @@ class Diagnosis:
                                            for n, p in self.added]},
             "joint_refit": [{"effect": n, "parameters": p} for n, p in self.refit],
             "disagreement": self.disagreement,
+            **({"record_calibration": self.calibration} if self.calibration else {}),
             "simulations": self.simulations,
         }

@@ -84,6 +84,7 @@ from msens.diagnose.where import feature_residuals, feature_table, window_residu
 from msens.errors import InputError
 from msens.io.waveform import Waveform
 from msens.pipeline import calibrate_dissipation, output_times
+from msens.synth import GAIN_CONVENTION, GAIN_KEY, gain_unit
 
 __all__ = ["THRESHOLD", "Candidate", "Diagnosis", "baseline_dissipation", "diagnose",
            "diagnose_passes", "diagnose_reference", "match_setup_spec"]
@@ -207,7 +208,22 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
         simulations=predictor.simulations, elapsed_s=time.perf_counter() - start,
         verdict=verdict(float(rss1.sum()), n, windows, ens.dof),
         noise={**ens.to_json(names), **(per_shot.to_json() if per_shot else {})},
-        before=base, after=after, overlay=_overlay(objective, records0, records1, base_result))
+        before=base, after=after, overlay=_overlay(objective, records0, records1, base_result),
+        calibration=_calibration(objective, records1, base_result, names))
+
+
+def _calibration(objective: WaveformObjective, records: np.ndarray, result,
+                 names: list[str]) -> dict:
+    """The gain, offset and delay profiled out of the fit of ``records`` (the final model),
+    in the one gain convention of msens (measured = gain x model)."""
+    a = objective.aligned(records)[0][0]
+    return {"convention": f"{GAIN_CONVENTION} (as synth's truth_gain_* and compare's "
+                          f"{GAIN_KEY})",
+            "delay_s": float(a.delay),
+            "channels": [{"channel": n, GAIN_KEY: float(g), f"{GAIN_KEY}_unit": gain_unit(s),
+                          "offset_V": float(b)}
+                         for n, g, b, s in zip(names, a.gains, a.offsets, result.sensors,
+                                               strict=True)]}
 
 
 def _overlay(objective: WaveformObjective, records0: np.ndarray, records1: np.ndarray,

@@ -120,8 +120,9 @@ def compare(study: Study, data: Path, out: Path, *,
 def format_comparison(report: dict) -> str:
     """Plain-text table of a comparison report (the content of ``compare.json``).
 
-    The conversion factor K is printed with its unit (``gain_unit``): N/V for bead and rod
-    channels, N/(V s) for a four-contact MsS, V/V for a physics MsS. TOF and AR are those
+    The conversion factor K (paper Eq. 11, model per measured volt: the inverse of the
+    gain ``gain_measured_per_model``) is printed with its unit (``K_unit``): N/V for bead and
+    rod channels, N/(V s) for a four-contact MsS, V/V for a physics MsS. TOF and AR are those
     of the compared records (for a physics MsS, of its integrated DAQ voltage).
     """
     # K's unit follows its value in a column of its own: a channel's K is one quantity
@@ -131,7 +132,8 @@ def format_comparison(report: dict) -> str:
     for ch in report["channels"]:
         m, s = ch["model"], ch["measured"]
         lines.append(
-            f"{ch['channel']:<10} {s['gain']['mean']:>10.4g} {ch.get('gain_unit', '?'):<7} "
+            f"{ch['channel']:<10} {s['conversion_factor_K']['mean']:>10.4g} "
+            f"{ch.get('K_unit', '?'):<7} "
             f"{s['tof_us']['mean']:>7.1f} ({m['tof_us']:>6.1f}) "
             f"{s['ar']['mean']:>6.3f} ({m['ar']:>5.3f}) {s['nrmse']['mean']:>7.4f} "
             f"{s['correlation']['mean']:>6.3f}")

@@ -22,10 +22,12 @@ _BYTES_PER_SAMPLE = 2 * 8
 #: Contacts each run of the Eq. 10 calibration batch samples (two sensors' contacts).
 _CALIBRATION_CONTACTS = 8
 #: Largest count of mesh elements the eddy-current model's skin refinement may add
-#: (``[field] skin_size_m``). Measured on the one-coil tiny study (9 beads refined):
-#: 40 µm gives 38,600 elements in 3.6 s of meshing, 20 µm 71,500 in 7 s, 10 µm 139,000 in
-#: 17 s (the finest size of the convergence study, benchmarks/dynamic_mesh_convergence.py);
-#: 1 µm would be about 1.3 million, meshed for minutes and solved at every frequency.
+#: (``[field] skin_size_m``). Measured with the bead surfaces graded only, on the one-coil
+#: tiny study (9 beads refined): 40 µm gives 38,600 elements in 3.6 s of meshing, 20 µm
+#: 71,500 in 7 s, 10 µm 139,000 in 17 s; 1 µm would be about 1.3 million, meshed for minutes
+#: and solved at every frequency. Grading the pole pieces too (issue 33) adds ~33,000 per
+#: bridge magnet at 40 µm: the one-coil model has 71,600 elements (7 s of meshing), the main
+#: study (two coils) 132,000 against 66,400.
 MAX_SKIN_ELEMENTS = 150_000
 
 #: Records of nt float64 samples each sensor adds (force, features' work arrays, and for a
@@ -100,41 +102,47 @@ def skin_elements(study: Study) -> tuple[float, float]:
     that would add :data:`MAX_SKIN_ELEMENTS` (0, 0 without eddy currents or an MsS).
 
     The refinement (:class:`msens.field.build.MeshOptions`) grades triangles of size
-    ``s + g d`` at distance ``d`` on both sides of each refined bead's surface (a half circle
-    of length pi R in the axisymmetric section), until a coarser size takes over, so a bead
-    adds about ``2 pi R / ((sqrt(3)/4) g s)`` triangles; within 10 % of the measured
-    counts (see :data:`MAX_SKIN_ELEMENTS`).
+    ``s + g d`` at distance ``d`` on both sides of every conducting surface (each refined
+    bead's half circle of length pi R in the axisymmetric section, each pole piece's and
+    magnet's rectangle outline, :func:`msens.field.build.skin_part_sizes`), until a coarser
+    size takes over, so a length ``l`` of surface adds about ``2 l / ((sqrt(3)/4) g s)``
+    triangles; within 10 % of the measured counts (see :data:`MAX_SKIN_ELEMENTS`).
 
     Returns
     -------
     (float, float)
-        Estimated elements (the setup that refines most beads) and the smallest allowed
+        Estimated elements (the setup that refines most) and the smallest allowed
         skin size, m.
     """
     from msens.config.fieldsetup import eddy_settings, geometry_from_study
     from msens.config.schema import MssModel
+    from msens.field.build import skin_beads, skin_part_sizes
 
     if not study.field.eddy_currents:
         return 0.0, 0.0
     options = eddy_settings(study).options
-    per_bead_times_size = 2.0 * math.pi * 0.5 * study.chain.bead_diameter_m / (
-        math.sqrt(3.0) / 4.0 * options.skin_growth)
-    most = 0
+    per_length_times_size = 2.0 / (math.sqrt(3.0) / 4.0 * options.skin_growth)
+    scale = fixed = 0.0  # elements x skin size (surfaces at skin_size), elements (others)
     for setup in study.setups:
         if not any(s.model is MssModel.PHYSICS for s in setup.sensors):
             continue
         geometry = geometry_from_study(study, setup)
-        coils = [u.coil.particle for u in geometry.sensors]
-        reach = max(options.near_contacts, 1)  # the beads msens.field.build refines
-        refined = [p for p in geometry.beads.particles
-                   if min(abs(p - q) for q in coils) <= reach]
-        most = max(most, len(refined))
-    scale = most * per_bead_times_size
-    smallest = scale / MAX_SKIN_ELEMENTS
+        beads = len(skin_beads(geometry, options)) * math.pi * geometry.beads.radius
+        parts = fixed_parts = 0.0
+        for q, size in skin_part_sizes(geometry, options):
+            outline = 2.0 * ((q.r1 - q.r0) + (q.z1 - q.z0))
+            if q.name.startswith("pole_"):  # graded to skin_size (the steel's δ/2 is less)
+                parts += outline
+            else:  # a magnet, graded to its own skin depth: does not scale with skin_size
+                fixed_parts += outline * per_length_times_size / size
+        here = (beads + parts) * per_length_times_size
+        if here / options.skin_size + fixed_parts > scale / options.skin_size + fixed:
+            scale, fixed = here, fixed_parts
+    smallest = scale / max(MAX_SKIN_ELEMENTS - fixed, 1.0)
     if smallest > 0.0:  # rounded up to two significant digits, so the value quoted passes
         step = 10.0 ** (math.floor(math.log10(smallest)) - 1)
         smallest = math.ceil(smallest / step) * step
-    return scale / options.skin_size, smallest
+    return scale / options.skin_size + fixed, smallest
 
 
 def check(study: Study) -> Budget:

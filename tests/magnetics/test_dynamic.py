@@ -208,6 +208,58 @@ def test_skin_refinement_option_keeps_existing_mesh_keys():
         MeshOptions(skin_size=-1.0)
 
 
+def _surface_edges(axi, names):
+    """Lengths (m) of the mesh edges between the named parts and the rest (not the axis)."""
+    m = axi.mesh
+    inside = np.zeros(m.t.shape[1], dtype=bool)
+    for n in names:
+        inside[axi.subdomains[n]] = True
+    f2t = m.f2t
+    two = f2t[1] >= 0
+    on = two & (inside[f2t[0]] != inside[np.where(two, f2t[1], 0)])
+    pts = m.p[:, m.facets[:, on]]
+    return np.hypot(*(pts[:, 0] - pts[:, 1]))
+
+
+@pytest.mark.parametrize("rule", ["conducting", "beads"])
+def test_skin_grading_reaches_every_conducting_surface(tmp_path, rule):
+    """Issue 33: the skin rule grades the pole pieces as it grades the beads (the mesh before
+    it left the poles at the part size, 1.2 mm, with a skin depth of ~70 µm at 10 kHz)."""
+    g = one_sensor()
+    skin = 150e-6  # coarse, so the mesh takes a second; the rule does not depend on it
+    opts = MeshOptions(bead_size=0.6e-3, centre_size=0.3e-3, flat_fraction=0.8,
+                       wedge_factor=4.0, skin_size=skin, skin_parts=rule)
+    axi, _ = load_mesh(g, opts, store=Store.at(tmp_path))
+    poles = _surface_edges(axi, ["pole_13_lower", "pole_13_upper"])
+    beads = _surface_edges(axi, ["bead_12", "bead_13", "bead_14"])
+    assert np.median(beads) <= 1.01 * skin and np.max(beads) <= 1.5 * skin
+    if rule == "conducting":
+        assert np.median(poles) <= 1.01 * skin and np.max(poles) <= 1.5 * skin
+    else:  # the old rule: the poles at the part size
+        assert np.median(poles) > 4 * skin
+
+
+def test_skin_rule_is_in_the_mesh_key():
+    from msens.field.build import skin_surface_size
+    from msens.field.cache import canonical, geometry_key
+
+    g = one_sensor()
+    opts = MeshOptions(skin_size=40e-6)
+    assert opts.skin_parts == "conducting" and canonical(opts)["skin_parts"] == "conducting"
+    assert geometry_key(g, opts) != geometry_key(g, MeshOptions(skin_size=40e-6,
+                                                                skin_parts="beads"))
+    assert MeshOptions().skin_parts is None
+    # steel: the skin size governs; an NdFeB magnet (δ ~ 1.3 mm at 200 kHz): half its δ
+    assert skin_surface_size(opts, sigma=6e6, mu_r=1000.0, pole=True) == 40e-6
+    assert skin_surface_size(MeshOptions(skin_size=40e-6, pole_skin_size=10e-6), sigma=6e6,
+                             mu_r=1000.0, pole=True) == 10e-6
+    assert 0.6e-3 < skin_surface_size(opts, sigma=0.667e6, mu_r=1.05, pole=True) < 0.7e-3
+    with pytest.raises(InputError, match="skin_parts"):
+        MeshOptions(skin_parts="conducting")
+    with pytest.raises(InputError, match="skin_parts"):
+        MeshOptions(skin_size=40e-6, skin_parts="poles")
+
+
 def _same_report(a, b, rtol=1e-10):
     for p, ra in a.responses.items():
         rb = b.responses[p]

@@ -14,7 +14,10 @@ written as gmsh 4.1 ``.msh`` with named physical groups:
 Grading: near a contact the air wedge between two spheres is only g + (rho^2 - a^2)/R thick
 (g = optional gap between the flats), so the element size follows that height (times
 ``MeshOptions.wedge_factor``) from ``flat_fraction x a`` at the flat up to the bead size; beads,
-coils and magnets get their own sizes; the far air grows to ``far_size``.
+coils and magnets get their own sizes; the far air grows to ``far_size``. For the eddy-current
+model (``MeshOptions.skin_size``) one rule grades the mesh into the skin of every conducting
+part (the beads near a coil, the pole pieces, the magnets): size s + g·d at distance d from the
+part's surface, s from :func:`skin_surface_size`.
 """
 
 from __future__ import annotations
@@ -62,12 +65,22 @@ class MeshOptions:
     growth : float
         Distance over which part sizes blend into the air size, as a multiple of part_size.
     skin_size : float or None
-        Element size at the surfaces of the beads within ``near_contacts`` of a coil, m,
-        growing linearly with the distance d from the surface as skin_size + skin_growth·d
-        (both sides of the surface): resolves the eddy-current skin depth (20–100 µm at
-        5–50 kHz in the beads). None (default): no skin refinement.
+        Element size at the surface of every conducting part, m: the beads within
+        ``near_contacts`` of a coil, the pole pieces and the magnets
+        (:func:`skin_surface_size`), growing linearly with the distance d from the surface
+        as size + skin_growth·d (both sides of the surface): resolves the eddy-current skin
+        depth (20–100 µm at 5–50 kHz in the steel). None (default): no skin refinement.
     skin_growth : float
         Growth rate of the skin refinement (size per distance).
+    pole_skin_size : float or None
+        Skin size at the pole-piece and magnet surfaces, m, if it should differ from
+        ``skin_size`` (refinement studies of one region at a time,
+        ``benchmarks/dynamic_mesh_convergence.py``). None (default): ``skin_size``.
+    skin_parts : str or None
+        Which conducting surfaces the skin grading covers: ``"conducting"`` (beads near a coil,
+        pole pieces, magnets; what any ``skin_size`` gives, set automatically) or ``"beads"``
+        (the bead surfaces only: the grading before issue 33, kept for comparisons). None
+        without ``skin_size``.
     """
 
     flat_fraction: float = 0.4
@@ -83,8 +96,15 @@ class MeshOptions:
     # left out of the mesh cache key at their defaults, so existing keys do not change
     skin_size: float | None = field(default=None, metadata={"omit_if_default": True})
     skin_growth: float = field(default=0.25, metadata={"omit_if_default": True})
+    pole_skin_size: float | None = field(default=None, metadata={"omit_if_default": True})
+    # None without a skin; "conducting" with one, so every skin mesh's key names its rule and
+    # a mesh graded only at the beads (before issue 33) is never read for one graded
+    # everywhere.
+    skin_parts: str | None = field(default=None, metadata={"omit_if_default": True})
 
     def __post_init__(self) -> None:
+        if self.skin_size is not None and self.skin_parts is None:
+            object.__setattr__(self, "skin_parts", "conducting")
         for name in ("flat_fraction", "wedge_factor", "far_contact_factor", "bead_size",
                      "centre_size", "part_size", "far_size", "far_growth", "growth"):
             v = getattr(self, name)
@@ -94,6 +114,13 @@ class MeshOptions:
                 f"MeshOptions.skin_size must be > 0 or None, got {self.skin_size}")
         require(self.skin_growth > 0, f"MeshOptions.skin_growth must be > 0, got "
                 f"{self.skin_growth}")
+        require(self.pole_skin_size is None or (self.pole_skin_size > 0
+                                                and math.isfinite(self.pole_skin_size)),
+                f"MeshOptions.pole_skin_size must be > 0 or None, got {self.pole_skin_size}")
+        require(self.skin_parts in ((None,) if self.skin_size is None
+                                    else ("conducting", "beads")),
+                f"MeshOptions.skin_parts must be 'conducting' or 'beads' with a skin_size "
+                f"(None without), got {self.skin_parts!r}")
 
     def scaled(self, factor: float) -> MeshOptions:
         """All sizes (not the counts) times ``factor`` (refinement studies)."""
@@ -154,21 +181,116 @@ def _box_field(q: Rect, size: float, options: MeshOptions, r_pad: float = 0.0) -
     return bx
 
 
-def _skin_field(geometry: SensorGeometry, options: MeshOptions, sensors: list[int]) -> int:
-    """Size skin_size + skin_growth·d at distance d from the nearest bead surface (exact
-    distance to the spheres), for the beads within ``near_contacts`` of a coil."""
-    b = geometry.beads
-    near = [p for p in b.particles
-            if min(abs(p - q) for q in sensors) <= max(options.near_contacts, 1)]
-    big_r = MM * b.radius
-    terms = [f"Abs(Sqrt(x^2 + (y - {MM * b.center(p)!r})^2) - {big_r!r})" for p in near]
+#: Top frequency the skin grading is made for, Hz (the highest of
+#: :data:`msens.magnetics.dynamic.DEFAULT_FREQUENCIES`).
+SKIN_TOP_FREQUENCY = 200e3
+#: Relative permeability assumed for the steel in the grading rule (the upper end of the
+#: incremental μr at the bias point, 800–1200 in the pole pieces): with σ of 1018 its skin
+#: depth at :data:`SKIN_TOP_FREQUENCY` is ~15 µm, below any useful ``skin_size``.
+SKIN_STEEL_MU_R = 1000.0
+
+
+def skin_surface_size(options: MeshOptions, *, sigma: float, mu_r: float,
+                      pole: bool = False) -> float:
+    """Element size at the surface of a conducting part, m: the ONE grading rule.
+
+    size = max(skin, δ/2), δ = √(2/(ωμ0μrσ)) at :data:`SKIN_TOP_FREQUENCY`, with skin =
+    ``options.skin_size`` (``pole_skin_size`` for pole pieces and magnets if given). For the
+    steel (σ ≈ 6 MS/m, μr ~ 1000) δ/2 ≈ 7 µm, so the skin size governs; a sintered NdFeB
+    magnet (σ ≈ 0.67 MS/m, μr ≈ 1.05) has δ ≈ 1.3 mm at 200 kHz and is graded to ~0.7 mm,
+    not to tens of µm it does not need.
+
+    Parameters
+    ----------
+    options : MeshOptions
+        With a ``skin_size``.
+    sigma : float
+        Conductivity, S/m.
+    mu_r : float
+        Relative permeability.
+    pole : bool
+        A pole piece or magnet (``pole_skin_size`` applies) rather than a bead.
+    """
+    internal(options.skin_size is not None, "internal: skin_surface_size without skin_size")
+    skin = options.skin_size
+    if pole and options.pole_skin_size is not None:
+        skin = options.pole_skin_size
+    if sigma <= 0:
+        return math.inf
+    delta = math.sqrt(2.0 / (2 * math.pi * SKIN_TOP_FREQUENCY * 4e-7 * math.pi * mu_r * sigma))
+    return max(skin, 0.5 * delta)
+
+
+def _min_expr(terms: list[str]) -> str:
     expr = terms[-1]
     for t in reversed(terms[:-1]):  # gmsh's MathEval Min takes two arguments
         expr = f"Min({t}, {expr})"
+    return expr
+
+
+def _rect_distance(q: Rect) -> str:
+    """MathEval expression (mm) of the exact distance from (x, y) to the boundary of ``q``
+    (inside and out: |signed distance| of a box)."""
+    ax = f"Max({MM * q.r0!r} - x, x - {MM * q.r1!r})"
+    ay = f"Max({MM * q.z0!r} - y, y - {MM * q.z1!r})"
+    return (f"Abs(Sqrt(Max({ax}, 0)^2 + Max({ay}, 0)^2) + Min(Max({ax}, {ay}), 0))")
+
+
+def skin_beads(geometry: SensorGeometry, options: MeshOptions) -> list[int]:
+    """Particles whose bead surfaces the skin grading refines: those within
+    ``max(near_contacts, 1)`` of a coil."""
+    sensors = [u.coil.particle for u in geometry.sensors]
+    return [p for p in geometry.beads.particles
+            if min(abs(p - q) for q in sensors) <= max(options.near_contacts, 1)]
+
+
+def skin_part_sizes(geometry: SensorGeometry, options: MeshOptions) -> list[tuple[Rect, float]]:
+    """Pole pieces and magnets the skin grading refines, with their surface sizes, m
+    (none with ``skin_parts="beads"``). A magnet is graded as if of the most conductive
+    grade msens knows (its grade is a material, not part of the mesh key)."""
+    from msens.params.materials import MAGNET_CONDUCTIVITY, SIGMA_1018
+
+    if options.skin_parts != "conducting":
+        return []
+    sigma_magnet = max(MAGNET_CONDUCTIVITY.values())
+    out = []
+    for unit in geometry.iter_units():
+        for q in geometry.magnet_rects(unit):
+            if q.name.startswith("pole_"):
+                size = skin_surface_size(options, sigma=SIGMA_1018, mu_r=SKIN_STEEL_MU_R,
+                                         pole=True)
+            else:
+                size = skin_surface_size(options, sigma=sigma_magnet,
+                                         mu_r=unit.magnet.recoil_permeability, pole=True)
+            if math.isfinite(size) and size < options.part_size:
+                out.append((q, size))
+    return out
+
+
+def _skin_field(geometry: SensorGeometry, options: MeshOptions) -> list[int]:
+    """Size s + skin_growth·d at distance d (exact) from the surface of each conducting part:
+    the beads within ``near_contacts`` of a coil (s = skin_size), the pole pieces and the
+    magnets (s from :func:`skin_surface_size`)."""
+    b = geometry.beads
+    big_r = MM * b.radius
     f = gmsh.model.mesh.field
-    skin = f.add("MathEval")
-    f.setString(skin, "F", f"{MM * options.skin_size!r} + {options.skin_growth!r} * ({expr})")
-    return skin
+    out = []
+    from msens.params.materials import SIGMA_1018
+
+    bead_size = skin_surface_size(options, sigma=SIGMA_1018, mu_r=SKIN_STEEL_MU_R)
+    terms = [f"Abs(Sqrt(x^2 + (y - {MM * b.center(p)!r})^2) - {big_r!r})"
+             for p in skin_beads(geometry, options)]
+    if terms:
+        skin = f.add("MathEval")
+        f.setString(skin, "F", f"{MM * bead_size!r} + {options.skin_growth!r} * "
+                               f"({_min_expr(terms)})")
+        out.append(skin)
+    for q, size in skin_part_sizes(geometry, options):
+        skin = f.add("MathEval")
+        f.setString(skin, "F", f"{MM * size!r} + {options.skin_growth!r} * "
+                               f"({_rect_distance(q)})")
+        out.append(skin)
+    return out
 
 
 def _set_sizes(geometry: SensorGeometry, options: MeshOptions, part_rects: list[Rect]) -> None:
@@ -199,7 +321,7 @@ def _set_sizes(geometry: SensorGeometry, options: MeshOptions, part_rects: list[
     fields.append(centre)
 
     if options.skin_size is not None:
-        fields.append(_skin_field(geometry, options, sensors))
+        fields.extend(_skin_field(geometry, options))
 
     z0, z1 = b.z_span
     fields.append(_box_field(Rect("beads", 0.0, b.radius, z0, z1), MM * options.bead_size,

@@ -22,6 +22,7 @@ import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 
 import msens
+from msens.api import format_comparison
 from msens.io.mapped import mapped
 
 root = Path.cwd()
@@ -45,12 +46,7 @@ print(f"{waveform.time.size} samples, {waveform.time[0] * 1e6:.0f} to "
 
 out = Path(tempfile.mkdtemp(prefix="msens-compare-"))
 report, written = msens.compare(msens.load_default(), mapped(scope, columns), out)
-for ch in report["channels"]:
-    m, s = ch["model"], ch["measured"]
-    print(f"{ch['channel']}: gain K = {s['gain']['mean']:.4g} {ch.get('gain_unit', '')}, "
-          f"TOF {s['tof_us']['mean']:.1f} us (model {m['tof_us']:.1f}), "
-          f"AR {s['ar']['mean']:.3f} (model {m['ar']:.3f}), "
-          f"correlation {s['correlation']['mean']:.4f}")
+print(format_comparison(report))  # the table msens compare prints
 
 # %%
 # The overlay: the measured record after alignment and calibration against the model's,

@@ -24,6 +24,7 @@ import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 
 import msens
+from msens.api import format_design
 
 sweep = """\
 schema = "msens.sweep/1"
@@ -47,9 +48,7 @@ work = Path(tempfile.mkdtemp(prefix="msens-design-"))
 
 result = msens.design(msens.load_default(), work / "sweep.toml", work / "out", workers=1,
                       progress=False)
-print(f"{result.designs} designs; recommended: {result.recommendation['parameters']}")
-for reason in result.recommendation["reasons"]:
-    print(" -", reason)
+print(format_design(result))  # what msens design prints: the recommendation and why
 
 # %%
 # ``designs.csv`` has one row per design. The paper's coil (1100 turns, 7 mm, AWG36) is one of

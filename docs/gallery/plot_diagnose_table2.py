@@ -23,20 +23,16 @@ import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 
 import msens
+from msens.api import format_diagnosis
 
 out = Path(tempfile.mkdtemp(prefix="msens-diagnose-"))
 report, written = msens.diagnose(msens.load_paper_table2(), None, out, reference="bead")
 
-print(f"verdict: {report['summary']} (explained: {report['explained']})")
-print(f"effect: {report['effect']}, parameters: "
-      + ", ".join(f"{k} = {v:.3g}" for k, v in report["parameters"].items()))
-print(f"{'candidate':<24} {'dBIC':>7} {'misfit':>8}  plausible significant")
-for c in report["candidates"]:
-    print(f"{c['effect']:<24} {c['score']:>7.1f} {c['misfit']:>8.3g}  "
-          f"{c['plausible']!s:<9} {c['significant']!s}")
+print(format_diagnosis(report))  # the table msens diagnose prints
 
 # %%
-# Read the table from the top: the best-scoring candidates can be implausible (a striker
+# Read the table from the top (score: ΔBIC against the baseline; misfit: in units of the
+# measurement's standard deviation): the best-scoring candidates can be implausible (a striker
 # faster than free fall from its drop height) and are then not named. The named effect's
 # parameters say where and how large it is; ``explained`` says whether the model with it
 # reproduces the data within their scatter. The figure ``msens diagnose`` writes shows, per

@@ -141,9 +141,10 @@ def _api_case(expr: str) -> int:
     other exception propagates (a traceback: a bug)."""
     from msens import api
     from msens.errors import InputError
+    from msens.field.geometry import BeadChain
 
     env = {"api": api, "Path": Path, "work": Path(os.environ["MSENS_FUZZ_WORK"]),
-           "math": math}
+           "math": math, "BeadChain": BeadChain}
     env["study"] = api.load(env["work"] / "tiny.toml")
     try:
         eval(expr, env)  # the campaign's own generated expressions
@@ -391,8 +392,7 @@ def api_case(rng: random.Random) -> tuple[str, str]:
              f"api.design(study, {bad}, work / 'api-d')",
              f"api.replace(study, {{'chain.beads': {bad}}})",
              f"api.compare(study, {bad}, work / 'api-c')",
-             f"__import__('msens.field.geometry').field.geometry.BeadChain(contact_layer={bad})",
-             f"__import__('msens.field.geometry').field.geometry.BeadChain(count={bad})"]
+             f"BeadChain(contact_layer={bad})", f"BeadChain(count={bad})"]
     expr = rng.choice(calls)
     # the good value of a call that only fails by its hostile argument would run a study:
     # keep those that are plainly valid out (a tiny run is fine, but not a design)

@@ -36,18 +36,11 @@ def study(value: object, what: str = "study"):
 
 
 def _path(value: object, option: str, what: str) -> Path:
-    if not isinstance(value, str | os.PathLike):
-        raise InputError(f"{option} must be a path to {what} (str or pathlib.Path), got "
-                         f"{type(value).__name__} {shorten(value)}")
-    text = os.fspath(value)
-    if not isinstance(text, str):
-        raise InputError(f"{option} must be a text path, got {shorten(text)}")
-    if text.strip() == "":
+    from msens.io._files import check_path
+
+    if isinstance(value, str | os.PathLike) and str(os.fspath(value)).strip() == "":
         raise InputError(f"{option} is empty: give {what}")
-    if "\0" in text:
-        raise InputError(f"{option} {shorten(text)} holds a NUL character; no file can be "
-                         "named so")
-    return Path(text)
+    return check_path(value, option)
 
 
 def output_file(value: object, option: str = "--out",

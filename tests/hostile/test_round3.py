@@ -107,7 +107,7 @@ def test_design_scheduler_checked_before_any_work(tmp_path, capsys, address):
     """Malformed addresses failed in parallel.py after ~40 s of field work."""
     code, err = run_cli(["design", str(TINY_MSS), "--sweep", str(SWEEP_COIL), "--out",
                          str(tmp_path / "d"), "--scheduler", address, "-q"], capsys,
-                        seconds=5)
+                        seconds=15)  # field work took ~40 s before the address was read
     assert_input_error(code, err, "--scheduler")
     assert len(err) < 600
     assert not (tmp_path / "d").exists()
@@ -124,14 +124,14 @@ def test_design_scheduler_nothing_listening(tmp_path, capsys):
 @pytest.mark.parametrize("workers", ["0", "-3"])
 def test_design_workers_below_one(tmp_path, capsys, workers):
     code, err = run_cli(["design", str(TINY_MSS), "--sweep", str(SWEEP_COIL), "--out",
-                         str(tmp_path / "d"), "--workers", workers, "-q"], capsys, seconds=5)
+                         str(tmp_path / "d"), "--workers", workers, "-q"], capsys, seconds=15)
     assert_input_error(code, err, "--workers must be >= 1", workers)
 
 
 def test_run_checks_scheduler_without_remote_work(tiny, tmp_path, capsys):
     path = tiny()
     code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures",
-                         "--scheduler", "garbage"], capsys, seconds=5)
+                         "--scheduler", "garbage"], capsys, seconds=15)
     assert_input_error(code, err, "--scheduler 'garbage'")
 
 
@@ -204,10 +204,10 @@ def test_study_loader_refuses_what_it_cannot_read(tmp_path, capsys, kind):
         with open(path, "wb") as fh:
             fh.truncate(5 << 20)
     code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
-                        capsys, seconds=5)
+                        capsys, seconds=15)
     assert_input_error(code, err, str(path))
     code, err = run_cli(["design", str(TINY_MSS), "--sweep", str(path), "--out",
-                         str(tmp_path / "d"), "-q"], capsys, seconds=5)
+                         str(tmp_path / "d"), "-q"], capsys, seconds=15)
     assert_input_error(code, err, str(path))
 
 
@@ -234,7 +234,7 @@ def test_electronics_rate_refused_before_field_work(tmp_path, capsys):
     path = tmp_path / "s.toml"
     path.write_text(TINY_MSS.read_text() + "\n[electronics]\nsample_rate_hz = 1e3\n")
     code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
-                        capsys, seconds=5)
+                        capsys, seconds=15)
     assert_input_error(code, err, "'electronics.sample_rate_hz'", "cannot resolve the pulse")
 
 
@@ -298,7 +298,7 @@ def test_range_messages_quote_the_value_exactly(tiny, tmp_path, capsys):
 
 
 def test_synth_out_empty(tmp_path, capsys):
-    code, err = run_cli(["synth", str(TINY_MSS), "--out", ""], capsys, seconds=5)
+    code, err = run_cli(["synth", str(TINY_MSS), "--out", ""], capsys, seconds=15)
     assert_input_error(code, err, "--out is empty")
 
 

@@ -141,14 +141,12 @@ def load_study(path: str | Path) -> Study:
     InputError
         Missing or unreadable file, bad TOML, or any invalid key or value.
     """
-    from msens.io._files import read_text
+    from msens.io._files import check_path, read_text
 
     if not isinstance(path, str | os.PathLike):
         raise InputError(f"a study is loaded from a path (str or pathlib.Path) to a .toml file, "
                          f"got {type(path).__name__} {shorten(path)}")
-    if str(path) == "":
-        raise InputError("study file path is empty: give a .toml file")
-    path = Path(path)
+    path = check_path(path, "study file")  # empty, NUL, a name too long
     if not path.exists():
         raise InputError(f"study file '{path}' does not exist")
     # a regular file of bounded size: /dev/zero or a pipe would be read forever

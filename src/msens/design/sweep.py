@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -193,9 +192,9 @@ class SweepSpec:
 
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and validate a sweep file (raises :class:`InputError`)."""
-    from msens.io._files import read_text
+    from msens.io._files import check_path, read_text
 
-    if isinstance(path, str | os.PathLike) and str(path) and not Path(path).exists():
+    if not check_path(path, "sweep file").exists():
         raise InputError(f"sweep file '{path}' does not exist")
     text = read_text(path, what="sweep file")  # a regular file of bounded size
     return parse_sweep(text, source=str(path))

@@ -29,6 +29,14 @@ def check_path(value: object, what: str = "file") -> Path:
         raise InputError(f"{what} path is empty")
     if "\0" in text:
         raise InputError(f"{what} path {shorten(text)} holds a NUL character")
+    try:
+        os.stat(text)
+    except (FileNotFoundError, NotADirectoryError):
+        pass  # a new name in a folder that exists or will be made: the caller's business
+    except OSError as exc:  # a name too long, a loop of links, no permission to look
+        raise InputError(f"{what} {shorten(text)}: {exc.strerror or exc}") from None
+    except ValueError as exc:  # e.g. characters the OS cannot encode
+        raise InputError(f"{what} {shorten(text)}: {exc}") from None
     return Path(text)
 
 

@@ -17,8 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from msens.errors import InputError
+from msens.errors import InputError, shorten
 from msens.io import dirlock
+from msens.io._files import check_path
 from msens.io.atomic import atomic_write, clean_stale
 
 #: Resolution of every raster figure msens writes (PNG; also the raster parts of PDF/SVG).
@@ -67,13 +68,14 @@ class OutputDir:
     """
 
     def __init__(self, path: str | Path):
-        self.path = Path(path)
+        self.path = check_path(path, "--out")  # type, empty, name too long, ...
         if self.path.exists() and not self.path.is_dir():
             raise InputError(f"--out '{self.path}' is a file, expected a directory")
         try:
             self.path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise InputError(f"--out '{self.path}' cannot be created: {exc}") from None
+            raise InputError(f"--out {shorten(str(self.path))} cannot be created "
+                             f"({exc.strerror or exc})") from None
         # one command at a time in a folder: a second one is told the folder is in use
         key = dirlock.acquire(self.path)
         weakref.finalize(self, dirlock.release, key)

@@ -381,8 +381,9 @@ def physics_summary(result: StudyResult) -> dict:
 def frequency_summary(response, tr) -> dict:
     """A coil's eddy-current frequency response for ``summary.json``: at each solved
     frequency, the contact-approach and Villari sensitivities of the two contacts beside the
-    coil's bead relative to their static values (magnitude, phase in degrees), and the coil
-    impedance as R (Ω) and L (H)."""
+    coil's bead relative to their static values (magnitude, phase in degrees), the coil
+    impedance as R (Ω) and L (H), and (``screening_by_part``) how much of the screening the
+    equivalent magnet's pole pieces cause and how much the beads."""
     freqs = np.asarray(response.frequencies, dtype=float)
     own = [int(np.flatnonzero(np.asarray(response.contacts) == c)[0])
            for c in (tr.particle - 1, tr.particle)]
@@ -394,6 +395,10 @@ def frequency_summary(response, tr) -> dict:
     z = np.asarray(response.impedance)
     out["resistance_ohm"] = z.real.tolist()
     out["inductance_H"] = np.asarray(response.inductance).real.tolist()
+    if response.screening is not None:
+        # what rests on the equivalent magnet: the screening with its pole pieces (and magnet)
+        # conducting or not (msens.magnetics.dynamic.screening_split)
+        out["screening_by_part"] = response.screening
     return out
 
 

@@ -74,6 +74,10 @@ DEFAULT_FREQUENCIES: tuple[float, ...] = (0.0, 10.0, 30.0, 100.0, 300.0, 500.0, 
 #: accurate (tested against a moved coil's own model).
 RESPONSE_OFFSET_STEP = 0.25e-3
 
+#: Frequencies of the screening split (:func:`screening_split`), Hz: those ``summary.json`` and
+#: the docs quote.
+SCREENING_FREQUENCIES: tuple[float, ...] = (10e3, 30e3, 100e3)
+
 def sensor_conductivity(mesh, geometry: SensorGeometry, *, steel: float = SIGMA_1018,
                         magnets: Mapping[str, float] | None = None) -> np.ndarray:
     """Conductivity of every element of a sensor mesh, S/m, shape (n_elements,).
@@ -132,8 +136,8 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
                         frequencies: Sequence[float] = DEFAULT_FREQUENCIES, *,
                         sigma: np.ndarray | None = None, steel: float = SIGMA_1018,
                         magnets: Mapping[str, float] | None = None,
-                        direct: bool = False, offsets: Sequence[float] | None = None
-                        ) -> DynamicReport:
+                        direct: bool = False, offsets: Sequence[float] | None = None,
+                        screening: bool = False) -> DynamicReport:
     """Solve (K_t + jωM_σ) a_s = f_s for every source and coil at each frequency.
 
     Parameters
@@ -161,6 +165,10 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
         Axial coil offsets, m (within ±``OFFSET_SPAN``): also solve every source and read it
         with each coil moved by each offset (:func:`msens.magnetics.mechanisms.offset_linkage`),
         the profiles of :meth:`FrequencyResponse.shifted`.
+    screening : bool
+        Also solve at :data:`SCREENING_FREQUENCIES` with the pole pieces and magnets
+        non-conducting, and record how much of the screening comes from them
+        (:func:`screening_split`, :attr:`FrequencyResponse.screening`).
 
     Returns
     -------
@@ -228,6 +236,11 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
     src = (f"msens.magnetics.dynamic {DYNAMIC_VERSION}: (K_t + jωM_σ) a_s = f_s at "
            f"{n_f} frequencies; σ steel {steel:.4g} S/m on beads and pole pieces, magnets "
            f"{dict(magnets or {}) or 'by grade'}; {sol.dofs} dofs")
+    split = None
+    if screening:
+        t0 = time.perf_counter()
+        split = screening_split(model, geometry, op, sigma, coil_loads)
+        timings["screening"] = time.perf_counter() - t0
     for i, c in enumerate(coils):
         contacts, vr, ar = model.contact_profiles(link[i].real)
         _, vi, ai = model.contact_profiles(link[i].imag)
@@ -243,7 +256,7 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
             particle=c.particle, frequencies=freqs, contacts=contacts, villari=vr + 1j * vi,
             approach=ar + 1j * ai, impedance=coil_resistance(c) + 1j * w * lam_self[i],
             resistance_ohm=coil_resistance(c), static_inductance_H=float(lam_self[i, 0].real),
-            source=src, **profiles)
+            source=src, screening=None if split is None else split[c.particle], **profiles)
     details = {"dofs": sol.dofs, "elements": mesh.n_elements, "frequencies_Hz": freqs.tolist(),
                "sigma_max_S_per_m": float(np.max(sigma)),
                "conducting_elements": int(np.count_nonzero(sigma)),
@@ -251,10 +264,106 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
     return DynamicReport(out, details)
 
 
+def equivalent_magnet_elements(mesh) -> np.ndarray:
+    """Elements of the equivalent bridge magnet's parts (pole pieces ``pole_*``, magnets
+    ``magnet_*``), bool, shape (n_elements,)."""
+    out = np.zeros(mesh.n_elements, dtype=bool)
+    for name, el in mesh.subdomains.items():
+        if name.startswith(("pole_", "magnet_")):
+            out[el] = True
+    return out
+
+
+def screening_split(model: MechanismPotentials, geometry: SensorGeometry,
+                    op: HarmonicOperator, sigma: np.ndarray, coil_loads: np.ndarray,
+                    frequencies: Sequence[float] = SCREENING_FREQUENCIES) -> dict[int, dict]:
+    """How much of the eddy-current screening comes from the equivalent magnet, per coil.
+
+    The pole pieces (and a conducting magnet) belong to the axisymmetric equivalent of an
+    undocumented bridge magnet (design.md §5); the beads are the chain's. Each coil's response
+    is solved at ``frequencies`` twice, with every conductor (``sigma``) and with the magnet's
+    parts non-conducting (:func:`equivalent_magnet_elements`), and compared on the contact
+    approach of the coil's two contacts (D_c(f)/D_c(0), the dominant mechanism) and the
+    coil's eddy-loss resistance R_eddy = Re Z − R_dc and inductance.
+
+    Parameters
+    ----------
+    model : MechanismPotentials
+    geometry : SensorGeometry
+    op : HarmonicOperator
+        With every conductor (``sigma``).
+    sigma : ndarray, shape (n_elements,)
+        S/m.
+    coil_loads : ndarray, shape (n_coils, n_dofs)
+        1 A in each coil of ``geometry.iter_units()``.
+    frequencies : sequence of float
+        Hz, > 0.
+
+    Returns
+    -------
+    dict of int -> dict
+        Per coil particle, JSON-ready: ``frequencies_Hz``, ``contacts``; for ``all`` (every
+        conductor) and ``beads`` (magnet parts non-conducting) the approach ratio's
+        magnitude and phase (deg, shape (n_f, 2)), ``eddy_resistance_ohm`` and
+        ``inductance_H`` (n_f); ``magnet_share_of_screening``: the part of the approach
+        ratio's loss of magnitude, 1 − |D_c(f)/D_c(0)|, that the magnet's parts cause,
+        (|r_beads| − |r_all|) / (1 − |r_all|), shape (n_f, 2).
+    """
+    sol = model.solution
+    mesh = sol.problem.mesh
+    beads_only = np.where(equivalent_magnet_elements(mesh), 0.0, sigma)
+    ops = {"all": op, "beads": HarmonicOperator(sol, beads_only)}
+    coils = [u.coil for u in geometry.iter_units()]
+    freqs = np.asarray([float(f) for f in frequencies])
+    require(freqs.size > 0 and bool(np.all(freqs > 0)),
+            f"screening frequencies must be > 0 Hz, got {freqs.tolist()}")
+    fac0 = op.factor(0.0)
+    static = op.solve(fac0, coil_loads)
+    rows: dict[str, dict[str, list]] = {k: {"link": [], "lam": []} for k in ops}
+    for f in freqs:
+        for k, o in ops.items():
+            own = o.solve(o.factor(f), coil_loads)
+            rows[k]["link"].append(TWO_PI * (model.rhs @ own.T).T)  # (n_coils, n_s)
+            rows[k]["lam"].append([region_linkage(sol, own[i:i + 1], f"coil_{c.particle}",
+                                                  c.turns, c.area)[0]
+                                   for i, c in enumerate(coils)])
+    w = TWO_PI * freqs
+    out = {}
+    for i, c in enumerate(coils):
+        pair = [c.particle - 1, c.particle]
+        contacts, _, a0 = model.contact_profiles(TWO_PI * (model.rhs @ static[i].real))
+        k = [int(np.flatnonzero(np.asarray(contacts) == q)[0]) for q in pair]
+        entry: dict = {"frequencies_Hz": freqs.tolist(), "contacts": pair,
+                       "what": "contact approach D_c(f)/D_c(0) of the coil's two contacts and "
+                               "the coil's eddy-loss resistance and inductance, with every "
+                               "conductor ('all') and with the pole pieces and magnet "
+                               "non-conducting ('beads')"}
+        mags = {}
+        for name, r in rows.items():
+            link = np.asarray(r["link"])[:, i, :]  # (n_f, n_s)
+            _, _, ar = model.contact_profiles(link.real)
+            _, _, ai = model.contact_profiles(link.imag)
+            ratio = (ar + 1j * ai)[:, k] / a0[k]
+            lam = np.asarray(r["lam"])[:, i]
+            z_eddy = 1j * w * lam  # Z − R_dc
+            mags[name] = np.abs(ratio)
+            entry[name] = {"approach_ratio_magnitude": np.abs(ratio).tolist(),
+                           "approach_ratio_phase_deg": np.degrees(np.angle(ratio)).tolist(),
+                           "eddy_resistance_ohm": z_eddy.real.tolist(),
+                           "inductance_H": (z_eddy.imag / w).tolist()}
+        loss = 1.0 - mags["all"]
+        entry["magnet_share_of_screening"] = np.where(
+            np.abs(loss) > 1e-12, (mags["beads"] - mags["all"]) / np.where(loss == 0, 1, loss),
+            0.0).tolist()
+        out[c.particle] = entry
+    return out
+
+
 # ----------------------------------------------------------------------------- cache
 
 #: Version of what :func:`frequency_responses` computes; part of the cache key.
-DYNAMIC_VERSION = "dynamic/2"  # 2: the eddy mesh's bias starts from the plain mesh's
+DYNAMIC_VERSION = "dynamic/3"  # 3: the screening split; 2: the eddy mesh's bias starts
+#                                  from the plain mesh's
 
 
 def dynamic_key(transducer_key: str, frequencies: Sequence[float], steel: float,
@@ -287,6 +396,7 @@ def report_to_json(report: DynamicReport) -> dict:
                    "villari_Wb_per_N": _cplx(r.villari), "approach_Wb_per_m": _cplx(r.approach),
                    "impedance_ohm": _cplx(r.impedance), "resistance_ohm": r.resistance_ohm,
                    "static_inductance_H": r.static_inductance_H, "source": r.source,
+                   **({} if r.screening is None else {"screening": r.screening}),
                    **({} if r.offsets is None else {
                        "offsets_m": np.asarray(r.offsets).tolist(),
                        "villari_by_offset_Wb_per_N": _cplx(r.villari_by_offset),
@@ -307,6 +417,7 @@ def report_from_json(data: dict) -> DynamicReport:
             approach=_uncplx(v["approach_Wb_per_m"]), impedance=_uncplx(v["impedance_ohm"]),
             resistance_ohm=float(v["resistance_ohm"]),
             static_inductance_H=float(v["static_inductance_H"]), source=str(v["source"]),
+            screening=v.get("screening"),
             **({} if "offsets_m" not in v else {
                 "offsets": np.asarray(v["offsets_m"], dtype=float),
                 "villari_by_offset": _uncplx(v["villari_by_offset_Wb_per_N"]),
@@ -361,14 +472,15 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, store: Store | Non
     log.info("eddy-current responses (cached: no): %d frequencies", len(freqs))
     with heartbeat(log, "eddy-current responses"):  # minutes of complex solves
         if scheduler is None:
-            rep = _report_task((geometry, options, store, freqs, steel, magnets, grid, start))
+            rep = _report_task((geometry, options, store, freqs, steel, magnets, grid, start,
+                                True))
         else:
             from msens.parallel import run_tasks
 
             chunks = [c for c in np.array_split(np.asarray(freqs[1:]), _workers(scheduler))
                       if c.size]
             tasks = [(geometry, options, store, [0.0, *c.tolist()], steel, magnets, grid,
-                      None) for c in chunks]
+                      None, i == 0) for i, c in enumerate(chunks)]  # one chunk splits
             parts = dict(run_tasks(_report_task, tasks, scheduler=scheduler))
             rep = join_reports([parts[i] for i in range(len(tasks))])
     rep.details["transducer_key"] = tkey
@@ -407,14 +519,14 @@ def _report_task(args: tuple) -> DynamicReport:
     from msens.magnetics.mechanisms import mechanism_potentials
     from msens.magnetics.steel_law import law_for_steel
 
-    geometry, options, store, freqs, steel, magnets, offsets, start = args
+    geometry, options, store, freqs, steel, magnets, offsets, start, screening = args
     t0 = time.perf_counter()
     sol = eddy_bias_solution(geometry, options, store=store, start=start)
     timings: dict[str, float] = {"mesh_and_bias_solve": time.perf_counter() - t0}
     model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
                                  law=law_for_steel(geometry.steel), timings=timings)
     rep = frequency_responses(model, geometry, freqs, steel=steel, magnets=magnets,
-                              offsets=offsets)
+                              offsets=offsets, screening=screening)
     rep.details["timings_s"] = {**timings, **rep.details["timings_s"]}
     rep.details["bias_newton_iterations"] = sol.iterations
     return rep
@@ -452,7 +564,9 @@ def join_reports(parts: Sequence[DynamicReport]) -> DynamicReport:
             villari=cat("villari"), approach=cat("approach"), impedance=cat("impedance"),
             resistance_ohm=r0.resistance_ohm, static_inductance_H=r0.static_inductance_H,
             source=r0.source.replace(f"at {np.asarray(r0.frequencies).size} frequencies",
-                                     f"at {freqs.size} frequencies"), **profiles)
+                                     f"at {freqs.size} frequencies"),
+            screening=next((part.responses[p].screening for part in parts
+                            if part.responses[p].screening is not None), None), **profiles)
     details = dict(first.details)
     details["frequencies_Hz"] = responses[next(iter(responses))].frequencies.tolist()
     timings: dict[str, float] = {}
@@ -473,13 +587,16 @@ __all__ = [
     "DEFAULT_FREQUENCIES",
     "DYNAMIC_VERSION",
     "RESPONSE_OFFSET_STEP",
+    "SCREENING_FREQUENCIES",
     "DynamicReport",
     "dynamic_key",
     "dynamic_report",
     "eddy_bias_solution",
+    "equivalent_magnet_elements",
     "frequency_responses",
     "join_reports",
     "report_from_json",
     "report_to_json",
+    "screening_split",
     "sensor_conductivity",
 ]

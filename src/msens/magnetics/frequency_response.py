@@ -72,6 +72,10 @@ class FrequencyResponse:
     villari_by_offset, approach_by_offset : ndarray of complex, shape (n_o, n_f, n_c), optional
         ``villari`` and ``approach`` of the same coil moved by each offset (magnets and beads
         fixed), from the same harmonic source potentials; :meth:`shifted` interpolates them.
+    screening : dict, optional
+        How much of the eddy-current screening comes from the equivalent magnet's pole pieces
+        (and magnet) and how much from the beads, JSON-ready
+        (:func:`msens.magnetics.dynamic.screening_split`; of the coil at its own position).
     """
 
     particle: int
@@ -86,6 +90,7 @@ class FrequencyResponse:
     offsets: np.ndarray | None = None
     villari_by_offset: np.ndarray | None = None
     approach_by_offset: np.ndarray | None = None
+    screening: dict | None = None
 
     def __post_init__(self) -> None:
         f = np.asarray(self.frequencies, dtype=float)

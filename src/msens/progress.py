@@ -19,8 +19,9 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-#: Seconds between two heartbeat lines.
-HEARTBEAT_S = 5.0
+#: Seconds between two heartbeat lines (below 5 s: a thread woken late on a busy machine
+#: still keeps the silence near 5 s).
+HEARTBEAT_S = 4.0
 
 #: Wall time of the chain kernel's first compilation on an idle 2-core machine, s (numba,
 #: every variant the kernel has; measured 95 s for issue 37). It happens once per
@@ -58,7 +59,8 @@ def heartbeat(logger: logging.Logger, stage: str, *, every: float = HEARTBEAT_S,
     note : str
         Appended to each line, e.g. ``" (compiling the chain kernel on first use)"``.
 
-    Heartbeats nest: while an inner stage's heartbeat runs, the outer one keeps quiet.
+    Heartbeats nest: while an inner stage's heartbeat runs, the outer one keeps quiet
+    (unless no heartbeat line came for ``every`` seconds).
     """
     if not logger.isEnabledFor(logging.INFO):
         yield
@@ -71,11 +73,14 @@ def heartbeat(logger: logging.Logger, stage: str, *, every: float = HEARTBEAT_S,
 
     def beat() -> None:
         while not done.wait(every):
+            now = time.perf_counter()
             with _LOCK:
-                innermost = _ACTIVE[-1] is token
-            if innermost:  # an inner stage's heartbeat speaks for both
-                logger.info("%s: still working, %.0f s%s", stage,
-                            time.perf_counter() - start, note)
+                # an inner stage's heartbeat speaks for both, unless it has not yet spoken
+                speak = _ACTIVE[-1] is token or now - _LAST[0] >= every
+                if speak:
+                    _LAST[0] = now
+            if speak:
+                logger.info("%s: still working, %.0f s%s", stage, now - start, note)
 
     thread = threading.Thread(target=beat, name="msens-heartbeat", daemon=True)
     thread.start()
@@ -88,6 +93,8 @@ def heartbeat(logger: logging.Logger, stage: str, *, every: float = HEARTBEAT_S,
             _ACTIVE.remove(token)
 
 
-#: The running heartbeats, innermost last (only the innermost one logs).
+#: The running heartbeats, innermost last (the innermost one logs), and when a heartbeat
+#: line was last logged (time.perf_counter()).
 _ACTIVE: list[object] = []
+_LAST = [0.0]
 _LOCK = threading.Lock()

@@ -16,16 +16,23 @@ from pathlib import Path
 from msens import results
 from msens.config.schema import PAPER_TABLE2
 from msens.config.study import Study, builtin_study_path, default_study_path, load_study
-from msens.io.output import DPI, OutputDir
 from msens.pipeline import run_study
-from msens.results import StudyResult
 from msens.workflows.common import check_format as _check_format
-from msens.workflows.common import figure_names as _figure_names
 from msens.workflows.common import provenance
 from msens.workflows.compare import compare as compare
 from msens.workflows.compare import format_comparison as format_comparison
 from msens.workflows.diagnose import diagnose as diagnose
 from msens.workflows.diagnose import format_diagnosis as format_diagnosis
+from msens.workflows.field import FIELD_OUTPUTS as FIELD_OUTPUTS
+from msens.workflows.field import field as field
+from msens.workflows.field import format_field as format_field
+from msens.workflows.run import FIGURES as FIGURES
+from msens.workflows.run import PHYSICS_FIGURES as PHYSICS_FIGURES
+from msens.workflows.run import format_summary as format_summary
+from msens.workflows.run import prepare_outputs as prepare_outputs
+from msens.workflows.run import run as run
+from msens.workflows.run import summary as summary
+from msens.workflows.run import write_outputs as write_outputs
 
 
 def load(path: str | Path) -> Study:
@@ -50,115 +57,9 @@ def replace(study: Study, changes: dict | None = None, /, **more) -> Study:
     return study.replace(changes, **more)
 
 
-def run(study: Study, *, scheduler: str | None = None) -> StudyResult:
-    """Calibrate, simulate and observe every setup of ``study`` (the eddy-current frequency
-    solves on the Dask cluster at ``scheduler`` when given)."""
-    from msens import preflight
-
-    # the address is checked even when no remote work turns out to be needed
-    preflight.study(study)
-    scheduler = preflight.check_scheduler(scheduler)
-    return run_study(study, scheduler=scheduler)
-
-
-def summary(result: StudyResult) -> dict:
-    """The content of ``summary.json`` (:func:`msens.results.summary` with this run's
-    provenance)."""
-    return results.summary(result, provenance(result.study))
-
-
 physics_summary = results.physics_summary
 mechanism_share = results.mechanism_share
 frequency_summary = results.frequency_summary
-
-
-FIGURES = ("contact_forces.png", "sensor_profiles.png", "sensor_records.png", "table2.png")
-PHYSICS_FIGURES = ("mss_voltage.png", "mss_integrated.png", "sensitivity_profile.png",
-                   "magnetic_precompression.png", "field_B.png")
-
-
-def prepare_outputs(out: str | Path, *, figures: bool = True,
-                    fig_format: str = "png") -> OutputDir:
-    """Open ``out`` and check, before any work, that no user file would be overwritten.
-
-    ``fig_format`` ("png", "pdf" or "svg") names the figures to check.
-    """
-    _check_format(fig_format)
-    d = OutputDir(out)
-    d.check(["summary.json",
-             *(_figure_names(FIGURES + PHYSICS_FIGURES, fig_format) if figures else ())])
-    return d
-
-
-def _figure_makers(result: StudyResult) -> dict:
-    from msens import plots, plots_mss
-
-    makers = {
-        "contact_forces.png": lambda: plots.contact_profiles(result),
-        "sensor_records.png": lambda: plots.sensor_records(result),
-    }
-    if any(s.setup.inserts or len(result.setups) > 1 for s in result.setups):
-        makers["sensor_profiles.png"] = lambda: plots.sensor_profiles(result)
-    if result.study.reference:
-        makers["table2.png"] = lambda: plots.table2(result.rows(), result.study.name)
-    if any(s.transducers for s in result.setups):
-        makers["mss_voltage.png"] = lambda: plots_mss.mss_voltages(result)
-        makers["mss_integrated.png"] = lambda: plots_mss.mss_integrated(result)
-        makers["sensitivity_profile.png"] = lambda: plots_mss.sensitivity_profile(result)
-        makers["magnetic_precompression.png"] = lambda: plots_mss.magnetic_precompression(result)
-    return makers
-
-
-def _field_map(result: StudyResult, d: OutputDir, fig_format: str = "png") -> Path | None:
-    """The bias-field map of the first physics setup (re-solves the cached field model)."""
-    from msens.config.fieldsetup import geometry_from_study
-    from msens.field.sensor_model import run_field_model
-    from msens.field_outputs import plot_field_map
-
-    setup = next((s.setup for s in result.setups if s.transducers), None)
-    if setup is None:
-        return None
-    report = run_field_model(geometry_from_study(result.study, setup), inductance=False)
-    return d.write(f"field_B.{fig_format}", lambda p: plot_field_map(report, p, fig_format))
-
-
-def write_outputs(result: StudyResult, out: str | Path | OutputDir, *,
-                  figures: bool = True, fig_format: str = "png") -> list[Path]:
-    """Write ``summary.json`` and the figures (in ``fig_format``: "png", "pdf" or "svg")
-    into ``out``; returns the written paths."""
-    from msens import plots
-
-    _check_format(fig_format)
-    d = out if isinstance(out, OutputDir) else prepare_outputs(out, figures=figures,
-                                                               fig_format=fig_format)
-    written = [d.write_json("summary.json", summary(result))]
-    if figures:
-        for name, make in _figure_makers(result).items():
-            fig = make()
-            written.append(d.savefig(name, fig, fmt=fig_format, dpi=DPI))
-            plots.close(fig)
-        field_map = _field_map(result, d, fig_format)
-        if field_map is not None:
-            written.append(field_map)
-    return written
-
-
-def format_summary(result: StudyResult) -> str:
-    """A short plain-text table of the rows, for the terminal."""
-    lines = [f"study {result.study.name}: gamma_c = {result.gamma_contact:.3g} kg/s, "
-             f"gamma_w = {result.gamma_wall:.3g} kg/s"
-             + (" (fitted, paper Eq. 10)" if result.fit is not None else "")]
-    head = f"{'setup':<6} {'pos':<7} {'part':>4} {'TOF us':>8} {'AR':>6} {'peak N':>7} " \
-           f"{'speed m/s':>9} {'exp TOF':>8} {'exp AR':>6}"
-    lines += [head, "-" * len(head)]
-    for r in result.rows():
-        ref = r.get("reference", {})
-        lines.append(
-            f"{r['setup']:<6} {r['position']:<7} {r['particle']:>4} {r['tof_us']:>8.1f} "
-            f"{r['ar']:>6.3f} {r['incident_peak_N']:>7.2f} {r['speed_m_per_s']:>9.1f} "
-            f"{ref.get('experiment_tof_us', float('nan')):>8.1f} "
-            f"{ref.get('experiment_ar', float('nan')):>6.2f}")
-    return "\n".join(lines)
 
 
 def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
@@ -204,52 +105,6 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
                           metadata=meta)
     write_waveform(waveform, out, overwrite=overwrite)
     return out
-
-
-FIELD_OUTPUTS = ("field.json", "field.vtu", "field_B.png", "field_3d.png")
-
-
-def field(study: Study, out: Path, *, fig_format: str = "png") -> str:
-    """Solve the field model of the study's MsS sensors; write ``field.json``, ``field.vtu``
-    and figures (the field map in ``fig_format``: png, pdf or svg; the 3-D view is always
-    PNG) into ``out``; return a short text report."""
-    from msens.config.fieldsetup import geometry_from_study
-    from msens.field.sensor_model import run_field_model
-    from msens.field_outputs import write_field_outputs
-
-    geometry = geometry_from_study(study)
-    target = OutputDir(out)
-    target.check([f"field_B.{_check_format(fig_format)}" if n == "field_B.png" else n
-                  for n in FIELD_OUTPUTS])
-    report = run_field_model(geometry)
-    written = write_field_outputs(report, out, fig_format=fig_format)
-    for name, path in written.items():
-        if not path.startswith("skipped"):
-            target.record(name)
-    return format_field(report, written)
-
-
-def format_field(report, written: dict[str, str]) -> str:
-    """Plain-text summary of a field-model report."""
-    sensors = [u.coil.particle for u in report.geometry.sensors]
-    near = {p + d for p in sensors for d in (-2, -1, 0, 1, 2)}
-    lines = [f"field model: {report.dofs} dofs, {report.elements} elements, "
-             f"{report.newton_iterations} Newton iterations, bias solve "
-             f"{report.timings_s['bias_solve']:.1f} s",
-             "NOTE: the bias magnet is an axisymmetric equivalent of the undocumented "
-             "bridge magnet", "", "coil  R (Ohm)  L_air (mH)  L_bias (mH)"]
-    for c in report.coils:
-        l_air, l_bias = c.air_core_inductance_H * 1e3, c.inductance_H * 1e3
-        lines.append(f"{c.particle:>4}  {c.resistance_ohm:>7.2f}  {l_air:>10.2f}  {l_bias:>11.2f}")
-    lines += ["", "bead  Bz centre (T)"]
-    lines += [f"{b.particle:>4}  {b.B_center_T[1]:>13.3f}" for b in report.beads
-              if b.particle in near]
-    lines += ["", "contact  magnetic compression (N)"]
-    lines += [f"{c.upper:>3}-{c.lower:<3}  {c.magnetic_force_N:>10.2f}" for c in report.contacts
-              if c.upper in near and c.lower in near]
-    lines += ["", "wrote " + ", ".join(f"{k} ({v})" if v.startswith("skipped") else k
-                                     for k, v in written.items())]
-    return "\n".join(lines)
 
 
 def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str | None = None,

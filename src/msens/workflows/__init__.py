@@ -3,6 +3,10 @@
 One module per workflow; :mod:`msens.api` and the command line only delegate to them.
 So far:
 
+- :mod:`.run` — simulate every setup of a study; ``summary.json``, the figures, the text
+  table.
+- :mod:`.field` — the field model of the study's MsS sensors: ``field.json``, ``field.vtu``,
+  the field maps, the text report.
 - :mod:`.common` — what every workflow shares: the figure formats it can write, the names of
   its figures in a format, and the provenance it records (msens version, study hash).
 - :mod:`.compare` — a measured waveform against the model of a study: the checks of the
@@ -11,15 +15,18 @@ So far:
 - :mod:`.diagnose` — the effect the model misses, from a waveform or a setup's reference
   rows: ``diagnosis.json``, its figure and the text table.
 
-The functions named like their modules (``compare``, ``diagnose``) are not listed here (an
-attribute of the package cannot be both); import them from their modules or call them through
-:mod:`msens`.
+The functions named like their modules (``run``, ``field``, ``compare``, ``diagnose``) are not
+listed here (an attribute of the package cannot be both); import them from their modules or
+call them through :mod:`msens`.
 """
 
 from msens._lazy import attribute, names
 
 _HOMES = {
     "common": ("check_format", "figure_names", "provenance"),
+    "run": ("FIGURES", "PHYSICS_FIGURES", "figure_makers", "format_summary", "prepare_outputs",
+            "summary", "write_outputs"),
+    "field": ("FIELD_OUTPUTS", "format_field"),
     "compare": ("check_measurement", "format_comparison"),
     "diagnose": ("format_diagnosis", "reference_passes"),
 }

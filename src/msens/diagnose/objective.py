@@ -7,22 +7,25 @@ Two objectives share one interface (``rss(records) -> (sensors,)``: chi^2 per se
   (force for bead and rod, dF/dt for the four-contact MsS, paper Eq. 5). The shots of a file
   are first merged into their aligned ensemble mean, whose per-sample variance comes from
   the pre-trigger record and the shot-to-shot scatter, never from a fit
-  (:func:`msens.diagnose.noise.ensemble`). Against it, one time offset D (impact to trigger)
-  common to all channels — a single offset keeps the delays between sensors, which carry the
-  speed — and per channel one gain and one DC offset, all profiled out: for a given D, gain
-  (kept >= 0) and offset are the weighted linear least-squares fit y ~ g m + b (the
-  pre-trigger mean removes the offset only to ~noise / sqrt(pre-trigger samples), which over
-  a whole record would otherwise cost chi^2 of order tens and bias shape parameters), and D
-  is found by an FFT cross-correlation over +-``MAX_SHIFT_S`` followed by a bounded Brent
-  refinement of the exact residual. The model is interpolated onto the data's own sample
-  times, so the data's noise stays independent (what the BIC assumes). ``rss`` is the
-  residual weighted by each sample's inverse variance (chi^2), so ``sigma`` is 1.
+  (:func:`msens.diagnose.noise.ensemble`), plus, once added, the model's own uncertainty
+  (:mod:`msens.diagnose.likelihood`, the likelihood diagnose and calibrate share). Against
+  it, one time offset D (impact to trigger) common to all channels — a single offset keeps
+  the delays between sensors, which carry the speed — and per channel one gain and one DC
+  offset, all profiled out: for a given D, gain (kept >= 0) and offset are the weighted
+  linear least-squares fit y ~ g m + b (the pre-trigger mean removes the offset only to
+  ~noise / sqrt(pre-trigger samples), which over a whole record would otherwise cost chi^2
+  of order tens and bias shape parameters), and D is found by an FFT cross-correlation over
+  +-``MAX_SHIFT_S`` followed by a bounded Brent refinement of the exact residual. The model
+  is interpolated onto the data's own sample times, so the data's noise stays independent
+  (what the BIC assumes). ``rss`` is the residual weighted by each sample's inverse variance
+  (chi^2), so ``sigma`` is 1.
 - :class:`FeatureObjective`: published features (TOF and AR per sensor, e.g. the paper's
   Table 2) against the model's, each residual divided by the published shot-to-shot std.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,6 +34,7 @@ from scipy.optimize import minimize_scalar
 
 from msens.compare import align_shot
 from msens.config.schema import MssModel, ReferenceRow, SetupSpec
+from msens.diagnose.likelihood import model_uncertainty, variance_split
 from msens.diagnose.noise import MIN_PRETRIGGER, Ensemble, ensemble
 from msens.diagnose.predict import feature_records, model_features_of, signal
 from msens.errors import InputError
@@ -61,7 +65,13 @@ class Shot:
     delay0 : float
         Impact-to-trigger offset found against the baseline model, s (model t = tau + D).
     w : ndarray, shape (sensors, n)
-        Inverse variance of each sample of ``y``, 1/V^2.
+        Inverse variance of each sample of ``y``, 1/V^2: of the noise and, once
+        :meth:`WaveformObjective.add_model_uncertainty` is called, of the model's own
+        uncertainty (:mod:`msens.diagnose.likelihood`).
+    noise_var : ndarray, shape (sensors, n), optional
+        The noise's part of that variance, V^2 (None: all of it).
+    model_var : ndarray, shape (sensors, n), optional
+        The model uncertainty's part, V^2 (None: none).
     """
 
     tau: np.ndarray
@@ -69,6 +79,8 @@ class Shot:
     sigma: np.ndarray
     delay0: float
     w: np.ndarray
+    noise_var: np.ndarray | None = None
+    model_var: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -154,6 +166,8 @@ class WaveformObjective:
         self.n_obs = np.full(len(self.kinds), float(self.shots[0].tau.size))
         #: Mean inverse variance per sensor, 1/V^2 (weights of the coarse alignment).
         self._weights = self.shots[0].w.mean(axis=1)
+        #: Each sensor's model uncertainty, once added (:meth:`add_model_uncertainty`).
+        self.model_uncertainty: tuple = ()
 
     def _check_usable(self, waveform: Waveform, setup: SetupSpec) -> None:
         for j, spec in enumerate(setup.sensors):
@@ -166,6 +180,43 @@ class WaveformObjective:
                         f"channel {spec.kind.value}@{spec.particle} has no usable pulse "
                         f"(peak {peak:.3g} V against noise {noise:.3g} V; needs > {MIN_SNR:g}x "
                         f"the noise of the shots' mean)")
+
+    def add_model_uncertainty(self, records: np.ndarray) -> None:
+        """Add the model's own uncertainty to the variance of every sample.
+
+        The model variance (:func:`msens.diagnose.likelihood.model_uncertainty` of each
+        sensor) is computed once, from ``records`` (the baseline model's) aligned on the
+        data, and held fixed for every candidate: the likelihood's variance is then the
+        same for all of them, and chi^2 stays comparable between them.
+
+        Parameters
+        ----------
+        records : ndarray, shape (sensors, nt)
+            The baseline model's records.
+        """
+        unc = [model_uncertainty(k, ph) for k, ph in zip(self.kinds, self.physics, strict=True)]
+        #: Each sensor's model uncertainty.
+        self.model_uncertainty = tuple(unc)
+        if all(u.relative_amplitude == 0.0 and u.relative_timing == 0.0 for u in unc):
+            return
+        out = []
+        for shot, (a, tm, m) in zip(self.shots, self.aligned(records), strict=True):
+            noise_var = 1.0 / shot.w if shot.noise_var is None else shot.noise_var
+            scaled = m - a.offsets[:, None]  # gain applied, offset removed
+            model_var = np.array([u.variance(x, tm) for u, x in zip(unc, scaled, strict=True)])
+            out.append(dataclasses.replace(shot, w=1.0 / (noise_var + model_var),
+                                           noise_var=noise_var, model_var=model_var))
+        self.shots = out
+        self._weights = self.shots[0].w.mean(axis=1)
+
+    def variance_split(self) -> dict:
+        """Per sensor and overall: the noise's and the model uncertainty's shares of the
+        variance the residual is measured against (:func:`~msens.diagnose.likelihood.
+        variance_split`)."""
+        shot = self.shots[0]
+        if shot.model_var is None:
+            return {"noise_share": 1.0, "model_uncertainty_share": 0.0}
+        return variance_split(shot.noise_var, shot.model_var)
 
     # ---------------------------------------------------------------- evaluation
 

@@ -69,8 +69,10 @@ def feature_residuals(result, waveform: Waveform) -> dict:
 
 def window_residuals(objective: WaveformObjective, records_before: np.ndarray,
              records_after: np.ndarray, result) -> list[dict]:
-    """chi^2 per sample (residual over the fit-free noise) in the incident and reflected
-    window of each sensor, and elsewhere, before and after."""
+    """chi^2 per sample (residual over the likelihood's variance: the fit-free noise plus the
+    model's own uncertainty) in the incident and reflected window of each sensor, and
+    elsewhere, before and after; for the model after, the chi^2 over the noise alone and
+    the model uncertainty's share of the window's variance."""
     feats = model_features_of(feature_records(records_before, objective.physics, objective.t),
                               objective.t)
     rows = []
@@ -89,7 +91,8 @@ def window_residuals(objective: WaveformObjective, records_before: np.ndarray,
             masks.append(inside)
         for window in ("incident", "reflected", "elsewhere"):
             vals, count = [], 0
-            for aligned in per:
+            noise_only, noise_sum, model_sum = 0.0, 0.0, 0.0
+            for k, aligned in enumerate(per):
                 num = 0.0
                 count = 0
                 for shot, (_, _, m), mk in zip(objective.shots, aligned, masks, strict=True):
@@ -97,11 +100,22 @@ def window_residuals(objective: WaveformObjective, records_before: np.ndarray,
                     r = (shot.y[j] - m[j])[sel]
                     num += float(np.sum(shot.w[j][sel] * r**2))
                     count += r.size
+                    if k == 1:  # the model under test: the residual over the noise alone
+                        nv = (1.0 / shot.w[j] if shot.noise_var is None
+                              else shot.noise_var[j])[sel]
+                        noise_only += float(np.sum(r**2 / nv))
+                        noise_sum += float(np.sum(nv))
+                        if shot.model_var is not None:
+                            model_sum += float(np.sum(shot.model_var[j][sel]))
                 vals.append(num / count if count else float("nan"))
             if count:
+                total = noise_sum + model_sum
                 rows.append({"channel": name, "window": window, "n_samples": count,
                              "chi2_per_sample_before": vals[0],
-                             "chi2_per_sample_after": vals[1]})
+                             "chi2_per_sample_after": vals[1],
+                             "chi2_per_sample_after_noise_only": noise_only / count,
+                             "model_uncertainty_share": model_sum / total if total > 0
+                             else 0.0})
     return rows
 
 

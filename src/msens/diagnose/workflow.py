@@ -75,6 +75,7 @@ from msens.diagnose.diagnosis import Candidate, Diagnosis
 from msens.diagnose.effects import Context
 from msens.diagnose.effects import get as get_effect
 from msens.diagnose.fit import refit_jointly
+from msens.diagnose.likelihood import variance_split
 from msens.diagnose.noise import shot_matrix
 from msens.diagnose.objective import FeatureObjective, WaveformObjective, check_channels
 from msens.diagnose.predict import Predictor, baseline_state, positions, setup_result
@@ -173,6 +174,8 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
                   100 * per_shot.spread)
     objective = WaveformObjective(waveform, base_result, shifts)
     records0 = predictor.records([base])[0]
+    # the likelihood's variance: the noise and the model's own uncertainty (physics MsS)
+    objective.add_model_uncertainty(records0)
     rss0 = objective.rss(records0)
     weights = np.ones(len(rss0))  # rss is chi^2: already over the noise
     fits = fit_candidates(candidate_effects(ctx, effects, added), ctx, base, predictor,
@@ -207,9 +210,26 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
         refit=refit, gamma_contact=gc, gamma_wall=gw, disagreement=disagreement,
         simulations=predictor.simulations, elapsed_s=time.perf_counter() - start,
         verdict=verdict(float(rss1.sum()), n, windows, ens.dof),
-        noise={**ens.to_json(names), **(per_shot.to_json() if per_shot else {})},
+        noise={**ens.to_json(names), **(per_shot.to_json() if per_shot else {}),
+               "model_uncertainty": _model_uncertainty_json(objective, names)},
         before=base, after=after, overlay=_overlay(objective, records0, records1, base_result),
         calibration=_calibration(objective, records1, base_result, names))
+
+
+def _model_uncertainty_json(objective: WaveformObjective, names: list[str]) -> dict:
+    """The model's own uncertainty in the likelihood: its sizes per channel and its share
+    of the variance the residuals are measured against."""
+    shot = objective.shots[0]
+    per = []
+    for j, (n, u) in enumerate(zip(names, objective.model_uncertainty, strict=True)):
+        split = (variance_split(shot.noise_var[j], shot.model_var[j])
+                 if shot.model_var is not None else variance_split(1.0 / shot.w[j], 0.0))
+        per.append({"channel": n, **u.to_json(), **split})
+    return {"definition": "variance per sample added to the noise's: (a m)^2 + (r t dm/dt)^2 "
+                          "of the baseline model's record m (a: relative_amplitude, r: "
+                          "relative_timing, t: time since impact); shares: of the summed "
+                          "variance over the record",
+            **objective.variance_split(), "channels": per}
 
 
 def _calibration(objective: WaveformObjective, records: np.ndarray, result,

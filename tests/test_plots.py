@@ -254,6 +254,70 @@ def test_field_map_smooth_parts_named_units(tmp_path):
     for fmt in plots.FORMATS:
         path = plot_field_map(report, tmp_path / f"field_B.{fmt}")
         assert path.read_bytes()[:5].startswith(MAGIC[fmt])
+    _check_flux_function(report)
+    _check_3d_parts(report)
+
+
+def _check_flux_function(report):
+    """The refined flux function is the P2 potential's r A_φ, exactly, at the vertices and
+    edge midpoints; the flux lines are equally spaced in flux."""
+    from msens.field_outputs import (
+        FLUX_SUBDIVISION,
+        _element_fields,
+        _flux_levels,
+        _lattice,
+        _refined_psi,
+    )
+
+    sol = report.solution
+    mesh = sol.basis.mesh
+    keep = np.zeros(mesh.t.shape[1], dtype=bool)
+    keep[::97] = True
+    r, z, tri, psi = _refined_psi(report, keep)
+    lam, sub = _lattice(FLUX_SUBDIVISION)
+    assert sub.shape == (FLUX_SUBDIVISION**2, 3)
+    assert tri.shape == (keep.sum() * FLUX_SUBDIVISION**2, 3)
+    k = lam.shape[0]
+    a = sol.a[sol.basis.nodal_dofs[0]]
+    am = sol.a[sol.basis.facet_dofs[0]]
+    t, t2f = mesh.t[:, keep], mesh.t2f[:, keep]
+    corner = [int(np.flatnonzero(np.all(lam == np.eye(3)[v], axis=1))[0]) for v in range(3)]
+    for v in range(3):
+        np.testing.assert_allclose(r[corner[v]::k], mesh.p[0, t[v]])
+        np.testing.assert_allclose(z[corner[v]::k], mesh.p[1, t[v]])
+        np.testing.assert_allclose(psi[corner[v]::k], mesh.p[0, t[v]] * a[t[v]], rtol=1e-12,
+                                   atol=1e-18)
+    # skfem's edge order (0, 1), (1, 2), (0, 2)
+    for edge, (i, j) in enumerate(((0, 1), (1, 2), (0, 2))):
+        mid = int(np.flatnonzero(np.all(np.isclose(lam, (np.eye(3)[i] + np.eye(3)[j]) / 2),
+                                        axis=1))[0])
+        r_mid = 0.5 * (mesh.p[0, t[i]] + mesh.p[0, t[j]])
+        np.testing.assert_allclose(psi[mid::k], r_mid * am[t2f[edge]], rtol=1e-12,
+                                   atol=1e-18)
+    # the levels are equally spaced
+    b_mean, _, _ = _element_fields(report)
+    everything = np.ones(mesh.t.shape[1], dtype=bool)
+    _, _, _, psi_all = _refined_psi(report, everything, n=1)
+    levels = _flux_levels(report, psi_all, everything, np.linalg.norm(b_mean, axis=1))
+    assert np.allclose(np.diff(levels), np.diff(levels)[0])
+
+
+def _check_3d_parts(report):
+    """The 3-D view keeps every bead whole (no half-shells at its ends) and no air; its
+    image is cut to the parts."""
+    from msens.field_outputs import _crop_white, _sensor_z_span, _solid_triangles
+
+    z0, z1 = _sensor_z_span(report)
+    keep = _solid_triangles(report, z0 - 0.01, z1 + 0.01, 0.03)
+    subdomains = report.solution.problem.mesh.subdomains
+    beads = [n for n in subdomains if n.startswith("bead_")]
+    whole = [n for n in beads if keep[subdomains[n]].all()]
+    assert len(whole) >= 10
+    assert all(keep[subdomains[n]].all() or not keep[subdomains[n]].any() for n in beads)
+    assert not keep[subdomains["air"]].any()
+    img = np.full((100, 80, 3), 255, dtype=np.uint8)
+    img[30:60, 20:40] = 10
+    assert _crop_white(img, margin=2).shape == (34, 24, 3)
 
 
 def test_diagnosis_figure_says_no_effect_named():

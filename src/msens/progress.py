@@ -18,6 +18,7 @@ import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 
 #: Seconds between two heartbeat lines (below 5 s: a thread woken late on a busy machine
 #: still keeps the silence near 5 s).
@@ -59,42 +60,64 @@ def heartbeat(logger: logging.Logger, stage: str, *, every: float = HEARTBEAT_S,
     note : str
         Appended to each line, e.g. ``" (compiling the chain kernel on first use)"``.
 
-    Heartbeats nest: while an inner stage's heartbeat runs, the outer one keeps quiet
-    (unless no heartbeat line came for ``every`` seconds).
+    Heartbeats nest: one background thread speaks for the innermost running stage, so an
+    outer stage is quiet while an inner one runs and speaks again as soon as it ends.
     """
     if not logger.isEnabledFor(logging.INFO):
         yield
         return
-    done = threading.Event()
-    start = time.perf_counter()
-    token = object()
-    with _LOCK:
-        _ACTIVE.append(token)
-
-    def beat() -> None:
-        while not done.wait(every):
-            now = time.perf_counter()
-            with _LOCK:
-                # an inner stage's heartbeat speaks for both, unless it has not yet spoken
-                speak = _ACTIVE[-1] is token or now - _LAST[0] >= every
-                if speak:
-                    _LAST[0] = now
-            if speak:
-                logger.info("%s: still working, %.0f s%s", stage, now - start, note)
-
-    thread = threading.Thread(target=beat, name="msens-heartbeat", daemon=True)
-    thread.start()
+    entry = _Stage(logger, stage, note, every, time.perf_counter())
+    with _COND:
+        _STACK.append(entry)
+        _LAST[0] = entry.start  # a stage starts with a line of its own, usually
+        global _THREAD
+        if _THREAD is None:
+            _THREAD = threading.Thread(target=_tick, name="msens-heartbeat", daemon=True)
+            _THREAD.start()
+        _COND.notify_all()
     try:
         yield
     finally:
-        done.set()
-        thread.join()
-        with _LOCK:
-            _ACTIVE.remove(token)
+        with _COND:
+            _STACK.remove(entry)
+            thread = _THREAD if not _STACK else None
+            _COND.notify_all()
+        if thread is not None:
+            thread.join()
 
 
-#: The running heartbeats, innermost last (the innermost one logs), and when a heartbeat
-#: line was last logged (time.perf_counter()).
-_ACTIVE: list[object] = []
+@dataclass(frozen=True)
+class _Stage:
+    logger: logging.Logger
+    stage: str
+    note: str
+    every: float
+    start: float
+
+
+#: The running stages, innermost last; when a heartbeat line was last logged
+#: (time.perf_counter()); the thread that logs them (None while no stage runs).
+_STACK: list[_Stage] = []
 _LAST = [0.0]
-_LOCK = threading.Lock()
+_THREAD: threading.Thread | None = None
+_COND = threading.Condition()
+
+
+def _tick() -> None:
+    """The heartbeat thread: a line for the innermost stage whenever none came for its
+    ``every`` seconds; ends when no stage runs."""
+    global _THREAD
+    while True:
+        with _COND:
+            if not _STACK:
+                _THREAD = None
+                return
+            entry = _STACK[-1]
+            wait = _LAST[0] + entry.every - time.perf_counter()
+            if wait > 0:
+                _COND.wait(wait)
+                continue
+            now = time.perf_counter()
+            _LAST[0] = now
+        entry.logger.info("%s: still working, %.0f s%s", entry.stage, now - entry.start,
+                          entry.note)

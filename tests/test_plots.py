@@ -431,3 +431,21 @@ def test_vocabulary_names_data_keys(tag, name):
     assert contact_name(11) == "contact 11 (particles 11, 12)"
     assert contact_name(11, particles=False) == "contact 11"
     assert TIME_LABEL == "time since striker impact (µs)"
+
+
+def test_table2_rows_without_tof_or_reference_draw_no_marks():
+    """A row whose record holds no reflected pulse (TOF and AR None) or without a reference
+    shows no marks instead of failing."""
+    rows = [{"setup": "a", "sensor": "bead", "position": "top", "particle": 13,
+             "tof_us": None, "ar": None,
+             "reference": {"experiment_tof_us": 300.0, "experiment_tof_std_us": 2.0,
+                           "experiment_ar": 0.5, "experiment_ar_std": 0.02}},
+            {"setup": "a", "sensor": "mss", "position": "bottom", "particle": 18,
+             "tof_us": 210.0, "ar": 0.7, "reference": {}}]
+    fig = plots.table2(rows, "x")
+    try:
+        for ax in fig.axes:
+            msens = next(ln for ln in ax.lines if ln.get_label() == "model (msens)")
+            assert np.all(np.isnan(msens.get_xdata()))
+    finally:
+        plots.close(fig)

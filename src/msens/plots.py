@@ -225,8 +225,9 @@ def _table2_errors(r: dict, key: str) -> tuple[float, float, float]:
     suffix = "_us" if key == "tof" else ""
     exp = ref.get(f"experiment_{key}{suffix}", np.nan)
     std = ref.get(f"experiment_{key}_std{suffix}", np.nan)
-    model = r[f"{key}{suffix}"]
-    paper = ref.get(f"paper_model_{key}{suffix}", np.nan)
+    # a row whose record holds no reflected pulse has no TOF or AR (None)
+    model, paper, exp, std = (np.nan if v is None else float(v) for v in (
+        r.get(f"{key}{suffix}"), ref.get(f"paper_model_{key}{suffix}", np.nan), exp, std))
     with np.errstate(invalid="ignore", divide="ignore"):
         return (100.0 * (model - exp) / exp, 100.0 * (paper - exp) / exp,
                 100.0 * std / abs(exp))

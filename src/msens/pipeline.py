@@ -169,7 +169,7 @@ def calibrate_dissipation(study: Study, t: np.ndarray) -> DissipationFit | None:
 
         try:
             with heartbeat(_log, "Eq. 10 calibration",
-                           note=" (the first run compiles the chain kernel)"):
+                           note=" (a first run also compiles the chain kernel)"):
                 fit = fit_dissipation(
                     make_chain, sensors=(particles[0], particles[-1]), ar_top=spec.ar_top,
                     ar_bottom=spec.ar_bottom, velocity=study.striker.velocity_m_per_s,
@@ -256,7 +256,7 @@ def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_conta
               setup.name, chain.n_particles, t[-1] * 1e3, COMPILE_ESTIMATE_TEXT)
     start = time.perf_counter()
     with heartbeat(_log, f"setup {setup.name}: simulating the chain",
-                   note=" (the first run compiles the chain kernel)"):
+                   note=" (a first run also compiles the chain kernel)"):
         history = simulate(chain, study.striker.velocity_m_per_s, t, dt=study.simulation.dt_s)
     _log.info("setup %s: simulated in %.1f s", setup.name, time.perf_counter() - start)
     return chain, history

@@ -25,10 +25,9 @@ from dataclasses import dataclass
 HEARTBEAT_S = 4.0
 
 #: Wall time of the chain kernel's first compilation on an idle 2-core machine, s (numba,
-#: every variant the kernel has; measured 95 s for issue 37). It happens once per
-#: install: the compiled code is kept in the user cache folder
-#: (:func:`msens.chain.kernel.cache_guard.default_cache_dir`). A loaded machine takes
-#: several times longer.
+#: the variants ``msens run`` needs: 95 s measured for issue 37; at load averages 10 and
+#: 15 on the same machine it took 213 s and 422 s). It happens once per install: the
+#: compiled code is kept in the user cache folder (:mod:`msens.numba_cache`).
 KERNEL_COMPILE_S = 95.0
 
 

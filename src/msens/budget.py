@@ -285,34 +285,45 @@ def check_resolvable(study: Study) -> None:
 def flag_unresolved(study: Study, result):
     """``result`` (a :class:`msens.results.SetupResult`) with the reflected features of
     every sensor whose record holds no wall reflection set to NaN (null in JSON) and the
-    reason in the sensor's ``note``; each reason is also logged as a warning. A peak found
-    before the reflection can arrive, or after the record ends, is not the reflection."""
+    reason in the sensor's ``note``; each reason is also logged as a warning.
+
+    The reflection is expected one round trip (sensor to wall and back) after the incident
+    peak at the modelled incident speed (between the setup's sensors, else from the impact
+    to the sensor), within :data:`~msens.signals.resolvability.ROUND_TRIP_WINDOW`; a peak
+    outside that window, or a record that ends before it, gives no TOF or AR.
+    """
     import dataclasses
     import logging
 
     import numpy as np
 
-    from msens.signals.resolvability import arrival_bounds, reflection_note
+    from msens.signals.resolvability import ROUND_TRIP_WINDOW, reflection_note, round_trip
 
-    scales, length = setup_scales(study, result.setup, result.chain)
+    _, zeroed = setup_scales(study, result.setup, result.chain)
+    full = np.asarray(result.chain.length, dtype=float)
     t_end = float(result.history.t[-1])
     sensors = []
-    changed = False
     for r in result.sensors:
-        _, earliest = arrival_bounds(length, r.sensor.particle, scales.speed_m_per_s)
-        note = reflection_note(float(r.features.t_reflected), t_end, earliest)
+        t_inc = float(r.features.t_incident)
+        speed = result.speed_incident
+        if not (math.isfinite(speed) and speed > 0.0):  # one sensor: impact to sensor
+            k = r.sensor.particle - 1
+            speed = (float(np.sum(full[1:k]) + 0.5 * full[k]) / t_inc
+                     if math.isfinite(t_inc) and t_inc > 0.0 else math.nan)
+        if math.isfinite(speed) and speed > 0.0:
+            window = (ROUND_TRIP_WINDOW[0] * round_trip(zeroed, r.sensor.particle, speed),
+                      ROUND_TRIP_WINDOW[1] * round_trip(full, r.sensor.particle, speed))
+            note = reflection_note(t_inc, float(r.features.t_reflected), t_end, window)
+        else:
+            note = "no incident pulse found in the record: no TOF or AR"
         if note is None:
             sensors.append(r)
             continue
-        changed = True
         nan = np.full_like(np.asarray(r.features.t_reflected, dtype=float), np.nan)
         features = dataclasses.replace(r.features, t_reflected=nan, f_reflected=nan.copy())
         note = f"{r.sensor.kind.value}@{r.sensor.particle}: {note}"
         logging.getLogger("msens.budget").warning("setup %s: %s", result.setup.name, note)
         sensors.append(dataclasses.replace(r, features=features, note=note))
-    if not changed:
+    if not any(s.note for s in sensors):
         return result
-    nan = float("nan")
-    return dataclasses.replace(result, sensors=tuple(sensors),
-                               speed_reflected=nan if any(s.note for s in sensors)
-                               else result.speed_reflected)
+    return dataclasses.replace(result, sensors=tuple(sensors), speed_reflected=math.nan)

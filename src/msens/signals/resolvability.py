@@ -46,9 +46,18 @@ SPEED_MARGIN = 1.5
 #: pulse, not on the baseline).
 MIN_SAMPLES_PER_PULSE = 4
 
-__all__ = ["MIN_SAMPLES_PER_PULSE", "PULSE_LENGTH_DIAMETERS", "SPEED_MARGIN", "PulseScales",
-           "arrival_bounds",
-           "impact", "pulse_scales", "reflection_note"]
+__all__ = [
+    "MIN_SAMPLES_PER_PULSE",
+    "PULSE_LENGTH_DIAMETERS",
+    "ROUND_TRIP_WINDOW",
+    "SPEED_MARGIN",
+    "PulseScales",
+    "arrival_bounds",
+    "impact",
+    "pulse_scales",
+    "reflection_note",
+    "round_trip",
+]
 
 
 @dataclass(frozen=True)
@@ -156,27 +165,51 @@ def arrival_bounds(length: ArrayLike, particle: int, speed_m_per_s: float
     return to_centre / speed_m_per_s, (to_wall + back) / speed_m_per_s
 
 
-def reflection_note(t_reflected: float, t_end: float, earliest: float) -> str | None:
-    """Why a record's reflected peak at ``t_reflected`` (NaN: none found) is not the wall's
-    reflection, or None if it can be.
+#: Window of a reflection's time of flight around the round trip expected at the modelled
+#: speed (twice the sensor-wall distance over the incident pulse's speed): a reflected pulse
+#: is slower (it is smaller: V ~ F^(1/6)) and crosses rods faster; a peak outside is not
+#: the wall's reflection. On the paper's setups the TOFs lie within 0.9-1.2 of the centre.
+ROUND_TRIP_WINDOW = (0.6, 1.6)
+
+
+def round_trip(length: ArrayLike, particle: int, speed_m_per_s: float) -> float:
+    """Time for a pulse to go from a particle's centre to the wall and back at
+    ``speed_m_per_s``, s (``length`` as in :func:`arrival_bounds`)."""
+    lengths = np.asarray(length, dtype=float)
+    k = particle - 1
+    return 2.0 * float(np.sum(lengths[k + 1:]) + 0.5 * lengths[k]) / speed_m_per_s
+
+
+def reflection_note(t_incident: float, t_reflected: float, t_end: float,
+                    window: tuple[float, float]) -> str | None:
+    """Why a record's reflected peak is not the wall's reflection, or None if it can be.
 
     Parameters
     ----------
-    t_reflected : float
-        Time of the reflected peak the features found, s (NaN if none).
+    t_incident, t_reflected : float
+        Times of the incident and the reflected peak the features found, s (NaN: none).
     t_end : float
         End of the record, s.
-    earliest : float
-        Earliest arrival of the reflected pulse (:func:`arrival_bounds`), s.
+    window : (float, float)
+        Shortest and longest plausible time of flight, s (:data:`ROUND_TRIP_WINDOW` times
+        :func:`round_trip`).
     """
-    if t_end < earliest:
+    lo, hi = window
+    if not math.isfinite(t_incident):
+        return "no incident pulse found in the record: no TOF or AR"
+    if t_end < t_incident + lo:
         return (f"the record ends at {t_end * 1e6:.4g} us, before the wall's reflection can "
-                f"arrive (at the earliest {earliest * 1e6:.4g} us): no TOF or AR")
+                f"arrive (not before {(t_incident + lo) * 1e6:.4g} us): no TOF or AR")
     if not math.isfinite(t_reflected):
-        return ("no reflected pulse found in the record (damping may absorb it, or the "
-                "record ends before it): no TOF or AR")
-    if t_reflected < earliest:
-        return (f"the peak after the incident pulse ({t_reflected * 1e6:.4g} us) comes before "
-                f"the wall's reflection can arrive (at the earliest {earliest * 1e6:.4g} us): "
-                "it is not the reflection; no TOF or AR")
+        why = ("the record may end before it (expected up to "
+               f"{(t_incident + hi) * 1e6:.4g} us)" if t_end < t_incident + hi
+               else "the chain's damping absorbs it")
+        return f"no reflected pulse found in the record ({why}): no TOF or AR"
+    tof = t_reflected - t_incident
+    if not lo <= tof <= hi:
+        return (f"the peak taken for the reflection ({t_reflected * 1e6:.4g} us, TOF "
+                f"{tof * 1e6:.4g} us) is not the wall's reflection, expected with a TOF of "
+                f"{lo * 1e6:.4g}-{hi * 1e6:.4g} us at the modelled speed"
+                + (" (the record ends before that)" if t_end < t_incident + hi else "")
+                + ": no TOF or AR")
     return None

@@ -164,3 +164,42 @@ def test_a_named_effect_reports_its_interval():
     iv = d.to_json()["parameter_intervals"]["remanence_factor"]
     assert (iv["lower"], iv["value"], iv["upper"]) == (1.05, 1.1, 1.16)
     assert d.to_json()["closest_at_bound"] is None
+
+
+class _IntObjective:
+    """chi^2 smooth in an integer position k, a count c and a force f (one 'sensor')."""
+
+    n_obs = np.array([np.inf])
+
+    def rss(self, records):
+        k, c, f = records
+        return np.array([((k - 17) / 2.0) ** 2 + (c - 4) ** 2 + ((f - 2.5) / 0.05) ** 2])
+
+
+class _IntPredictor:
+    def records(self, states):
+        return [np.array(s) for s in states]
+
+
+def test_coarse_to_fine_search_finds_the_exhaustive_optimum_for_less():
+    space = (Parameter("first_contact", 2, 29, integer=True),
+             Parameter("contact_count", 1, 6, integer=True),
+             Parameter("force_n", 0.05, 30.0, log=True))
+
+    def effect(strides):
+        return Effect(name="toy", description="toy", space=lambda ctx, base: space,
+                      baseline=lambda ctx, base: {"force_n": 0.0},
+                      apply=lambda ctx, base, p: (p["first_contact"], p["contact_count"],
+                                                  p["force_n"]),
+                      grid_points=6, strides=lambda ctx: strides)
+
+    full = fit_effect(effect({}), None, None, _IntPredictor(), _IntObjective(), np.ones(1))
+    fast = fit_effect(effect({"first_contact": 3, "contact_count": 2}), None, None,
+                      _IntPredictor(), _IntObjective(), np.ones(1))
+    for fit in (full, fast):
+        assert (fit.parameters["first_contact"], fit.parameters["contact_count"]) == (17, 4)
+        assert fit.parameters["force_n"] == pytest.approx(2.5, rel=1e-3)
+        lo, hi = fit.intervals["force_n"]
+        assert lo == pytest.approx(2.5 - Z_LEVEL * 0.05, rel=2e-3)
+        assert hi == pytest.approx(2.5 + Z_LEVEL * 0.05, rel=2e-3)
+    assert fast.evaluations < 0.25 * full.evaluations

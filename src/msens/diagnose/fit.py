@@ -5,8 +5,9 @@ The criterion minimised is the weighted residual sum over sensors, sum_c RSS_c /
 ``effect.grid_points`` per parameter (log-spaced for scale parameters) run as one batch, then
 a bounded Brent search (one parameter) or Nelder–Mead (several) between the grid neighbours
 of the best point. Integer parameters: every combination (one batch; states that need no new
-simulation share one); continuous parameters beside them are refined at the best
-combination.
+simulation share one), or, for an effect with ``strides`` (costly states), every stride-th
+value with a coarser continuous grid first and then every value between the best coarse
+point's neighbours; continuous parameters beside them are refined at the best combination.
 
 Honest parameters: at the optimum the curvature of the criterion (a chi^2: the residual over
 the likelihood's variance, :mod:`msens.diagnose.likelihood`) gives each continuous parameter
@@ -94,6 +95,12 @@ def _grid(p: Parameter, points: int) -> np.ndarray:
     return np.linspace(_to_x(p, p.lower), _to_x(p, p.upper), points)
 
 
+def _stride_grid(g: np.ndarray, stride: int) -> np.ndarray:
+    """Every ``stride``-th value of an integer grid, its last value included."""
+    out = g[::stride]
+    return out if out[-1] == g[-1] else np.append(out, g[-1])
+
+
 def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predictor,
                objective, weights: np.ndarray) -> EffectFit:
     """Fit ``effect`` on top of ``base`` to the measurement behind ``objective``.
@@ -134,6 +141,21 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
             count[0] += len(todo)
         return [cache[tuple(map(float, x))] for x in xs]
 
+    strides = {k: int(v) for k, v in effect.strides(ctx).items() if int(v) > 1}
+    if strides:
+        # coarse to fine: the integer parameters with a stride on every stride-th value and
+        # the continuous ones on a coarser grid, then every integer between the best coarse
+        # point's neighbours with the full continuous grid
+        coarse = [_grid(p, max(3, effect.grid_points // 2)) if not p.integer else
+                  _stride_grid(grids[i], strides.get(p.name, 1))
+                  for i, p in enumerate(space)]
+        cpts = list(itertools.product(*coarse))
+        ccrit = [float(weights @ r) for r in evaluate(cpts)]
+        cbest = cpts[int(np.argmin(ccrit))]
+        grids = [g if not p.integer or p.name not in strides else
+                 g[np.abs(g - cbest[i]) < strides[p.name]]
+                 for i, (p, g) in enumerate(zip(space, grids, strict=True))]
+        points = cpts + list(itertools.product(*grids))
     rss = evaluate(points)
     crit = np.array([float(weights @ r) for r in rss])
     best = np.array(points[int(np.argmin(crit))], dtype=float)

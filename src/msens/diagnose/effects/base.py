@@ -147,6 +147,9 @@ class Effect:
         Whether the effect makes sense for the setup (e.g. magnets only on MsS setups).
     grid_points : int
         Points per continuous parameter of the batched start grid.
+    strides : callable (Context) -> dict of str -> int
+        Per integer parameter, a stride for a coarse first search (coarse to fine, for
+        effects whose states are costly on some setups); empty: every combination.
     """
 
     name: str
@@ -156,6 +159,7 @@ class Effect:
     apply: Callable[[Context, ModelState, Mapping[str, float]], ModelState]
     applies: Callable[[Context], bool] = lambda ctx: True
     grid_points: int = 12
+    strides: Callable[[Context], Mapping[str, int]] = lambda ctx: {}
 
 
 @dataclass(frozen=True)

@@ -136,13 +136,11 @@ def test_compare_bad_data_fails_before_the_run(tmp_path, capsys, monkeypatch, st
     is simulated: exit 2 and one line, in well under the run's time."""
     import time
 
-    from msens import api
     from msens.config.study import default_study_path
 
     def no_run(*args, **kwargs):  # a warm cache makes the run fast: timing alone can't tell
         raise AssertionError("compare ran the study before checking the data")
 
-    monkeypatch.setattr(api, "run_study", no_run)
     monkeypatch.setattr("msens.workflows.compare.run_study", no_run)
 
     path = (default_study_path() if study == "paper-mss"

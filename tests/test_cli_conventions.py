@@ -33,9 +33,10 @@ def _no_simulation(monkeypatch):
     def boom(*args, **kwargs):
         raise AssertionError("work started before the cheap checks")
 
-    from msens import api, pipeline
+    from msens import pipeline
 
-    monkeypatch.setattr(api, "run_study", boom)
+    for workflow in ("run", "synth", "compare"):  # each workflow's own reference
+        monkeypatch.setattr(f"msens.workflows.{workflow}.run_study", boom)
     monkeypatch.setattr(pipeline, "simulate", boom)
 
 

@@ -16,7 +16,6 @@ from pathlib import Path
 from msens import results
 from msens.config.schema import PAPER_TABLE2
 from msens.config.study import Study, builtin_study_path, default_study_path, load_study
-from msens.pipeline import run_study
 from msens.workflows.common import check_format as _check_format
 from msens.workflows.common import provenance
 from msens.workflows.compare import compare as compare
@@ -33,6 +32,7 @@ from msens.workflows.run import prepare_outputs as prepare_outputs
 from msens.workflows.run import run as run
 from msens.workflows.run import summary as summary
 from msens.workflows.run import write_outputs as write_outputs
+from msens.workflows.synth import synth as synth
 
 
 def load(path: str | Path) -> Study:
@@ -60,51 +60,6 @@ def replace(study: Study, changes: dict | None = None, /, **more) -> Study:
 physics_summary = results.physics_summary
 mechanism_share = results.mechanism_share
 frequency_summary = results.frequency_summary
-
-
-def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
-          noise: float = 0.01, seed: int = 0, overwrite: bool = False) -> Path:
-    """Write synthetic measurements of one setup of ``study`` to ``out`` (never over an
-    existing file unless ``overwrite``)."""
-    from msens import preflight
-    from msens.errors import InputError
-    from msens.io.read import write_waveform
-    from msens.synth import RigEffects, synthesize
-
-    preflight.study(study)
-    out = preflight.output_file(out, "--out", overwrite=overwrite)
-    shots = preflight.count(shots, "--shots", 1, 10000)
-    noise = preflight.number(noise, "--noise", 0.0, 1.0, " (fraction of the peak)")
-    seed = preflight.count(seed, "--seed", 0, 2**63 - 1)
-    if not 0 <= seed < 2**63:  # numpy's generators take non-negative seeds
-        raise InputError(f"--seed must be from 0 to 2**63 - 1, got {seed}")
-    names = [s.name for s in study.setups]
-    name = setup or names[0]
-    if name not in names:
-        raise InputError(f"--setup must be one of {', '.join(names)}, got {name!r}")
-    if out.exists() and not overwrite:
-        raise InputError(f"refusing to overwrite '{out}' (the command's --overwrite replaces it)")
-    from msens.config import plausible
-
-    chosen_setup = study.setup(name)
-    samples = round(study.simulation.t_end_s * study.simulation.sample_rate_hz) + 1
-    # the shots' records and the rig effects' working copies (about four) in float64
-    need = 4 * 8 * shots * samples * len(chosen_setup.sensors)
-    if need > plausible.MEMORY_BUDGET_BYTES:
-        raise InputError(f"--shots {shots} of {samples:,} samples x "
-                         f"{len(chosen_setup.sensors)} channels need about "
-                         f"{need / 2**30:.3g} GiB; the budget is "
-                         f"{plausible.MEMORY_BUDGET_BYTES / 2**30:g} GiB: fewer shots, or a "
-                         "shorter 'simulation.t_end_s'")
-    result = run_study(study)
-    chosen = next(s for s in result.setups if s.setup.name == name)
-    meta = {"study": study.name}
-    if study.striker.drop_height_m is not None:
-        meta["drop_height_m"] = repr(study.striker.drop_height_m)
-    waveform = synthesize(chosen, RigEffects(shots=shots, noise=noise, seed=seed),
-                          metadata=meta)
-    write_waveform(waveform, out, overwrite=overwrite)
-    return out
 
 
 def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str | None = None,

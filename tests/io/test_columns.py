@@ -237,7 +237,6 @@ def test_cli_bad_maps_exit_2_with_one_message(tmp_path, capsys, monkeypatch, com
         raise AssertionError("ran the study")
 
     monkeypatch.setattr(msens.pipeline, "run_study", no_run)
-    monkeypatch.setattr("msens.api.run_study", no_run)
     monkeypatch.setattr("msens.workflows.compare.run_study", no_run)
     argv = {
         "check-waveform": ["check-waveform", str(SCOPE)],

@@ -12,12 +12,14 @@ So far:
 - :mod:`.compare` — a measured waveform against the model of a study: the checks of the
   measurement (also the first step of a diagnosis), ``compare.json``, the overlay figure and
   the text table.
+- :mod:`.synth` — synthetic measurements of one setup: the request checked (including the
+  memory its shots need) before the study runs, then the rig effects and the file.
 - :mod:`.diagnose` — the effect the model misses, from a waveform or a setup's reference
   rows: ``diagnosis.json``, its figure and the text table.
 
-The functions named like their modules (``run``, ``field``, ``compare``, ``diagnose``) are not
-listed here (an attribute of the package cannot be both); import them from their modules or
-call them through :mod:`msens`.
+The functions named like their modules (``run``, ``field``, ``synth``, ``compare``,
+``diagnose``) are not listed here (an attribute of the package cannot be both); import them
+from their modules or call them through :mod:`msens`.
 """
 
 from msens._lazy import attribute, names

@@ -39,8 +39,8 @@ _N = int(os.environ.get("MSENS_FUZZ_EXAMPLES", "0"))
 
 
 #: Examples per test in the default suite and in the slow group.
-FAST = {"parse": 120, "run": 10, "wave": 40, "sweep": 80}
-SLOW = {"parse": 2000, "run": 150, "wave": 600, "sweep": 1000}
+FAST = {"parse": 120, "run": 10, "wave": 40, "sweep": 80, "args": 150}
+SLOW = {"parse": 2000, "run": 150, "wave": 600, "sweep": 1000, "args": 3000}
 _LONG = {"on": False}
 
 
@@ -294,6 +294,57 @@ def test_fuzz_sweep_specs(index):
     check()
 
 
+# --------------------------------------------------------------------------- arguments
+
+#: Arguments of every kind a script or a shell may pass (issue 38: ``shots=2.5``,
+#: ``scheduler=""``, ``workers=0``, a 300-character ``--out``).
+ARGUMENTS = st.one_of(
+    HOSTILE, st.none(), st.text(max_size=40), st.binary(max_size=8),
+    st.sampled_from(["tcp://", "inproc://x", "tls://h:1", "h:", ":1", "[::1]", "tcp://h:0",
+                     "/dev/zero", "/proc/self/x.csv", "y" * 300, "a\0b", ".", "/", "x.csv"]),
+    st.builds(Path, st.text(max_size=20)))
+
+
+def test_fuzz_command_arguments():
+    """Every checked argument gives its value back (typed) or one InputError, at once."""
+    from msens import preflight
+    from msens.parallel import check_scheduler
+    from msens.preflight import check_workers, count, number, output_dir, output_file
+
+    checks = [lambda v: check_scheduler(v, connect=False), check_workers,
+              lambda v: count(v, "--shots", 1, 10000),
+              lambda v: number(v, "--noise", 0.0, 1.0), output_file, output_dir,
+              preflight.study]
+
+    @_settings("args")
+    @given(st.sampled_from(range(len(checks))), ARGUMENTS)
+    def check(which, value):
+        start = time.perf_counter()
+        try:
+            checks[which](value)
+        except InputError as exc:
+            text = str(exc)
+            assert text and "\n" not in text and len(text) <= 1100
+        assert time.perf_counter() - start < 1.0
+    check()
+
+
+def test_fuzz_path_arguments_of_readers(tmp_path):
+    """Readers and loaders given anything: a result or one InputError naming it."""
+    from msens.config.study import load_study
+    from msens.design.sweep import load_sweep
+    from msens.io.read import read_waveform
+
+    @_settings("args")
+    @given(st.sampled_from([load_study, load_sweep, read_waveform]), ARGUMENTS)
+    def check(reader, value):
+        try:
+            reader(value)
+        except InputError as exc:
+            assert str(exc) and "\n" not in str(exc)
+    check()
+
+
 @pytest.mark.slow
 def test_fuzz_long(record, tmp_path, capsys, monkeypatch):
     """Every fuzz test above with the slow group's example counts."""
@@ -308,6 +359,8 @@ def test_fuzz_long(record, tmp_path, capsys, monkeypatch):
         test_fuzz_binary_waveform_files(record, tmp_path / suffix[1:], capsys, suffix)
     for index in range(len(SWEEPS)):
         test_fuzz_sweep_specs(index)
+    test_fuzz_command_arguments()
+    test_fuzz_path_arguments_of_readers(tmp_path)
 
 
 def test_fuzz_helpers_find_every_leaf():

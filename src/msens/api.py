@@ -16,10 +16,11 @@ from pathlib import Path
 from msens import results
 from msens.config.schema import PAPER_TABLE2
 from msens.config.study import Study, builtin_study_path, default_study_path, load_study
-from msens.workflows.common import check_format as _check_format
-from msens.workflows.common import provenance
+from msens.workflows.common import provenance as provenance
 from msens.workflows.compare import compare as compare
 from msens.workflows.compare import format_comparison as format_comparison
+from msens.workflows.design import design as design
+from msens.workflows.design import format_design as format_design
 from msens.workflows.diagnose import diagnose as diagnose
 from msens.workflows.diagnose import format_diagnosis as format_diagnosis
 from msens.workflows.field import FIELD_OUTPUTS as FIELD_OUTPUTS
@@ -60,27 +61,3 @@ def replace(study: Study, changes: dict | None = None, /, **more) -> Study:
 physics_summary = results.physics_summary
 mechanism_share = results.mechanism_share
 frequency_summary = results.frequency_summary
-
-
-def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str | None = None,
-           workers: int | None = None, progress: bool = True, fig_format: str = "png"):
-    """Sweep coil/magnet designs of the study's MsS (:mod:`msens.design`); writes
-    ``designs.csv``, ``pareto.<fig_format>`` and ``recommendation.json`` into ``out``."""
-    from msens import budget, preflight
-    from msens.design import load_sweep, run_design
-
-    preflight.study(study)
-    scheduler = preflight.check_scheduler(scheduler)
-    workers = preflight.check_workers(workers)
-    out = preflight.output_dir(out)
-    budget.check(study)
-    return run_design(study, load_sweep(sweep), out, scheduler=scheduler, workers=workers,
-                      progress=progress, provenance=provenance(study),
-                      fig_format=_check_format(fig_format))
-
-
-def format_design(result) -> str:
-    """Plain-text summary of a design sweep."""
-    from msens.design import format_result
-
-    return format_result(result)

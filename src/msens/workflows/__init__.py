@@ -14,12 +14,14 @@ So far:
   the text table.
 - :mod:`.synth` — synthetic measurements of one setup: the request checked (including the
   memory its shots need) before the study runs, then the rig effects and the file.
+- :mod:`.design` — coil or magnet design sweeps: the request checked, then
+  :func:`msens.design.run_design` (the sweep, its cache and its files).
 - :mod:`.diagnose` — the effect the model misses, from a waveform or a setup's reference
   rows: ``diagnosis.json``, its figure and the text table.
 
 The functions named like their modules (``run``, ``field``, ``synth``, ``compare``,
-``diagnose``) are not listed here (an attribute of the package cannot be both); import them
-from their modules or call them through :mod:`msens`.
+``design``, ``diagnose``) are not listed here (an attribute of the package cannot be both);
+import them from their modules or call them through :mod:`msens`.
 """
 
 from msens._lazy import attribute, names
@@ -30,6 +32,7 @@ _HOMES = {
             "summary", "write_outputs"),
     "field": ("FIELD_OUTPUTS", "format_field"),
     "compare": ("check_measurement", "format_comparison"),
+    "design": ("format_design",),
     "diagnose": ("format_diagnosis", "reference_passes"),
 }
 

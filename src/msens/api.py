@@ -1,7 +1,9 @@
 """Public Python API: load a study, run it, write and print its results.
 
 The ``msens`` command is a thin layer over these functions, so scripts and notebooks get
-exactly the numbers the terminal prints::
+exactly the numbers the terminal prints. Each workflow lives in its module of
+:mod:`msens.workflows`; this module loads studies and re-exports the workflows (the package
+itself, :mod:`msens`, offers the same names)::
 
     import msens.api as ms
     study = ms.load("studies/paper-table2.toml")

@@ -7,7 +7,9 @@ pulse features (time of flight, amplitude ratio, speed), and the comparison with
 waveforms. All quantities are in SI units.
 
 The names below are the public surface; everything else is reached through the
-subpackages (each lists its API in ``__all__``).
+subpackages (each lists its API in ``__all__``). Each workflow lives in its module of
+:mod:`msens.workflows`; :mod:`msens.api` offers the same functions with their text formatters,
+and the ``msens`` command (also ``python -m msens``) calls them.
 
 Studies
 -------

@@ -127,6 +127,11 @@ def test_study_toml_round_trip(name):
     assert study_toml(back).split("\n", 1)[1] == study_toml(changed).split("\n", 1)[1]
 
 
+def test_study_toml_header_stays_a_comment():
+    study = load_study(builtin_study_path("paper-table2")).replace({"name": "two\nlines"})
+    assert _equal(parse_study(study_toml(study), source="dumped"), study)
+
+
 def test_format_toml_round_trips_awkward_documents():
     doc = {"schema": "x/1", "plain": 1, "float": 1e-300, "big": 2.0**70, "neg": -0.0,
            "inf": float("inf"), "whole": 3.0, "text": "quote \" backslash \\ tab\t nl\n \x7f é",

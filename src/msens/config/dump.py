@@ -52,7 +52,9 @@ def study_toml(study: Study) -> str:
     measurement = document.get("measurement")
     if isinstance(measurement, dict) and study.measurement_file is not None:
         measurement["file"] = str(study.measurement_file.resolve())
-    header = f"# msens study {study.name!r}, written from {study.source}\n"
+    origin = "".join(c if c.isprintable() else " " for c in f"{study.name!r}, written from "
+                     f"{study.source}")  # one comment line, whatever the names hold
+    header = f"# msens study {origin}\n"
     return header + format_toml(document)
 
 

@@ -138,6 +138,10 @@ class Diagnosis:
         channel: ``gain_measured_per_model`` (measured = gain x model, synth's and
         compare's convention) with its unit, DC offset (V) and the impact-to-trigger delay
         (s). Empty in feature mode.
+    intervals : dict
+        The named parameters' 95 % intervals (lower, upper), SI (after a joint refit, the
+        single fit's interval moved to the refined value); empty: those of the named
+        candidate.
     """
 
     mode: str
@@ -163,6 +167,7 @@ class Diagnosis:
     after: ModelState = field(repr=False)
     overlay: list = field(repr=False, default_factory=list)
     calibration: dict = field(default_factory=dict)
+    intervals: dict = field(default_factory=dict)
 
     @property
     def explained(self) -> bool:
@@ -210,7 +215,7 @@ class Diagnosis:
             "effect": self.effect,
             "parameters": self.parameters,
             "parameter_intervals": intervals_json(
-                self.parameters, named.intervals if named else {}, ()),
+                self.parameters, self.intervals or (named.intervals if named else {}), ()),
             "interval_definition": INTERVAL_DEFINITION,
             "closest_at_bound": None if closest is None else {
                 "effect": closest.effect, "score": closest.score,

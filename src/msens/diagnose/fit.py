@@ -330,6 +330,20 @@ def parameter_intervals(x0: np.ndarray, cov: np.ndarray, lower: np.ndarray,
             for x, s, lo, hi in zip(x0, sd, lower, upper, strict=True)]
 
 
+def recentred(effect: Effect, ctx: Context, base: ModelState, intervals: dict,
+              old: dict, new: dict) -> dict:
+    """``intervals`` of a fit at ``old`` moved to ``new`` (a joint refit's values) by the
+    same shift in each search variable, clipped to the searched range."""
+    out = {}
+    for p in effect.space(ctx, base):
+        if p.name not in intervals:
+            continue
+        shift = _to_x(p, float(new[p.name])) - _to_x(p, float(old[p.name]))
+        lo, hi = (_to_x(p, v) for v in intervals[p.name])
+        out[p.name] = (_from_x(p, lo + shift), _from_x(p, hi + shift))
+    return out
+
+
 def refit_jointly(named: list[tuple[Effect, dict]], ctx: Context, plain: ModelState,
                   predictor: Predictor, objective, weights: np.ndarray,
                   maxfev: int = 80) -> tuple[list[dict], ModelState, np.ndarray]:

@@ -74,7 +74,7 @@ from msens.diagnose.candidates import (
 from msens.diagnose.diagnosis import Candidate, Diagnosis
 from msens.diagnose.effects import Context
 from msens.diagnose.effects import get as get_effect
-from msens.diagnose.fit import refit_jointly
+from msens.diagnose.fit import recentred, refit_jointly
 from msens.diagnose.likelihood import variance_split
 from msens.diagnose.noise import shot_matrix
 from msens.diagnose.objective import FeatureObjective, WaveformObjective, check_channels
@@ -190,7 +190,10 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
             [(get_effect(wfit.effect), dict(wfit.parameters))]
         params, after, _ = refit_jointly(named, ctx, plain, predictor, objective, weights)
         refit = tuple((e.name, p) for (e, _), p in zip(named, params, strict=True))
-        winner = dataclasses.replace(winner, parameters=params[-1])
+        winner = dataclasses.replace(
+            winner, parameters=params[-1],
+            intervals=recentred(get_effect(wfit.effect), ctx, base, winner.intervals,
+                                winner.parameters, params[-1]))
     records1 = predictor.records([after])[0]  # rerun with the effect added
     rss1 = objective.rss(records1)
     n = float(objective.n_obs.sum())
@@ -203,6 +206,7 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     return Diagnosis(
         mode="waveform", setup=setup.name, effect=winner.effect if winner else "none",
         parameters=dict(winner.parameters) if winner else {},
+        intervals=dict(winner.intervals) if winner else {},
         misfit_before=misfit0, misfit_after=float(rss1.sum()) / n,
         candidates=tuple(cands), threshold=threshold, n_obs=int(n),
         sigma=tuple(float(np.sqrt(np.mean(1.0 / w))) for w in objective.shots[0].w),
@@ -333,6 +337,7 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
     return Diagnosis(
         mode="features", setup=setup.name, effect=winner.effect if winner else "none",
         parameters=dict(winner.parameters) if winner else {},
+        intervals=dict(winner.intervals) if winner else {},
         misfit_before=misfit0, misfit_after=float(objective.rss(records1).sum()) / n,
         candidates=tuple(cands), threshold=threshold, n_obs=int(n),
         sigma=tuple(float(s) for s in objective.sigma),

@@ -12,8 +12,9 @@
 """
 
 from msens.uq.inputs import InputSet, UncertainInput, load_inputs
-from msens.uq.propagate import Propagation, propagate
+from msens.uq.propagate import Propagation
 from msens.uq.workflow import UqResult, run_uq
 
-__all__ = ["InputSet", "Propagation", "UncertainInput", "UqResult", "load_inputs", "propagate",
-           "run_uq"]
+# propagate() stays in msens.uq.propagate: a package attribute cannot be both the function
+# and the submodule of the same name (``import msens.uq.propagate as m`` would bind the function)
+__all__ = ["InputSet", "Propagation", "UncertainInput", "UqResult", "load_inputs", "run_uq"]

@@ -203,3 +203,21 @@ def test_coarse_to_fine_search_finds_the_exhaustive_optimum_for_less():
         assert lo == pytest.approx(2.5 - Z_LEVEL * 0.05, rel=2e-3)
         assert hi == pytest.approx(2.5 + Z_LEVEL * 0.05, rel=2e-3)
     assert fast.evaluations < 0.25 * full.evaluations
+
+
+def test_a_fit_at_the_edge_of_its_physical_range_is_flagged():
+    def toy() -> Effect:
+        return Effect(name="toy", description="a toy effect",
+                      space=lambda ctx, base: (Parameter("x_m", 0.0, 1.0,
+                                                         plausible=(0.0, 0.6)),),
+                      baseline=lambda ctx, base: {"x_m": 0.0},
+                      apply=lambda ctx, base, p: float(p["x_m"]))
+
+    at_edge = fit_effect(toy(), None, None, _Predictor(), _Objective(0.599, 0.01),
+                         np.ones(1))
+    assert at_edge.at_bound == ("x_m",)
+    inside = fit_effect(toy(), None, None, _Predictor(), _Objective(0.55, 0.01), np.ones(1))
+    assert inside.at_bound == ()
+    # beyond the physical range: implausible (judged elsewhere), not "at bound"
+    beyond = fit_effect(toy(), None, None, _Predictor(), _Objective(0.7, 0.01), np.ones(1))
+    assert beyond.at_bound == ()

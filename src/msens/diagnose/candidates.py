@@ -110,9 +110,15 @@ def bound_notes(effect: Effect, ctx: Context, base: ModelState, params: Mapping[
     for name in at_bound:
         p = space[name]
         v = float(params[name])
-        end = "upper" if abs(v - p.upper) <= abs(v - p.lower) else "lower"
-        out.append(f"at bound: {name} = {v:.4g} at the {end} end of its searched range "
-                   f"[{p.lower:.4g}, {p.upper:.4g}]: the search, not the data, stopped it")
+        lo, hi = p.physical
+        edges = [(abs(v - p.lower), "lower", "searched", p.lower, p.upper),
+                 (abs(v - p.upper), "upper", "searched", p.lower, p.upper),
+                 (abs(v - lo), "lower", "physical", lo, hi),
+                 (abs(v - hi), "upper", "physical", lo, hi)]
+        _, end, kind, a, b = min(edges, key=lambda e: e[0])
+        out.append(f"at bound: {name} = {v:.4g} at the {end} end of its {kind} range "
+                   f"[{a:.4g}, {b:.4g}]: the {'search' if kind == 'searched' else 'limit'}, "
+                   "not the data, stopped it")
     return tuple(out)
 
 

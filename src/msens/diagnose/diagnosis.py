@@ -75,7 +75,8 @@ INTERVAL_DEFINITION = ("95 % interval of each continuous parameter from the curv
                        "likelihood's variance holds the noise and the model's own "
                        "uncertainty), clipped to the searched range; integer parameters "
                        "have none. at_bound: the optimum is within 0.5 % of the searched "
-                       "span from one of its ends")
+                       "span from one of its ends, or from an end of its physical range "
+                       "inside it")
 
 
 def intervals_json(parameters: dict, intervals: dict, at_bound: tuple[str, ...]) -> dict:

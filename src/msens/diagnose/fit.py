@@ -14,7 +14,8 @@ the likelihood's variance, :mod:`msens.diagnose.likelihood`) gives each continuo
 an interval (:func:`curvature_covariance`: a finite-difference Hessian H in the search
 variables, two batches of simulations; covariance 2 H^-1, widened by the reduced chi^2 when
 it exceeds 1), and a parameter whose optimum sits within ``BOUND_TOL`` of the edge of its
-searched range is flagged "at bound": the search, not the data, stopped it there.
+searched range, or of its physical range inside it, is flagged "at bound": the search or
+the physical limit, not the data, stopped it there.
 """
 
 from __future__ import annotations
@@ -210,11 +211,23 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
             p = space[i]
             intervals[p.name] = (_from_x(p, lo_x), _from_x(p, hi_x))
         at_bound = [space[i].name for i, flag
-                    in zip(continuous, at_bounds(xc, lower, upper), strict=True) if flag]
+                    in zip(continuous, at_bounds(xc, lower, upper), strict=True)
+                    if flag or _at_physical_edge(space[i], float(best[i]))]
     return EffectFit(effect=effect.name, parameters=params,
                      state=effect.apply(ctx, base, params),
                      rss=evaluate([best])[0], n_parameters=len(space), evaluations=count[0],
                      intervals=intervals, at_bound=tuple(at_bound))
+
+
+def _at_physical_edge(p: Parameter, x: float) -> bool:
+    # inside the physical range but within BOUND_TOL of the searched span from one of its
+    # ends that lies inside the search (beyond it the fit is implausible instead)
+    span = _to_x(p, p.upper) - _to_x(p, p.lower)
+    for edge in p.physical:
+        if p.lower < edge < p.upper and p.is_plausible(_from_x(p, x)) and \
+                abs(x - _to_x(p, edge)) <= BOUND_TOL * span:
+            return True
+    return False
 
 
 def at_bounds(x: np.ndarray, lower: np.ndarray, upper: np.ndarray,

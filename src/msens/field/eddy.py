@@ -55,11 +55,13 @@ from msens.field.regions import CurrentRegion
 from msens.field.solve import Discretisation, FieldSolution, MagnetostaticProblem, discretise
 from msens.params.units import MU0, TWO_PI
 
-#: Element size at the surfaces of the beads near a coil for the eddy-current model, m (the
-#: skin depth is ~20 µm at 100 kHz with the differential permeability). On the one-sensor model
-#: (``python benchmarks/dynamic_mesh_convergence.py``) the contact approach at 40 µm agrees
-#: with 10 µm to 0.7 % and 0.05° at 100 kHz and 2.3 % and 0.7° at 200 kHz; without refinement
-#: it is 9° off at 30 kHz and 28° off at 100 kHz.
+#: Element size at the surface of every conducting part for the eddy-current model (the beads
+#: near a coil, the pole pieces, the magnets: :func:`msens.field.build.skin_surface_size`), m
+#: (the skin depth is ~20 µm at 100 kHz with the differential permeability). On the main study
+#: (``python benchmarks/dynamic_mesh_convergence.py``) coil 13's contact approach at 40 µm
+#: everywhere agrees with the pole surfaces at 10 µm to 0.23 % and 0.05° at 100 kHz, R_eddy to
+#: 0.9 % and L to 0.2 %; with the bead surfaces only graded (before issue 33) it was 6.3° off at
+#: 10 kHz, 28 % at 100 kHz and R_eddy +130 % at 10 kHz.
 SKIN_SIZE = 40e-6
 
 __all__ = ["SKIN_SIZE", "HarmonicOperator", "HarmonicSolution",

@@ -37,6 +37,9 @@ XATOL = 1e-3
 #: A continuous optimum within this fraction of its searched span (in the search variable)
 #: from either end is "at bound".
 BOUND_TOL = 5e-3
+#: Integer combinations whose continuous parameters are refined, for effects searched coarse
+#: to fine (``Effect.strides``); 1 otherwise.
+REFINED_COMBINATIONS = 4
 #: Coverage of the reported intervals (two-sided, normal approximation).
 LEVEL = 0.95
 #: Normal quantile of ``LEVEL``.
@@ -163,35 +166,52 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
 
     continuous = [i for i, p in enumerate(space) if not p.integer]
     if continuous:
-        # refine the continuous parameters between their grid neighbours, the integer ones
-        # held at their best grid value
-        lo, hi = [], []
-        for i in continuous:
-            g = grids[i]
-            k = int(np.argmin(np.abs(g - best[i])))
-            lo.append(g[max(k - 1, 0)])
-            hi.append(g[min(k + 1, g.size - 1)])
-
-        def full(xc) -> np.ndarray:
-            x = best.copy()
+        def full(xc, at: np.ndarray | None = None) -> np.ndarray:
+            x = (best if at is None else at).copy()
             x[continuous] = xc
             return x
 
-        def f(xc) -> float:
-            return float(weights @ evaluate([full(np.atleast_1d(xc))])[0])
+        def refine(start: np.ndarray) -> tuple[np.ndarray, float]:
+            # the continuous parameters between their grid neighbours, the integer ones
+            # held at the start's values
+            lo, hi = [], []
+            for i in continuous:
+                g = grids[i]
+                k = int(np.argmin(np.abs(g - start[i])))
+                lo.append(g[max(k - 1, 0)])
+                hi.append(g[min(k + 1, g.size - 1)])
 
-        if len(continuous) == 1:
-            opt = minimize_scalar(lambda x: f([x]), bounds=(lo[0], hi[0]), method="bounded",
-                                  options={"xatol": _xatol(space[continuous[0]])})
-            x_opt = full(np.array([opt.x]))
-        else:
-            opt = minimize(f, best[continuous], method="Nelder-Mead",
-                           bounds=list(zip(lo, hi, strict=True)),
-                           options={"xatol": min(_xatol(space[i]) for i in continuous),
-                                    "fatol": 1e-6, "maxfev": 60})
-            x_opt = full(np.asarray(opt.x))
-        if f(x_opt[continuous]) < f(best[continuous]):
-            best = x_opt
+            def f(xc) -> float:
+                return float(weights @ evaluate([full(np.atleast_1d(xc), start)])[0])
+
+            if len(continuous) == 1:
+                opt = minimize_scalar(lambda x: f([x]), bounds=(lo[0], hi[0]),
+                                      method="bounded",
+                                      options={"xatol": _xatol(space[continuous[0]])})
+                x_opt = full(np.array([opt.x]), start)
+            else:
+                opt = minimize(f, start[continuous], method="Nelder-Mead",
+                               bounds=list(zip(lo, hi, strict=True)),
+                               options={"xatol": min(_xatol(space[i]) for i in continuous),
+                                        "fatol": 1e-6, "maxfev": 60})
+                x_opt = full(np.asarray(opt.x), start)
+            f_opt, f_start = f(x_opt[continuous]), f(start[continuous])
+            return (x_opt, f_opt) if f_opt < f_start else (start, f_start)
+
+        starts = [best]
+        integer = [i for i, p in enumerate(space) if p.integer]
+        if strides and integer:
+            # costly states, coarse grids: the continuous parameters are refined at the best
+            # REFINED_COMBINATIONS integer combinations (a run's place, length and force
+            # trade off along a ridge, on which the force grid alone picks the wrong one)
+            seen: dict[tuple, np.ndarray] = {}
+            for i in np.argsort(crit, kind="stable"):
+                key = tuple(points[i][j] for j in integer)
+                seen.setdefault(key, np.array(points[i], dtype=float))
+                if len(seen) == REFINED_COMBINATIONS:
+                    break
+            starts = list(seen.values())
+        best = min((refine(x) for x in starts), key=lambda r: r[1])[0]
     params = params_of(best)
     intervals: dict[str, tuple[float, float]] = {}
     at_bound: list[str] = []

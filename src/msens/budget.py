@@ -327,3 +327,25 @@ def flag_unresolved(study: Study, result):
     if not any(s.note for s in sensors):
         return result
     return dataclasses.replace(result, sensors=tuple(sensors), speed_reflected=math.nan)
+
+
+def check_record_rate(study: Study, waveform, source: str) -> None:
+    """Refuse (InputError naming ``source``) a measured record sampled too coarsely to
+    resolve the study's pulse: the same bound as ``simulation.sample_rate_hz``
+    (:func:`check_resolvable`), against the record's own sample interval."""
+    from msens.signals.resolvability import MIN_SAMPLES_PER_PULSE
+
+    t = waveform.time
+    if t.size < 2:
+        return  # the readers refuse such records
+    dt = float(t[-1] - t[0]) / (t.size - 1)
+    # the most lenient setup: the record's sensors choose one of them later
+    scales = max((setup_scales(study, setup)[0] for setup in study.setups),
+                 key=lambda s: s.duration_s)
+    if not dt * MIN_SAMPLES_PER_PULSE <= scales.duration_s:
+        raise InputError(
+            f"{source}: sampled every {dt * 1e6:.4g} us ({1.0 / dt:.4g} Hz), too coarse for "
+            f"the pulse of {study.source}, which lasts at least {scales.duration_s * 1e6:.3g} "
+            f"us and needs {MIN_SAMPLES_PER_PULSE} samples, so at least "
+            f"{scales.min_sample_rate_hz():.3g} Hz (or the time axis looks scaled: time_s "
+            "must be in seconds)")

@@ -373,3 +373,23 @@ def test_early_peak_is_not_taken_for_the_reflection(tmp_path, capsys):
         assert top["tof_us"] is None and top["ar"] is None and "no TOF or AR" in top["note"]
         assert bottom["tof_us"] > 200 and "note" not in bottom
     assert "not the wall's reflection" in rows[("rod", 13)]["note"]
+
+
+def test_measured_record_too_coarse_for_the_pulse(tmp_path, capsys):
+    """A record at 100 kHz (2 samples per pulse FWHM) was compared without a word."""
+    from tests.hostile.conftest import TWENTY
+
+    from msens.io import Waveform, read_waveform, write_waveform
+
+    study = tmp_path / "s.toml"
+    study.write_text(TWENTY)
+    good = api.synth(api.load(study), tmp_path / "r.csv", shots=1, noise=0.01, seed=1)
+    w = read_waveform(good)
+    write_waveform(Waveform(w.time[::50], w.data[::50], w.channels, w.metadata),
+                   tmp_path / "coarse.csv")
+    for argv in (["compare", str(study), str(tmp_path / "coarse.csv"), "--out",
+                  str(tmp_path / "c")],
+                 ["diagnose", str(tmp_path / "coarse.csv"), "--study", str(study), "--out",
+                  str(tmp_path / "d")]):
+        code, err = run_cli(argv, capsys, seconds=60)
+        assert_input_error(code, err, "coarse.csv", "too coarse", "Hz")

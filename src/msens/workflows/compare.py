@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from msens import budget
 from msens.compare import (
     check_signal,
     check_units,
@@ -64,6 +65,7 @@ def check_measurement(study: Study, waveform: Waveform, source: str) -> StudyRes
     check_shots(waveform, source)
     check_amplitudes(waveform, source)
     check_pulses(waveform, source)  # no signal is an error, in compare as in diagnose
+    budget.check_record_rate(study, waveform, source)  # the same bound as a study's rates
     result = run_study(study)
     check_signal(match_setup(result, waveform), waveform, source)
     return result

@@ -82,7 +82,7 @@ def _check_dashpot(t: Table, key: str, gamma: float, mass: float, law: Damping) 
     high = 0.5 * mass / P.MIN_DASHPOT_TIME_S
     if gamma * scale > high:
         limit = high / scale
-        raise t.error(key, f"must be <= {limit:.3g} for beads of {mass:g} kg, got {gamma:g}: "
+        raise t.error(key, f"must be <= {limit:.3g} for beads of {mass:g} kg, got {gamma!r}: "
                            f"its dashpot would stop a bead in under "
                            f"{P.MIN_DASHPOT_TIME_S:g} s, faster than any bead contact "
                            "vibrates (the chain would carry no wave)")
@@ -170,7 +170,7 @@ def _offset(t: Table, chain: ChainSpec) -> float:
     offset = t.number("axial_offset_m", 0.0)
     if abs(offset) > high:
         raise t.error("axial_offset_m", f"must be within +-{high:g} m (half a bead "
-                                        f"diameter) of its particle, got {offset:g} m: "
+                                        f"diameter) of its particle, got {offset!r} m: "
                                         "further, it sits nearer the next particle; name that "
                                         "particle instead")
     return offset

@@ -250,3 +250,15 @@ def test_magnet_design_with_eddy_currents_equals_msens_run(eddy_runs):
     rows = _design_rows(eddy_runs, "magnet", '[magnet]\ngrade = ["ceramic8"]\n')
     _, _, run, static = eddy_runs
     _equals_run(rows[0], _coil_summary(run), _coil_summary(static), 1e-8)
+
+
+def test_summary_says_what_rests_on_the_equivalent_magnet(eddy_runs):
+    """Issue 33 item 4: summary.json splits the screening between the equivalent magnet's
+    pole pieces and the beads."""
+    split = _coil_summary(eddy_runs[2])["frequency_response"]["screening_by_part"]
+    assert split["frequencies_Hz"] == [1e4, 3e4, 1e5]
+    beads = np.asarray(split["beads"]["approach_ratio_magnitude"])
+    full = np.asarray(split["all"]["approach_ratio_magnitude"])
+    assert beads.shape == full.shape == (3, 2) and np.all(beads >= full)
+    share = np.asarray(split["magnet_share_of_screening"])
+    assert np.all((share >= 0) & (share <= 1))

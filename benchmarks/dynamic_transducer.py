@@ -2,7 +2,7 @@
 
 Usage: ``python benchmarks/dynamic_transducer.py [study.toml]`` (default
 ``studies/paper-mss.toml``). The eddy-current model is the one ``msens run`` uses with
-``[field] eddy_currents = true`` (mesh graded into the bead surfaces, cached). Prints JSON:
+``[field] eddy_currents = true`` (mesh graded into every conducting surface, cached). Prints JSON:
 per coil, for the two contacts next to the coil's bead (12–13 for coil 13, 17–18 for coil
 18), |D|/|D_0| and the phase of the contact-approach sensitivity and the same for Villari (the
 bead bulk), at every solved
@@ -66,7 +66,7 @@ def rebuild(geometry, eddy) -> dict:
 def main(path: str | None = None, rebuild_models: bool = False) -> dict:
     study = load_study(path or ROOT / "studies" / "paper-mss.toml")
     geometry = geometry_from_study(study)
-    # the run's eddy-current model: its mesh graded into the bead surfaces, its cache
+    # the run's eddy-current model: its mesh graded into every conducting surface, its cache
     eddy = eddy_settings(study)
     options = eddy.options
     t0 = time.perf_counter()

@@ -42,7 +42,8 @@ FREQS = (0.0, 1e4, 3e4, 1e5)
 #: Refinement levels: name -> (bead skin size, pole/magnet skin size or None = beads only), µm.
 LEVELS: dict[str, tuple[float, float | None]] = {
     "beads-only-40": (40.0, None),  # the eddy mesh before issue 33
-    "all-40": (40.0, 40.0),  # the default now (SKIN_SIZE at every conducting surface)
+    "all-40": (40.0, 40.0),  # every conducting surface at the former default
+    "all-30": (30.0, 30.0),  # the default (SKIN_SIZE at every conducting surface)
     "poles-20": (40.0, 20.0),
     "poles-10": (40.0, 10.0),
     "beads-20": (20.0, 10.0),  # the reference: beads refined too

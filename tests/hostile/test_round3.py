@@ -181,7 +181,7 @@ def test_eddy_skin_size_that_would_mesh_forever(tmp_path, capsys):
                     "skin_size_m = 1e-6\n")
     code, err = run_cli(["run", str(path), "--out", str(tmp_path / "o"), "--no-figures"],
                         capsys, seconds=10)
-    assert_input_error(code, err, "'field.skin_size_m'", "smallest skin_size_m", "1.7e-05")
+    assert_input_error(code, err, "'field.skin_size_m'", "smallest skin_size_m", "1.3e-05")
 
 
 def test_steel_conductivity_needs_eddy_currents(tiny, tmp_path, capsys):

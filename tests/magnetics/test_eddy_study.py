@@ -20,7 +20,7 @@ TINY = (Path(__file__).parents[1] / "data" / "tiny-mss.toml").read_text().replac
     "[[sensor]]", "[electronics]\nsample_rate_hz = 5e6\n[[sensor]]")
 
 
-#: Eddy currents with a coarse skin mesh (0.3 mm; the default 40 µm is for accuracy, see
+#: Eddy currents with a coarse skin mesh (0.3 mm; the default 30 µm is for accuracy, see
 #: benchmarks/dynamic_mesh_convergence.py): the tests check the path, not the numbers.
 EDDY = "[field]\neddy_currents = true\nskin_size_m = 3e-4\n"
 

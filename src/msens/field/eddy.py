@@ -58,11 +58,13 @@ from msens.params.units import MU0, TWO_PI
 #: Element size at the surface of every conducting part for the eddy-current model (the beads
 #: near a coil, the pole pieces, the magnets: :func:`msens.field.build.skin_surface_size`), m
 #: (the skin depth is ~20 µm at 100 kHz with the differential permeability). On the main study
-#: (``python benchmarks/dynamic_mesh_convergence.py``) coil 13's contact approach at 40 µm
-#: everywhere agrees with the pole surfaces at 10 µm to 0.23 % and 0.05° at 100 kHz, R_eddy to
-#: 0.9 % and L to 0.2 %; with the bead surfaces only graded (before issue 33) it was 6.3° off at
-#: 10 kHz, 28 % at 100 kHz and R_eddy +130 % at 10 kHz.
-SKIN_SIZE = 40e-6
+#: (``python benchmarks/dynamic_mesh_convergence.py``) coil 13's contact approach with 30 µm at
+#: the beads agrees with a reference (beads 20 µm, pole surfaces 10 µm) within 0.04 % and
+#: 0.01° at 10–30 kHz and 0.5 % and 0.04° at 100 kHz, R_eddy within 1.0 % and L within
+#: 0.2 %; at 40 µm everywhere the contact approach was 1.1 % off at 100 kHz, and with the bead
+#: surfaces only graded (before issue 33) 6.3° off at 10 kHz, 27 % at 100 kHz and R_eddy
+#: +130 % at 10 kHz.
+SKIN_SIZE = 30e-6
 
 __all__ = ["SKIN_SIZE", "HarmonicOperator", "HarmonicSolution",
            "conductivity", "conductivity_mass", "dipole_moment",

@@ -148,6 +148,11 @@ def test_a_fit_at_a_bound_is_not_named_and_the_verdict_says_so():
                                 "summary": d.summary()}]}
     text = format_diagnosis(report)
     assert "[at bound]" in text and "remanence_factor=1.5 [1.45, 1.5]" in text
+    assert "model's own uncertainty" not in text
+    report["noise"] = {"model_uncertainty": {"noise_share": 0.46,
+                                             "model_uncertainty_share": 0.54}}
+    assert "noise (46 % of the variance) and the model's own uncertainty (54 %)" in \
+        format_diagnosis(report)
 
 
 def test_a_named_effect_reports_its_interval():

@@ -122,6 +122,11 @@ def format_diagnosis(report: dict) -> str:
                      + ("explained" if p.get("explained") else "NOT explained"))
     if "summary" in report["passes"][-1]:
         lines.append(f"verdict: {report['passes'][-1]['summary']}")
+    mu = (report.get("noise") or {}).get("model_uncertainty")
+    if mu and mu.get("model_uncertainty_share", 0.0) > 0.0:
+        lines.append(f"the residual is measured against the noise ({100 * mu['noise_share']:.0f} "
+                     f"% of the variance) and the model's own uncertainty "
+                     f"({100 * mu['model_uncertainty_share']:.0f} %)")
     if any(c.get("intervals") for c in report["candidates"]):
         lines.append("[lo, hi]: 95 % interval from the curvature of the fit; [at bound]: the "
                      "fit sits at an end of its searched range and is not named")

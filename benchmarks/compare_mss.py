@@ -4,7 +4,8 @@ For each seed, ``msens synth`` data of ``studies/paper-mss.toml`` (both coils; u
 amplifier gain 0.5-2, offset, trigger delay and jitter) without noise (1 shot) and with 1 %
 noise (5 shots) are compared with the model (``msens compare``): per coil the TOF and AR
 errors (measured mean minus model), the lowest correlation and the gain error
-(K x true gain - 1), and the speed error; the worst case over the seeds.
+(measured gain / true gain - 1, one convention: measured = gain x model), and the speed
+error; the worst case over the seeds.
 
 Run: ``python benchmarks/compare_mss.py [--seeds N]`` (default 20).
 """
@@ -32,7 +33,7 @@ def case(result, seed: int, noise: float, shots: int) -> dict:
             "tof_error_us": m["tof_us"]["mean"] - model["tof_us"],
             "ar_error": m["ar"]["mean"] - model["ar"],
             "correlation": m["correlation"]["mean"],
-            "gain_error": m["gain"]["mean"] * truth - 1.0}
+            "gain_error": m["gain_measured_per_model"]["mean"] / truth - 1.0}
     speed = report["speed"]
     out["speed_error"] = speed["measured_m_per_s"]["mean"] / speed["model_m_per_s"] - 1.0
     return out

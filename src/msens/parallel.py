@@ -22,10 +22,11 @@ import multiprocessing
 import os
 import re
 import socket
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from contextlib import contextmanager
 from contextvars import ContextVar
+from dataclasses import dataclass
 from typing import Any
 
 from msens.errors import InputError, shorten
@@ -222,6 +223,49 @@ def _share_cores(threads: int) -> None:
     threadpool_limits(limits=threads)  # and those already loaded
 
 
+@dataclass(frozen=True)
+class TaskMap:
+    """A map-like callable over :func:`run_tasks`, made where a workflow decides where its
+    work runs and handed to physics functions as their ``workers`` (scipy's ``workers=``
+    convention: an int or a map-like ``workers(fn, iterable)``).
+
+    Parameters
+    ----------
+    scheduler : str, optional
+        Address of a Dask distributed scheduler (``tcp://host:port``); None = local.
+    workers : int, optional
+        Local worker processes (default :func:`default_workers`); ignored with Dask.
+    """
+
+    scheduler: str | None = None
+    workers: int | None = None
+
+    def __call__(self, fn: Callable[[Any], Any], iterable: Iterable[Any]) -> list[Any]:
+        """``[fn(a) for a in iterable]``, run where this map says, in the order of
+        ``iterable``."""
+        args = list(iterable)
+        out: list[Any] = [None] * len(args)
+        for i, result in run_tasks(fn, args, scheduler=self.scheduler, workers=self.workers):
+            out[i] = result
+        return out
+
+    def __len__(self) -> int:
+        """Workers this map runs on: those of the Dask cluster (asked once per call, at
+        least 1), else the local worker processes."""
+        if self.scheduler is not None:
+            return dask_workers(self.scheduler)
+        return default_workers() if self.workers is None else check_workers(self.workers)
+
+
+def dask_workers(scheduler: str) -> int:
+    """Workers of the Dask scheduler at ``scheduler`` (at least 1)."""
+    scheduler = check_scheduler(scheduler, connect=False)  # the form, then dask installed
+    from distributed import Client
+
+    with Client(scheduler) as client:
+        return max(1, len(client.scheduler_info()["workers"]))
+
+
 def _run_dask(fn: Callable[[Any], Any], args: Sequence[Any],
               scheduler: str) -> Iterator[tuple[int, Any]]:
     scheduler = check_scheduler(scheduler, connect=False)  # the form, then dask installed
@@ -241,5 +285,5 @@ def _run_dask(fn: Callable[[Any], Any], args: Sequence[Any],
         client.close()
 
 
-__all__ = ["allow_pools", "check_scheduler", "check_workers", "default_workers",
-           "pools_allowed", "run_tasks"]
+__all__ = ["TaskMap", "allow_pools", "check_scheduler", "check_workers", "dask_workers",
+           "default_workers", "pools_allowed", "run_tasks"]

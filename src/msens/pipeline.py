@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 
 import numpy as np
 from tqdm import tqdm
@@ -198,10 +199,11 @@ def setup_transducers(study: Study, setup: SetupSpec) -> dict | None:
 
 
 def setup_responses(study: Study, setup: SetupSpec, *,
-                    scheduler: str | None = None) -> dict | None:
+                    workers: int | Callable = 1) -> dict | None:
     """Eddy-current frequency responses of a setup's physics MsS coils (cached on disk), or
-    None unless the study asks for eddy currents (``[field] eddy_currents = true``). With
-    ``scheduler`` (a Dask address) the frequency solves run on that cluster."""
+    None unless the study asks for eddy currents (``[field] eddy_currents = true``).
+    ``workers`` (an int or a map-like, e.g. :class:`msens.parallel.TaskMap` on a Dask
+    cluster): where the frequency solves run (:func:`msens.magnetics.dynamic.dynamic_report`)."""
     if not study.field.eddy_currents or not any(s.model is MssModel.PHYSICS
                                                 for s in setup.sensors):
         return None
@@ -212,7 +214,7 @@ def setup_responses(study: Study, setup: SetupSpec, *,
     _log.info("setup %s: eddy-current frequency responses (steel %.3g MS/m)", setup.name,
               eddy.steel / 1e6)
     return dynamic_report(geometry_from_study(study, setup), steel=eddy.steel,
-                          options=eddy.options, scheduler=scheduler).responses
+                          options=eddy.options, workers=workers).responses
 
 
 def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_contact: float,
@@ -263,7 +265,7 @@ def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_conta
 
 
 def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = None,
-              fit: DissipationFit | None = None, scheduler: str | None = None) -> StudyResult:
+              fit: DissipationFit | None = None, workers: int | Callable = 1) -> StudyResult:
     """Calibrate (if asked), simulate and observe every setup of ``study``.
 
     Parameters
@@ -274,8 +276,10 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
         predicted by the field model).
     fit : DissipationFit, optional
         A fit already made (skips the Eq. 10 calibration).
-    scheduler : str, optional
-        Dask scheduler address for the eddy-current frequency solves (default: here).
+    workers : int or map-like callable, optional
+        Where the eddy-current frequency solves run: 1 (default) here, an int n local
+        processes, or a map-like ``workers(fn, iterable)`` such as
+        :class:`msens.parallel.TaskMap` on a Dask cluster.
 
     Returns
     -------
@@ -298,7 +302,7 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
                                         transducers=transducers)
         observed = observe_setup(setup, chain, history, transducers=transducers,
                                  study=study,
-                                 responses=setup_responses(study, setup, scheduler=scheduler))
+                                 responses=setup_responses(study, setup, workers=workers))
         check_arrivals(study, observed)
         observed = budget.flag_unresolved(study, observed)  # no reflection: no TOF/AR
         check_speeds(study, observed)

@@ -36,6 +36,19 @@ def test_run_tasks_local_processes_match_serial(tmp_path):
     assert sorted(serial) == list(range(len(args)))
 
 
+def test_task_map_is_a_map_in_input_order(tmp_path):
+    """TaskMap (what a workflow hands the physics as ``workers``): results in the order of
+    the arguments whatever order the tasks finish in; its length is its worker count."""
+    from msens.parallel import TaskMap
+
+    log = str(tmp_path / "log")
+    args = [(i, 0.05 * (5 - i), log) for i in (0, 1, 2, 4, 5)]  # the first finish last
+    expected = [standin.square(a) for a in args]
+    assert TaskMap(workers=2)(standin.square, args) == expected
+    assert TaskMap(workers=1)(standin.square, iter(args)) == expected
+    assert len(TaskMap(workers=3)) == 3
+
+
 def test_workers_share_the_cores_between_their_blas_threads():
     """Local workers' BLAS gets cores // workers threads each (at least one): several
     workers with a thread per core each ran 1.5x slower on a 2-core machine."""

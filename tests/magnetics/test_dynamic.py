@@ -31,6 +31,7 @@ from msens.magnetics.dynamic import (
 from msens.magnetics.mechanisms import adjoint_check, coil_linkage, mechanism_potentials
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import Transducer, bias_solution
+from msens.parallel import TaskMap
 from msens.readout.electronics import coil_transfer_function, readout_circuit, transfer_function
 from msens.readout.mss import MssSensor, mss_signals
 from msens.store import Store
@@ -348,7 +349,8 @@ def test_offset_profiles_join_and_round_trip(model, report):
 
 @pytest.mark.slow
 def test_frequency_solves_on_a_dask_cluster(tmp_path):
-    """dynamic_report with a scheduler: the tasks run on the cluster and give the local report
+    """dynamic_report with a map over a Dask cluster (msens.parallel.TaskMap, as the run
+    workflow makes it): the tasks run on the cluster and give the local report
     (each task meshes through the shared cache and re-solves bias and sources: round-off)."""
     distributed = pytest.importorskip("distributed")
     g = one_sensor()
@@ -358,7 +360,7 @@ def test_frequency_solves_on_a_dask_cluster(tmp_path):
                                   dashboard_address=":0") as cluster:
         remote = dynamic_report(g, options=COARSE, store=Store.at(tmp_path / "dask"),
                                 frequencies=FREQS,
-                                scheduler=cluster.scheduler_address)
+                                workers=TaskMap(scheduler=cluster.scheduler_address))
         seen = {str(entry[0]) for entry in cluster.scheduler.transition_log}
     assert remote.details["tasks"] == 2 and len(seen) >= 2
     _same_report(local, remote)

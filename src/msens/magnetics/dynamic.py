@@ -36,7 +36,7 @@ function with the coil's series impedance Z(ω)
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -428,7 +428,7 @@ def report_from_json(data: dict) -> DynamicReport:
 def dynamic_report(geometry: SensorGeometry, *, options=None, store: Store | None = None,
                    frequencies: Sequence[float] = DEFAULT_FREQUENCIES,
                    steel: float = SIGMA_1018, magnets: Mapping[str, float] | None = None,
-                   refresh: bool = False, scheduler: str | None = None,
+                   refresh: bool = False, workers: int | Callable = 1,
                    offsets: bool = False, start: FieldSolution | None = None
                    ) -> DynamicReport:
     """Stored :func:`frequency_responses` of a geometry (artifact ``dynamic-<key>.json``).
@@ -438,10 +438,14 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, store: Store | Non
     ``store`` (default :meth:`msens.store.Store.default`) finds, verifies and writes the
     responses and the meshes as for :func:`msens.magnetics.transducer_cache.transducer_report`.
 
-    With ``scheduler`` (a Dask distributed scheduler address) the frequencies are split into
-    one chunk per worker; each task meshes (through ``store``, which travels with it),
-    solves the bias and the sources and then its frequencies, and the chunks are joined
-    (:func:`join_reports`). The result equals the local one to round-off.
+    ``workers``: where the frequency solves run, in scipy's convention. 1 (default): here, in
+    one task. An int n > 1: n local processes. A map-like callable ``workers(fn, iterable)``
+    (e.g. :class:`msens.parallel.TaskMap` on a Dask cluster, made by the workflow): its
+    tasks. With more than one worker the frequencies are split into one chunk per worker
+    (``len(workers)`` of a map-like that has a length, else one chunk per frequency); each
+    task meshes (through ``store``, which travels with it), solves the bias and the sources
+    and then its frequencies, and the chunks are joined (:func:`join_reports`). The result
+    equals the one-task result to round-off.
 
     With ``offsets`` each response also holds its coil's profiles over ±3 mm of axial offset
     (:data:`RESPONSE_OFFSET_STEP`; every source is then solved at every frequency), for
@@ -471,29 +475,29 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, store: Store | Non
     log = logging.getLogger(__name__)
     log.info("eddy-current responses (cached: no): %d frequencies", len(freqs))
     with heartbeat(log, "eddy-current responses"):  # minutes of complex solves
-        if scheduler is None:
+        if workers == 1:
             rep = _report_task((geometry, options, store, freqs, steel, magnets, grid, start,
                                 True))
         else:
-            from msens.parallel import run_tasks
-
-            chunks = [c for c in np.array_split(np.asarray(freqs[1:]), _workers(scheduler))
-                      if c.size]
+            mapper, n = _task_map(workers, len(freqs) - 1)
+            chunks = [c for c in np.array_split(np.asarray(freqs[1:]), n) if c.size]
             tasks = [(geometry, options, store, [0.0, *c.tolist()], steel, magnets, grid,
                       None, i == 0) for i, c in enumerate(chunks)]  # one chunk splits
-            parts = dict(run_tasks(_report_task, tasks, scheduler=scheduler))
-            rep = join_reports([parts[i] for i in range(len(tasks))])
+            rep = join_reports(list(mapper(_report_task, tasks)))
     rep.details["transducer_key"] = tkey
     store.write_json(name, report_to_json(rep), optional=True)
     return rep
 
 
-def _workers(scheduler: str) -> int:
-    """Workers of a Dask scheduler (at least 1)."""
-    from distributed import Client
+def _task_map(workers: int | Callable, tasks: int) -> tuple[Callable, int]:
+    """The map and the chunk count of ``workers`` (:func:`dynamic_report`) for ``tasks``
+    independent frequencies."""
+    if callable(workers):
+        return workers, len(workers) if hasattr(workers, "__len__") else max(1, tasks)
+    from msens.parallel import TaskMap, check_workers
 
-    with Client(scheduler) as client:
-        return max(1, len(client.scheduler_info()["workers"]))
+    n = check_workers(workers)
+    return TaskMap(workers=n), n
 
 
 def eddy_bias_solution(geometry: SensorGeometry, options: MeshOptions | None, *,

@@ -26,13 +26,17 @@ PHYSICS_FIGURES = ("mss_voltage.png", "mss_integrated.png", "sensitivity_profile
 
 def run(study: Study, *, scheduler: str | None = None) -> StudyResult:
     """Calibrate, simulate and observe every setup of ``study`` (the eddy-current frequency
-    solves on the Dask cluster at ``scheduler`` when given)."""
+    solves on the Dask cluster at ``scheduler`` when given, else in this process).
+
+    Where the work runs is decided here: the physics takes a map-like ``workers``
+    (:class:`msens.parallel.TaskMap` over the cluster) and never sees the address."""
     from msens import preflight
+    from msens.parallel import TaskMap
 
     # the address is checked even when no remote work turns out to be needed
     preflight.study(study)
     scheduler = preflight.check_scheduler(scheduler)
-    return run_study(study, scheduler=scheduler)
+    return run_study(study, workers=1 if scheduler is None else TaskMap(scheduler=scheduler))
 
 
 def summary(result: StudyResult) -> dict:

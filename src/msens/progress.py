@@ -16,7 +16,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -83,6 +83,29 @@ def heartbeat(logger: logging.Logger, stage: str, *, every: float = HEARTBEAT_S,
             _COND.notify_all()
         if thread is not None:
             thread.join()
+
+
+def stopwatch() -> Callable[[], float]:
+    """A function giving the wall seconds since this call (for progress lines that say how
+    long a stage has run)."""
+    start = time.perf_counter()
+    return lambda: time.perf_counter() - start
+
+
+@contextmanager
+def timed(logger: logging.Logger, stage: str, *,
+          level: int = logging.DEBUG) -> Iterator[Callable[[], float]]:
+    """Log ``<stage>: <t> s`` at ``level`` (default DEBUG) when the ``with`` block ends.
+
+    The timing of a computation's stages goes to the log, never into its results: the
+    physics stays a function of its inputs. Yields a :func:`stopwatch` of the block.
+    """
+    elapsed = stopwatch()
+    try:
+        yield elapsed
+    finally:
+        if logger.isEnabledFor(level):
+            logger.log(level, "%s: %.2f s", stage, elapsed())
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,6 @@ branch, PCHIP in the gap for the air branch).
 from __future__ import annotations
 
 import logging
-import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
@@ -507,16 +506,17 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
         workers = default_workers() if pools_allowed() else 1
     _log.info("contact maps %s (cached: no): %d contacts, a layer mesh and 18 nonlinear "
               "solves each, %d at a time", key, len(contacts), min(workers, len(contacts)))
-    began = time.perf_counter()
+    from msens.progress import heartbeat, stopwatch
+
+    elapsed = stopwatch()
     tasks = [(geometry, c, coils, options, store, start) for c in contacts]
     per_contact: dict[int, tuple[ContactMap, ...]] = {}
-    from msens.progress import heartbeat
 
     with heartbeat(_log, f"contact maps {key}"):  # each map takes a minute or more
         for i, maps in run_tasks(_contact_task, tasks, workers=workers):
             per_contact[contacts[i]] = maps
             _log.info("contact map %d/%d (contact %d) after %.0f s", len(per_contact),
-                      len(contacts), contacts[i], time.perf_counter() - began)
+                      len(contacts), contacts[i], elapsed())
     tables = {coil.particle: [per_contact[c][k] for c in contacts]
               for k, coil in enumerate(coils)}
     data = {"key": key, "version": MAP_VERSION, "transducer": transducer_key,

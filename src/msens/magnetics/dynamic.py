@@ -35,7 +35,7 @@ function with the coil's series impedance Z(ω)
 
 from __future__ import annotations
 
-import time
+import logging
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -58,6 +58,8 @@ from msens.magnetics.potentials import region_linkage
 from msens.params.materials import MAGNET_CONDUCTIVITY, SIGMA_1018
 from msens.params.units import TWO_PI
 from msens.store import Store, content_key
+
+_log = logging.getLogger(__name__)
 
 #: Frequencies solved by default, Hz: 0 (the static transducer), 12 roughly log-spaced
 #: points over 0.5–200 kHz (1-2-3-5 steps, so the reported 1, 3, 10, 30, 100 kHz are solved)
@@ -124,8 +126,8 @@ class DynamicReport:
         One per coil, keyed by its particle.
     details : dict
         JSON-ready diagnostics: per coil and frequency the reciprocity error (direct source
-        solves against the coil's own harmonic field) and the power balance; timings; dofs;
-        conductivities.
+        solves against the coil's own harmonic field) and the power balance; dofs;
+        conductivities. (The seconds of each stage go to the log at DEBUG.)
     """
 
     responses: dict[int, FrequencyResponse]
@@ -182,15 +184,15 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
     mesh = sol.problem.mesh
     if sigma is None:
         sigma = sensor_conductivity(mesh, geometry, steel=steel, magnets=magnets)
-    timings: dict[str, float] = {}
-    t0 = time.perf_counter()
-    op = HarmonicOperator(sol, sigma)
-    coils = [u.coil for u in geometry.iter_units()]
-    regions = [f"coil_{c.particle}" for c in coils]
-    # 1 A in each coil: J = N/S
-    coil_loads = np.array([op.winding_load(r, coil_current_density(c))
-                           for r, c in zip(regions, coils, strict=True)])
-    timings["assembly"] = time.perf_counter() - t0
+    from msens.progress import timed
+
+    with timed(_log, "eddy currents: assembly"):
+        op = HarmonicOperator(sol, sigma)
+        coils = [u.coil for u in geometry.iter_units()]
+        regions = [f"coil_{c.particle}" for c in coils]
+        # 1 A in each coil: J = N/S
+        coil_loads = np.array([op.winding_load(r, coil_current_density(c))
+                               for r, c in zip(regions, coils, strict=True)])
     n_f, n_s = freqs.size, model.rhs.shape[0]
     link = np.zeros((len(coils), n_f, n_s), dtype=complex)
     lam_self = np.zeros((len(coils), n_f), dtype=complex)
@@ -201,14 +203,11 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
              else np.zeros((len(coils), n_f, offs.size, n_s), dtype=complex))
     grids = ([] if offs is None
              else [offset_table_grid(sol, geometry, c) for c in coils])  # once per model
-    timings["factor"] = timings["solve"] = timings["post"] = 0.0
     for k, f in enumerate(freqs):
-        t0 = time.perf_counter()
-        fac = op.factor(f)
-        t1 = time.perf_counter()
-        own = op.solve(fac, coil_loads)
-        pots = op.solve(fac, model.rhs) if direct or offs is not None else None
-        t2 = time.perf_counter()
+        with timed(_log, f"eddy currents: {f:g} Hz factor and solves"):
+            fac = op.factor(f)
+            own = op.solve(fac, coil_loads)
+            pots = op.solve(fac, model.rhs) if direct or offs is not None else None
         for i, (c, r) in enumerate(zip(coils, regions, strict=True)):
             lam_self[i, k] = region_linkage(sol, own[i:i + 1], r, c.turns, c.area)[0]
             # reciprocity: K_t + jωM_σ is complex symmetric, Λ_s = 2π a_1ᵀ f_s (no conjugate)
@@ -228,19 +227,14 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
                 chk["power_balance_rel_error"].append(abs(re_z - loss) / max(abs(loss), 1e-300))
             else:
                 chk["power_balance_rel_error"].append(0.0)
-        t3 = time.perf_counter()
-        timings["factor"] += t1 - t0
-        timings["solve"] += t2 - t1
-        timings["post"] += t3 - t2
     out: dict[int, FrequencyResponse] = {}
     src = (f"msens.magnetics.dynamic {DYNAMIC_VERSION}: (K_t + jωM_σ) a_s = f_s at "
            f"{n_f} frequencies; σ steel {steel:.4g} S/m on beads and pole pieces, magnets "
            f"{dict(magnets or {}) or 'by grade'}; {sol.dofs} dofs")
     split = None
     if screening:
-        t0 = time.perf_counter()
-        split = screening_split(model, geometry, op, sigma, coil_loads)
-        timings["screening"] = time.perf_counter() - t0
+        with timed(_log, "eddy currents: screening split"):
+            split = screening_split(model, geometry, op, sigma, coil_loads)
     for i, c in enumerate(coils):
         contacts, vr, ar = model.contact_profiles(link[i].real)
         _, vi, ai = model.contact_profiles(link[i].imag)
@@ -260,7 +254,7 @@ def frequency_responses(model: MechanismPotentials, geometry: SensorGeometry,
     details = {"dofs": sol.dofs, "elements": mesh.n_elements, "frequencies_Hz": freqs.tolist(),
                "sigma_max_S_per_m": float(np.max(sigma)),
                "conducting_elements": int(np.count_nonzero(sigma)),
-               "coils": checks, "timings_s": timings}
+               "coils": checks}
     return DynamicReport(out, details)
 
 
@@ -468,13 +462,10 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, store: Store | Non
     if data is not None:
         return report_from_json(data)
     freqs = [float(f) for f in frequencies]
-    import logging
-
     from msens.progress import heartbeat
 
-    log = logging.getLogger(__name__)
-    log.info("eddy-current responses (cached: no): %d frequencies", len(freqs))
-    with heartbeat(log, "eddy-current responses"):  # minutes of complex solves
+    _log.info("eddy-current responses (cached: no): %d frequencies", len(freqs))
+    with heartbeat(_log, "eddy-current responses"):  # minutes of complex solves
         if workers == 1:
             rep = _report_task((geometry, options, store, freqs, steel, magnets, grid, start,
                                 True))
@@ -522,16 +513,15 @@ def _report_task(args: tuple) -> DynamicReport:
     """Mesh, bias, sources and the harmonic solves of one list of frequencies (from 0)."""
     from msens.magnetics.mechanisms import mechanism_potentials
     from msens.magnetics.steel_law import law_for_steel
+    from msens.progress import timed
 
     geometry, options, store, freqs, steel, magnets, offsets, start, screening = args
-    t0 = time.perf_counter()
-    sol = eddy_bias_solution(geometry, options, store=store, start=start)
-    timings: dict[str, float] = {"mesh_and_bias_solve": time.perf_counter() - t0}
+    with timed(_log, "eddy currents: mesh and bias solve"):
+        sol = eddy_bias_solution(geometry, options, store=store, start=start)
     model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
-                                 law=law_for_steel(geometry.steel), timings=timings)
+                                 law=law_for_steel(geometry.steel))
     rep = frequency_responses(model, geometry, freqs, steel=steel, magnets=magnets,
                               offsets=offsets, screening=screening)
-    rep.details["timings_s"] = {**timings, **rep.details["timings_s"]}
     rep.details["bias_newton_iterations"] = sol.iterations
     return rep
 
@@ -540,7 +530,7 @@ def join_reports(parts: Sequence[DynamicReport]) -> DynamicReport:
     """One report from reports of the same model at different frequencies (each from 0 Hz).
 
     The 0 Hz rows of all but the first are dropped (they repeat it); frequencies must then
-    increase. Timings are summed, checks concatenated.
+    increase. Checks are concatenated.
     """
     first = parts[0]
     responses = {}
@@ -573,11 +563,6 @@ def join_reports(parts: Sequence[DynamicReport]) -> DynamicReport:
                             if part.responses[p].screening is not None), None), **profiles)
     details = dict(first.details)
     details["frequencies_Hz"] = responses[next(iter(responses))].frequencies.tolist()
-    timings: dict[str, float] = {}
-    for part in parts:
-        for k, v in part.details.get("timings_s", {}).items():
-            timings[k] = timings.get(k, 0.0) + v
-    details["timings_s"] = timings
     details["coils"] = {
         c: {k: [x for i, part in enumerate(parts)
                 for x in part.details["coils"][c][k][(1 if i else 0):]]

@@ -10,8 +10,8 @@ verifies the linkage against the adjoint (reciprocity) route.
 
 from __future__ import annotations
 
+import logging
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,6 +39,8 @@ from msens.magnetics.villari import (
     villari_sources,
 )
 from msens.params.materials import BEAD_STEEL, ElasticMaterial
+
+_log = logging.getLogger(__name__)
 
 #: Coil offsets tabulated per transducer: ±OFFSET_SPAN in steps of OFFSET_STEP, m.
 OFFSET_SPAN = 3e-3
@@ -123,8 +125,8 @@ def contact_profiles(particles: np.ndarray, approach_contacts: np.ndarray, count
 
 def mechanism_potentials(sol: FieldSolution, geometry: SensorGeometry, *,
                          stress_force: float, law: JilesAthertonSablik,
-                         material: ElasticMaterial = BEAD_STEEL, approach: bool = True,
-                         timings: dict | None = None) -> MechanismPotentials:
+                         material: ElasticMaterial = BEAD_STEEL,
+                         approach: bool = True) -> MechanismPotentials:
     """Villari and contact-approach sources of every modelled bead and contact, solved.
 
     Parameters
@@ -140,30 +142,28 @@ def mechanism_potentials(sol: FieldSolution, geometry: SensorGeometry, *,
         Bead elasticity.
     approach : bool
         Include the contact-approach sources.
-    timings : dict, optional
-        Filled with the seconds each stage took.
+
+    The seconds each stage takes go to this module's log at DEBUG.
     """
-    timings = {} if timings is None else timings
+    from msens.progress import timed
+
     b = geometry.beads
-    t0 = time.perf_counter()
-    sampler = StressSampler(bead_stress(geometry, stress_force, material))
-    operator = TangentOperator(sol)
-    particles = np.array(list(b.particles))
-    sources = villari_sources(sol, geometry, particles, sampler, law)
-    timings["stress_and_tangent"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    if approach:
-        res = approach_residuals(sol, geometry, list(b.particles))
-        contacts = np.array(sorted(res))
-        a_rhs = -np.array([res[int(c)] for c in contacts])
-    else:
-        contacts = np.zeros(0, dtype=int)
-        a_rhs = np.zeros((0, sol.basis.N))
-    timings["approach_residuals"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    rhs = np.vstack([*(operator.magnetisation_rhs(el, m) for el, m in sources), a_rhs])
-    pots = operator.solve(rhs)
-    timings["source_solves"] = time.perf_counter() - t0
+    with timed(_log, "sources: bead stress and tangent operator"):
+        sampler = StressSampler(bead_stress(geometry, stress_force, material))
+        operator = TangentOperator(sol)
+        particles = np.array(list(b.particles))
+        sources = villari_sources(sol, geometry, particles, sampler, law)
+    with timed(_log, "sources: contact-approach residuals"):
+        if approach:
+            res = approach_residuals(sol, geometry, list(b.particles))
+            contacts = np.array(sorted(res))
+            a_rhs = -np.array([res[int(c)] for c in contacts])
+        else:
+            contacts = np.zeros(0, dtype=int)
+            a_rhs = np.zeros((0, sol.basis.N))
+    with timed(_log, "sources: potential solves"):
+        rhs = np.vstack([*(operator.magnetisation_rhs(el, m) for el, m in sources), a_rhs])
+        pots = operator.solve(rhs)
     return MechanismPotentials(solution=sol, particles=particles, contacts=contacts,
                                potentials=pots, count=b.count, operator=operator,
                                villari_sources=sources, approach_rhs=a_rhs, rhs=rhs)

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -258,7 +257,7 @@ class TransducerReport:
     transducers : dict of int -> Transducer
     details : dict
         JSON-ready diagnostics: per coil the bead Villari sensitivities, the reciprocity
-        check; timings; mesh size.
+        check; mesh size.
     bias : FieldSolution or None
         The bias solution it was computed from (None when read from the cache): a start
         for the same geometry's bias on another mesh (:func:`bias_solution`).
@@ -311,22 +310,20 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
     force = geometry.beads.contact_load if stress_force is None else float(stress_force)
     require(math.isfinite(force) and force > 0, f"stress_force must be > 0 N, got {force}")
     law = law_for_steel(geometry.steel) if law is None else law
-    timings: dict[str, float] = {}
-    from msens.progress import heartbeat
+    from msens.progress import heartbeat, stopwatch, timed
 
+    elapsed = stopwatch()
     _log.info("transducers: field mesh and nonlinear bias solve")
-    t0 = time.perf_counter()
-    with heartbeat(_log, "transducers: mesh and bias solve"):
+    with heartbeat(_log, "transducers: mesh and bias solve"), \
+            timed(_log, "transducers: mesh and bias solve"):
         sol, path = bias_solution(geometry, options=options, store=store, max_iter=max_iter)
-    timings["mesh_and_bias_solve"] = time.perf_counter() - t0
     _log.info("transducers: bead stress, Villari and contact-approach sources, their "
               "potentials (%d dofs)", sol.dofs)
     with heartbeat(_log, "transducers: sources and their potentials"):
         model = mechanism_potentials(sol, geometry, stress_force=force, law=law,
-                                     material=material, approach=approach, timings=timings)
-    t0 = time.perf_counter()
-    pforce = particle_forces(sol, geometry)
-    timings["magnetic_forces"] = time.perf_counter() - t0
+                                     material=material, approach=approach)
+    with timed(_log, "transducers: magnetic forces"):
+        pforce = particle_forces(sol, geometry)
 
     key = cache_key(geometry, options, stress_force=force, law=law, material=material,
                     approach=approach)
@@ -341,12 +338,11 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
                          force, geometry.beads.radius, material), "coils": {}}
     for unit in geometry.iter_units():
         coil = unit.coil
-        t0 = time.perf_counter()
-        link = coil_linkage(model, coil)
-        contacts, s_vil, dl = model.contact_profiles(link)
-        inductance, err = adjoint_check(model, coil, link)
-        offsets, vil_o, app_o = offset_profiles(model, geometry, coil)
-        timings[f"coil_{coil.particle}"] = time.perf_counter() - t0
+        with timed(_log, f"transducers: coil {coil.particle}"):
+            link = coil_linkage(model, coil)
+            contacts, s_vil, dl = model.contact_profiles(link)
+            inductance, err = adjoint_check(model, coil, link)
+            offsets, vil_o, app_o = offset_profiles(model, geometry, coil)
         out[coil.particle] = Transducer(
             particle=coil.particle, contacts=contacts, sensitivity_villari=s_vil,
             dlambda_dapproach=dl, contact_stiffness=stiffness, reference_force=force,
@@ -357,9 +353,7 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
             "particles": model.particles.tolist(),
             "bead_sensitivity_Wb_per_N": link[:model.particles.size].tolist(),
             "reciprocity_adjoint_rel_error": err}
-    details["timings_s"] = timings
-    _log.info("transducers: computed in %.1f s (%s)", sum(timings.values()),
-              ", ".join(f"{k} {v:.1f} s" for k, v in timings.items()))
+    _log.info("transducers: computed in %.1f s", elapsed())
     return TransducerReport(out, details, bias=sol)
 
 

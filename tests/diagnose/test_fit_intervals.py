@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -131,6 +132,12 @@ def test_a_fit_at_a_bound_is_not_named_and_the_verdict_says_so():
     # next is not the answer either
     assert decide([pinned, other], [], 10.0) == (None, None)
     assert decide([pinned], [], 10.0) == (None, None)
+    # pinned beyond its physical range too (a 30 N force at the top of its search): still
+    # blocks a lesser effect
+    beyond = dataclasses.replace(pinned, plausible=False)
+    assert decide([beyond, other], [], 10.0) == (None, None)
+    fits = [SimpleNamespace(effect="wall_dissipation")]
+    assert decide([other, dataclasses.replace(beyond, score=5.0)], fits, 10.0)[0] is other
     d = Diagnosis(mode="waveform", setup="mss", effect="none", parameters={},
                   misfit_before=2.0, misfit_after=2.0, candidates=(pinned,), threshold=10.0,
                   n_obs=100, sigma=(1.0,), added=(), refit=(), gamma_contact=1.0,

@@ -148,12 +148,12 @@ def decide(cands: list[Candidate], fits: list[EffectFit], threshold: float
     """The best-scoring candidate that is plausible, significant and not at a bound of its
     search, and whose score beats by ``threshold`` both the baseline and every plausible
     change below its floor (when a negligible change explains the data better, nothing
-    practical is missing), and that scores above every plausible fit pinned at a bound
-    (when an effect pushed to the end of its searched range fits better, the data want
-    something the library does not hold, and a lesser effect is not the answer)."""
+    practical is missing), and that scores above every fit pinned at a bound (when an
+    effect pushed to the end of its searched range fits better, the data want something
+    the library does not hold, and a lesser effect is not the answer)."""
     negligible = max((c.score for c in cands if c.plausible and not c.significant),
                      default=0.0)
-    pinned = max((c.score for c in cands if c.plausible and c.at_bound), default=-np.inf)
+    pinned = max((c.score for c in cands if c.at_bound and c.significant), default=-np.inf)
     for c in cands:
         if c.nameable and c.score - max(negligible, 0.0) > threshold and c.score > pinned:
             return c, next(f for f in fits if f.effect == c.effect)

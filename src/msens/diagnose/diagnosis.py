@@ -201,8 +201,8 @@ class Diagnosis:
         for a fit at a bound of its search (None otherwise)."""
         if self.effect != "none":
             return None
-        return next((c for c in self.candidates if c.plausible and c.significant
-                     and c.at_bound and c.score > self.threshold), None)
+        return next((c for c in self.candidates if c.significant and c.at_bound
+                     and c.score > self.threshold), None)
 
     def named_candidate(self) -> Candidate | None:
         """The candidate of the named effect (None for none)."""
@@ -239,7 +239,7 @@ class Diagnosis:
             "score_definition": "BIC(baseline) - BIC(effect) = chi2_0 - chi2 - k ln N",
             "naming_rule": "the best-scoring candidate whose parameters are inside their "
                            "physical ranges and not at a bound of their searched ranges, "
-                           "that scores above every plausible fit at a bound, "
+                           "that scores above every fit at a bound, "
                            "whose change reaches the effect's "
                            "practical-significance floor, and whose score exceeds the "
                            "threshold and the best plausible below-floor candidate's score "

@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -42,8 +42,9 @@ def _finite(x: float) -> float | None:
     return float(x) if math.isfinite(x) else None
 
 
-def report_dict(report: FieldReport) -> dict:
-    """The JSON-ready content of ``field.json``."""
+def report_dict(report: FieldReport, timings_s: Mapping[str, float] | None = None) -> dict:
+    """The JSON-ready content of ``field.json``; ``timings_s``: wall seconds of the model's
+    stages as the workflow measured them around its calls (empty when not measured)."""
     g = report.geometry
     return {
         "schema": SCHEMA,
@@ -64,7 +65,7 @@ def report_dict(report: FieldReport) -> dict:
         "dofs": report.dofs,
         "elements": report.elements,
         "mesh": str(report.mesh_path),
-        "timings_s": dict(report.timings_s),
+        "timings_s": dict(timings_s or {}),
         "model": {
             "beads": [g.beads.first, g.beads.last], "bead_diameter_m": g.beads.diameter,
             "contact_flat_radius_m": g.beads.flat_radius,
@@ -83,9 +84,10 @@ def report_dict(report: FieldReport) -> dict:
     }
 
 
-def write_json(report: FieldReport, path: str | Path) -> Path:
-    """Write ``field.json``."""
-    text = json.dumps(report_dict(report), indent=1)
+def write_json(report: FieldReport, path: str | Path, *,
+               timings_s: Mapping[str, float] | None = None) -> Path:
+    """Write ``field.json`` (``timings_s``: see :func:`report_dict`)."""
+    text = json.dumps(report_dict(report, timings_s), indent=1)
     return _atomic(Path(path), lambda tmp: Path(tmp).write_text(text))
 
 
@@ -531,11 +533,13 @@ def plot_field_3d(report: FieldReport, path: str | Path) -> Path:
 
 
 def write_field_outputs(report: FieldReport, out_dir: str | Path,
-                        fig_format: str = "png") -> dict[str, str]:
+                        fig_format: str = "png", *,
+                        timings_s: Mapping[str, float] | None = None) -> dict[str, str]:
     """Write field.json, field.vtu, field_B.<fig_format> and field_3d.png into ``out_dir``.
 
     ``fig_format`` ("png", "pdf" or "svg") is the map's format; the 3-D view is a rendered
-    raster and stays PNG.
+    raster and stays PNG. ``timings_s``: the stages' wall seconds for ``field.json``
+    (measured by the workflow; :func:`report_dict`).
 
     Returns
     -------
@@ -545,7 +549,7 @@ def write_field_outputs(report: FieldReport, out_dir: str | Path,
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    written = {"field.json": str(write_json(report, out / "field.json")),
+    written = {"field.json": str(write_json(report, out / "field.json", timings_s=timings_s)),
                "field.vtu": str(write_vtu(report, out / "field.vtu")),
                f"field_B.{fig_format}": str(plot_field_map(report,
                                                             out / f"field_B.{fig_format}"))}

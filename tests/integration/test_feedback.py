@@ -127,7 +127,7 @@ def test_field_3d_without_pyvista_is_skipped_with_a_hint(tmp_path, monkeypatch, 
         report.plot_field_3d(None, tmp_path / "field_3d.png")
     # the other outputs are written; the figure is reported as skipped, with the hint
     for name in ("write_json", "write_vtu", "plot_field_map"):
-        monkeypatch.setattr(report, name, lambda rep, path: path)
+        monkeypatch.setattr(report, name, lambda rep, path, **kw: path)
     caplog.clear()
     with caplog.at_level(logging.INFO, logger="msens"):
         written = report.write_field_outputs(None, tmp_path)

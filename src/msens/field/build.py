@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -366,7 +365,9 @@ def build_mesh(geometry: SensorGeometry, path: str | Path,
     b = geometry.beads
     _log.info("meshing the sensor geometry with gmsh (%d beads, %d coil(s); not cached yet)",
               len(b.particles), len(list(geometry.iter_units())))
-    start = time.perf_counter()
+    from msens.progress import stopwatch
+
+    elapsed = stopwatch()
     own = not gmsh.isInitialized()
     if own:
         gmsh.initialize(readConfigFiles=False, interruptible=False)
@@ -444,5 +445,5 @@ def build_mesh(geometry: SensorGeometry, path: str | Path,
             gmsh.model.remove()
         if own:
             gmsh.finalize()
-    _log.info("meshed in %.1f s", time.perf_counter() - start)
+    _log.info("meshed in %.1f s", elapsed())
     return path

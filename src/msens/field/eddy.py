@@ -30,8 +30,8 @@ scikit-fem could assemble complex forms directly (``BilinearForm(dtype=np.comple
 
 from __future__ import annotations
 
+import logging
 import math
-import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -54,6 +54,9 @@ from msens.field.mesh import AxiMesh
 from msens.field.regions import CurrentRegion
 from msens.field.solve import Discretisation, FieldSolution, MagnetostaticProblem, discretise
 from msens.params.units import MU0, TWO_PI
+from msens.progress import timed
+
+_log = logging.getLogger(__name__)
 
 #: Element size at the surface of every conducting part for the eddy-current model (the beads
 #: near a coil, the pole pieces, the magnets: :func:`msens.field.build.skin_surface_size`), m
@@ -93,8 +96,6 @@ class HarmonicSolution:
         Imposed (winding) current density phasor, A/m².
     residual : float
         Relative residual ‖A a − b‖/‖b‖ of the free-dof system.
-    seconds : float
-        Wall time of this frequency's factorisation and solve, s.
     """
 
     frequency: float
@@ -105,7 +106,6 @@ class HarmonicSolution:
     sigma: np.ndarray = field(repr=False, compare=False)
     j_source: np.ndarray = field(repr=False, compare=False)
     residual: float = 0.0
-    seconds: float = 0.0
 
     @property
     def omega(self) -> float:
@@ -340,17 +340,16 @@ def solve_harmonic(model: MagnetostaticProblem | FieldSolution, sigma: np.ndarra
     k_lift, m_lift = op.k_full @ lift, op.m_full @ lift
     out = []
     for f in freqs:
-        t0 = time.perf_counter()
         w = TWO_PI * f
         rhs = (f_vec - k_lift - 1j * w * m_lift)[free]
         a = lift.copy()
         if free.size:
-            a[free] = op.factor(f).solve(rhs)
-        seconds = time.perf_counter() - t0
+            with timed(_log, f"harmonic solve at {f:g} Hz"):
+                a[free] = op.factor(f).solve(rhs)
         a_ff = op.matrix(f)
         res = float(np.linalg.norm(a_ff @ a[free] - rhs) / max(np.linalg.norm(rhs), 1e-300))
         out.append(HarmonicSolution(frequency=f, a=a, basis=d.basis, disc=d, nu=op.nu,
-                                    sigma=op.sigma, j_source=j, residual=res, seconds=seconds))
+                                    sigma=op.sigma, j_source=j, residual=res))
     return tuple(out)
 
 

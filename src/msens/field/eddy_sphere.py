@@ -107,8 +107,6 @@ class SphereCheck:
     power, power_identity : float
         FE eddy loss (ω²/2)∫σ|A|²dV and −(ωμ0/2) Im(m H0*) from the FE moment, W.
     dofs : int
-    seconds : float
-        Factorisation + solve time at this frequency, s.
     """
 
     mu_r: float
@@ -121,7 +119,6 @@ class SphereCheck:
     power: float
     power_identity: float
     dofs: int
-    seconds: float
 
     @staticmethod
     def _errors(fe: complex, ex: complex) -> tuple[float, float]:
@@ -179,7 +176,7 @@ def sphere_check(mesh: AxiMesh, radius: float, r_out: float, mu_r: float,
                                skin_depth=skin_depth(s.frequency, mu_r, sigma),
                                moment=m, moment_exact=m_ex, h_mean=h, h_mean_exact=h_ex,
                                power=dissipated_power(s, "sphere"), power_identity=p_id,
-                               dofs=s.dofs, seconds=s.seconds))
+                               dofs=s.dofs))
     return out
 
 

@@ -22,8 +22,7 @@ from __future__ import annotations
 
 import logging
 import math
-import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -357,8 +356,6 @@ class FieldReport:
     dofs : int
     elements : int
     mesh_path : Path
-    timings_s : Mapping[str, float]
-        Wall-clock seconds of mesh, bias solve, inductances, post-processing.
     solution : FieldSolution
         The bias solution (for VTU export and figures; not serialised).
     note : str
@@ -376,7 +373,6 @@ class FieldReport:
     dofs: int
     elements: int
     mesh_path: Path
-    timings_s: Mapping[str, float]
     solution: FieldSolution = field(repr=False, compare=False)
     note: str = MAGNET_NOTE
 
@@ -472,35 +468,40 @@ def run_field_model(geometry: SensorGeometry, *,
     -------
     FieldReport
     """
-    _log.info("field model: mesh (cached on disk) and nonlinear bias solve")
-    t0 = time.perf_counter()
-    from msens.progress import heartbeat
+    from msens.progress import heartbeat, stopwatch
 
+    _log.info("field model: mesh (cached on disk) and nonlinear bias solve")
+    elapsed = stopwatch()
     with heartbeat(_log, "field model: mesh and bias solve"):
         axi, path = load_mesh(geometry, options, store)
-        t1 = time.perf_counter()
         sol = solve(bias_problem(geometry, axi))
-    t2 = time.perf_counter()
     _log.info("field model: %d dofs, %d Newton iterations, %.1f s", sol.dofs, sol.iterations,
-              t2 - t0)
+              elapsed())
     with heartbeat(_log, "field model: coil inductances, bead fields, contact forces"):
         coils = coil_results(sol, geometry) if inductance else tuple(
             CoilResult(u.coil.particle, u.coil.turns, coil_resistance(u.coil), math.nan,
                        math.nan, u.coil.inner_radius, u.coil.outer_radius, u.coil.length)
             for u in geometry.iter_units())
-        t3 = time.perf_counter()
-        beads = bead_fields(sol, geometry)
-        contacts = magnetic_contact_forces(sol, geometry)
-        z, bz = axis_profile(sol, geometry)
-    t4 = time.perf_counter()
-    report = FieldReport(
+        return field_report(geometry, sol, path, coils)
+
+
+def field_report(geometry: SensorGeometry, sol: FieldSolution, mesh_path: Path,
+                 coils: tuple[CoilResult, ...]) -> FieldReport:
+    """The report of a solved bias field: the coils' results (:func:`coil_results`) with
+    the bead fields, the magnetic contact forces and the axis profile.
+
+    The last stage of :func:`run_field_model`, separate so that a workflow can run (and
+    time) the stages itself: :func:`load_mesh`, :func:`msens.field.solve.solve` of
+    :func:`bias_problem`, :func:`coil_results`, this.
+    """
+    beads = bead_fields(sol, geometry)
+    contacts = magnetic_contact_forces(sol, geometry)
+    z, bz = axis_profile(sol, geometry)
+    return FieldReport(
         geometry=geometry, coils=coils, beads=beads, contacts=contacts, axis_z_m=z,
         axis_Bz_T=bz, newton_iterations=sol.iterations, newton_residuals=sol.residuals,
-        dofs=sol.dofs, elements=axi.n_elements, mesh_path=path,
-        timings_s={"mesh": t1 - t0, "bias_solve": t2 - t1, "inductance": t3 - t2,
-                   "post": t4 - t3},
+        dofs=sol.dofs, elements=sol.problem.mesh.n_elements, mesh_path=mesh_path,
         solution=sol)
-    return report
 
 
 __all__ = [
@@ -516,6 +517,7 @@ __all__ = [
     "coil_flux_linkage",
     "coil_resistance",
     "coil_results",
+    "field_report",
     "flux_density_at",
     "group_force",
     "load_mesh",

@@ -347,6 +347,24 @@ def test_offset_profiles_join_and_round_trip(model, report):
             np.testing.assert_allclose(x, y, rtol=0, atol=1e-12 * np.max(np.abs(y)))
 
 
+def test_frequency_solves_through_any_map_like(tmp_path):
+    """workers as a plain map-like callable (scipy's convention; no length): one task per
+    non-zero frequency, each from 0 Hz, joined into the one-task report."""
+    g = one_sensor()
+    local = dynamic_report(g, options=COARSE, store=Store.at(tmp_path / "local"),
+                           frequencies=FREQS)
+    calls = []
+
+    def serial_map(fn, iterable):
+        calls.append(1)
+        return list(map(fn, iterable))
+
+    mapped = dynamic_report(g, options=COARSE, store=Store.at(tmp_path / "mapped"),
+                            frequencies=FREQS, workers=serial_map)
+    assert calls == [1] and mapped.details["tasks"] == len(FREQS) - 1
+    _same_report(local, mapped)
+
+
 @pytest.mark.slow
 def test_frequency_solves_on_a_dask_cluster(tmp_path):
     """dynamic_report with a map over a Dask cluster (msens.parallel.TaskMap, as the run

@@ -495,3 +495,32 @@ def test_refresh_solves_the_maps_again(tmp_path, monkeypatch):
     assert not np.array_equal(fresh[13].maps[0].steel_flux, first[13].maps[0].steel_flux)
     cached = cm.approach_maps(g, "k", store=store, workers=1)
     assert np.array_equal(cached[13].maps[0].steel_flux, fresh[13].maps[0].steel_flux)
+
+
+def test_approach_maps_run_on_the_callers_map(tmp_path):
+    """A workflow's map-like ``workers`` (scipy's convention) runs one task per contact; the
+    maps come back per coil in contact order and are stored (the solves are stood in for:
+    this checks where the work runs and how it is put together)."""
+    from msens.magnetics.contact_map import approach_maps, mapped_contacts
+
+    g = _small()
+    seen = []
+
+    def standin_map(fn, iterable):
+        tasks = list(iterable)
+        seen.extend(task[1] for task in tasks)
+        return [tuple(ContactMap(contact=task[1], delta_static=0.5e-6 * (1 + task[1] / 100),
+                                 steel_delta=np.array([0.0, 1e-6, 2e-6]),
+                                 steel_flux=np.array([1.0, -1.0, -3.0]) * 1e-6 * task[1],
+                                 air_gap=np.array([1e-9, 1e-6, 1e-5]),
+                                 air_flux=np.array([0.0, 1.2, 10.0]) * 1e-6)
+                      for _ in task[2]) for task in tasks]
+
+    store = Store.at(tmp_path)
+    maps = approach_maps(g, "0" * 16, store=store, workers=standin_map)
+    contacts = list(mapped_contacts(g))
+    assert seen == contacts and list(maps) == [13]
+    assert [m.contact for m in maps[13].maps] == contacts
+    assert [float(m.steel_flux[1]) for m in maps[13].maps] == [-1e-6 * c for c in contacts]
+    again = approach_maps(g, "0" * 16, store=store, workers=standin_map)  # read back
+    assert seen == contacts and [m.contact for m in again[13].maps] == contacts

@@ -33,7 +33,7 @@ branch, PCHIP in the gap for the air branch).
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Literal
@@ -454,7 +454,7 @@ def _contact_task(args: tuple) -> tuple[ContactMap, ...]:
 
 def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
                   options: MeshOptions | None = None, store: Store | None = None,
-                  workers: int | None = None,
+                  workers: int | Callable | None = None,
                   particles: Sequence[int] | None = None,
                   start: P2Field | None = None, refresh: bool = False
                   ) -> dict[int, ApproachMap]:
@@ -466,7 +466,9 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     one layer mesh and 18 nonlinear solves per contact of :func:`mapped_contacts` (about
     12 s each on a core for the default geometry), the contacts spread over ``workers`` local
     processes (:func:`msens.parallel.run_tasks`; default: one per CPU under the ``msens``
-    command, else one, :func:`msens.parallel.pools_allowed`). ``particles``: the maps of those coils
+    command, else one, :func:`msens.parallel.pools_allowed`), or over a map-like ``workers``
+    callable ``workers(fn, iterable)`` that a workflow hands in (e.g.
+    :class:`msens.parallel.TaskMap` on a Dask cluster). ``particles``: the maps of those coils
     only, of their own contacts when solved; a cached table of every coil serves them too
     (then with all its contacts, as ``msens run`` reads them). ``start``: the bias of
     ``geometry`` on its plain mesh, where the layer meshes' Newton solves begin (the same
@@ -504,8 +506,10 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     if workers is None:
         # only where a pool is safe: the msens command, not a worker or a user's script
         workers = default_workers() if pools_allowed() else 1
+    at_a_time = ("on the caller's workers" if callable(workers)
+                 else f"{min(workers, len(contacts))} at a time")
     _log.info("contact maps %s (cached: no): %d contacts, a layer mesh and 18 nonlinear "
-              "solves each, %d at a time", key, len(contacts), min(workers, len(contacts)))
+              "solves each, %s", key, len(contacts), at_a_time)
     from msens.progress import heartbeat, stopwatch
 
     elapsed = stopwatch()
@@ -513,10 +517,14 @@ def approach_maps(geometry: SensorGeometry, transducer_key: str, *,
     per_contact: dict[int, tuple[ContactMap, ...]] = {}
 
     with heartbeat(_log, f"contact maps {key}"):  # each map takes a minute or more
-        for i, maps in run_tasks(_contact_task, tasks, workers=workers):
-            per_contact[contacts[i]] = maps
-            _log.info("contact map %d/%d (contact %d) after %.0f s", len(per_contact),
-                      len(contacts), contacts[i], elapsed())
+        if callable(workers):
+            per_contact = dict(zip(contacts, workers(_contact_task, tasks), strict=True))
+            _log.info("contact maps: %d after %.0f s", len(per_contact), elapsed())
+        else:
+            for i, maps in run_tasks(_contact_task, tasks, workers=workers):
+                per_contact[contacts[i]] = maps
+                _log.info("contact map %d/%d (contact %d) after %.0f s", len(per_contact),
+                          len(contacts), contacts[i], elapsed())
     tables = {coil.particle: [per_contact[c][k] for c in contacts]
               for k, coil in enumerate(coils)}
     data = {"key": key, "version": MAP_VERSION, "transducer": transducer_key,

@@ -249,6 +249,10 @@ class TaskMap:
             out[i] = result
         return out
 
+    def __bool__(self) -> bool:
+        """Always true (truth must not ask a Dask cluster for its workers, as ``len`` does)."""
+        return True
+
     def __len__(self) -> int:
         """Workers this map runs on: those of the Dask cluster (asked once per call, at
         least 1), else the local worker processes."""

@@ -47,6 +47,7 @@ def test_task_map_is_a_map_in_input_order(tmp_path):
     assert TaskMap(workers=2)(standin.square, args) == expected
     assert TaskMap(workers=1)(standin.square, iter(args)) == expected
     assert len(TaskMap(workers=3)) == 3
+    assert TaskMap(scheduler="tcp://127.0.0.1:1")  # truth asks no cluster
 
 
 def test_workers_share_the_cores_between_their_blas_threads():

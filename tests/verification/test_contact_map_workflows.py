@@ -153,7 +153,10 @@ def test_magnet_design_solves_its_own_maps_and_equals_msens_run(tmp_path, monkey
         (tmp_path / name).mkdir()
         (rows[name],) = _design(study, tmp_path / name, '[magnet]\ngrade = ["N38"]\n' + model)
         assert rows[name]["status"] == "ok"
-    assert list((tmp_path / "cache").glob("contact-map-*.json"))
+    # a design's own maps are stored with its sweep (the store writes new design artifacts
+    # into the sweep folder), never into the user cache
+    assert list((tmp_path / "maps").rglob("contact-map-*.json"))
+    assert not list((tmp_path / "cache").glob("contact-map-*.json"))
     n38 = study.replace({"sensor[1].magnet.grade": "N38"})
     run = next(c for c in api.physics_summary(api.run(n38))["coils"] if c["particle"] == 6)
     assert float(rows["maps"]["peak_emf_V"]) == pytest.approx(run["peak_emf_V"], rel=1e-6)

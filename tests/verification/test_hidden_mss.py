@@ -8,6 +8,10 @@ recover its parameter within 10 % in >= 90 % of 24 cases: the chain effects (str
 wall stiffness and dissipation, precompression, DAQ low-pass) and the MsS effects (bias magnet
 remanence, coil position, cable capacitance), three seeds each. Undisturbed data must give
 "none" in all 10 null cases. ``benchmarks/diagnose_mss.py`` prints the same cases as JSON.
+
+Since the diagnosis fits parameter intervals and searches static precompression on physics-MsS
+data, one case takes minutes on 2 cores (34 cases: hours), so these run as the ``campaign``
+group (``python -m pytest -m campaign``), not in CI's slow group.
 """
 
 from __future__ import annotations
@@ -43,7 +47,7 @@ def _case(bench, effect: str | None, seed: int, shots: int):
     return diagnose(wf, study), truth
 
 
-@pytest.mark.slow
+@pytest.mark.campaign
 def test_mss_hidden_effects_full_set(bench):
     wrong = []
     for k, seed in enumerate((500, 501, 502)):
@@ -56,7 +60,7 @@ def test_mss_hidden_effects_full_set(bench):
     assert len(wrong) <= 2, f"{len(wrong)}/24 wrong: {wrong}"
 
 
-@pytest.mark.slow
+@pytest.mark.campaign
 def test_mss_null_full_set(bench):
     named = [_case(bench, None, 600 + i, 5 if i % 2 else 1)[0].effect for i in range(10)]
     assert named == ["none"] * 10, named

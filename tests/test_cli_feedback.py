@@ -65,7 +65,7 @@ def test_one_compile_estimate():
 
     import msens
 
-    assert progress.COMPILE_ESTIMATE_TEXT == "about 1.6 min"
+    assert progress.COMPILE_ESTIMATE_TEXT == "about 45 s"
     root = Path(msens.__file__).resolve().parent
     text = (root / "pipeline.py").read_text()
     assert "COMPILE_ESTIMATE_TEXT" in text and "about a minute" not in text

@@ -25,10 +25,11 @@ from dataclasses import dataclass
 HEARTBEAT_S = 4.0
 
 #: Wall time of the chain kernel's first compilation on an idle 2-core machine, s (numba,
-#: the variants ``msens run`` needs: 95 s measured for issue 37; at load averages 10 and
-#: 15 on the same machine it took 213 s and 422 s). It happens once per install: the
-#: compiled code is kept in the user cache folder (:mod:`msens.numba_cache`).
-KERNEL_COMPILE_S = 95.0
+#: the variants ``msens run`` needs: the main study's chain stage took 47.7 s with a cold
+#: cache at load 0.8, the whole first ``msens run`` 60.6 s; a loaded machine takes several
+#: times longer). It happens once per install: the compiled code is kept in the user cache
+#: folder (:mod:`msens.numba_cache`).
+KERNEL_COMPILE_S = 45.0
 
 
 def duration_text(seconds: float) -> str:

@@ -141,7 +141,13 @@ def _files(folder: Path) -> dict[str, bytes]:
 def _kill_and_resume(cmd: list[str], out: Path, fractions: tuple[float, ...],
                      tmp_path: Path) -> None:
     """Run ``cmd`` (with ``out``) to completion as the reference; then for each fraction of
-    its duration, SIGKILL a run there and run again: the outputs must be byte-identical."""
+    its duration, SIGKILL a run there and run again: the outputs must be byte-identical.
+
+    A first run warms numba's cache: code compiled in the process that runs it rounds a few
+    results differently in the last bits (about 1e-15 relative) from the same code loaded from
+    the cache, and a compile would stretch the reference's duration, so the kill points."""
+    subprocess.run([*cmd, str(tmp_path / "warm")], env=_env(), check=True, timeout=600,
+                   stdout=subprocess.DEVNULL)
     ref = tmp_path / "ref"
     start = time.monotonic()
     subprocess.run([*cmd, str(ref)], env=_env(), check=True, timeout=300,

@@ -180,6 +180,16 @@ _DOCS: dict[str, tuple[str, str, str]] = {
         "numbers, and Sobol indices that say which input to measure better. Writes uq.json "
         "and figures to --out.",
         "msens uq --out out/uq\nmsens uq paper-table2 --samples 64 --out out/uq-table2"),
+    "calibrate": (
+        "Bayesian calibration of uncertain inputs on a measurement",
+        "Sample the posterior of chosen uncertain inputs (their distributions in the "
+        "uncertainty file are the priors) given a measured waveform file or a setup's "
+        "[reference] rows, with the likelihood msens diagnose uses, by emcee. Writes "
+        "calibration.json (posterior, convergence, posterior predictive) and figures "
+        "(pairs, predictive band, traces) to --out.",
+        "msens calibrate data.csv --study paper-mss --out out/cal\n"
+        "msens calibrate --study paper-table2 --reference bead --param striker.drop_height_m "
+        "--param chain.gamma_contact_kg_per_s --out out/cal-table2"),
 }
 
 
@@ -301,7 +311,31 @@ def _parser() -> argparse.ArgumentParser:
                     help="Dask distributed scheduler address (default: local processes)")
     uq.add_argument("--workers", type=int, default=None,
                     help="local worker processes (default: all CPUs)")
-    for command in (run, field, comp, diag, des, uq):
+    cal = _sub(sub, "calibrate")
+    cal.add_argument("data", nargs="?", default=None,
+                     help="measured waveform file (.csv, .npz or .tdms)")
+    cal.add_argument("--study", default=None, help=f"{_STUDY_HELP}; default paper-mss")
+    _study_options(cal, positional=False)
+    cal.add_argument("--reference", metavar="SETUP", default=None,
+                     help="the study's [reference] rows of SETUP (TOF and AR with their std, "
+                          "e.g. the paper's Table 2) are the measurement; no DATA")
+    cal.add_argument("--columns", metavar="MAP", default=None,
+                     help="column map of an oscilloscope/DAQ text export (as for diagnose)")
+    cal.add_argument("--inputs", default=None, metavar="FILE",
+                     help="uncertain inputs, the priors (msens.uncertainty/1; default: the "
+                          "built-in file of a built-in study)")
+    cal.add_argument("--param", dest="params", action="append", default=None, metavar="NAME",
+                     help="an input to calibrate (repeat for more; default: drop height, "
+                          "contact damping and the magnet's remanence where the file "
+                          "samples them); the others are held at their nominal values")
+    cal.add_argument("--walkers", type=int, default=None,
+                     help="emcee walkers, even, >= 2 x inputs (default max(16, 4 x inputs))")
+    cal.add_argument("--steps", type=int, default=400,
+                     help="steps per walker, the first half burn-in (default 400)")
+    cal.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    cal.add_argument("--out", default=None,
+                     help="output directory (default: out/<study>-calibrate/)")
+    for command in (run, field, comp, diag, des, uq, cal):
         # the same choices as msens.plots.FORMATS (not imported here: matplotlib is slow)
         command.add_argument("--format", dest="fig_format", choices=("png", "pdf", "svg"),
                              default="png", help="figure file format (default png)")
@@ -558,6 +592,31 @@ def _uq(args: argparse.Namespace) -> int:
     return 0
 
 
+def _calibrate(args: argparse.Namespace) -> int:
+    from msens import preflight
+
+    if args.columns is not None and args.data is None:
+        raise InputError("calibrate: --columns maps the columns of DATA; give DATA")
+    if args.out is not None:
+        preflight.output_dir(args.out)
+    study = _load_study(args.study, args.sets)
+    waveform = None
+    if args.data is not None:
+        from msens.io.read import read_waveform
+
+        waveform = read_waveform(_data(args.data, args.columns))
+    from msens.uq.calibration import run_calibrate
+    from msens.uq.calibration_report import format_table
+
+    result = run_calibrate(study, _out(args, study, "calibrate"), data=waveform,
+                           reference=args.reference, inputs=args.inputs, params=args.params,
+                           walkers=args.walkers, steps=args.steps, seed=args.seed,
+                           fig_format=args.fig_format, progress=not args.quiet)
+    print(format_table(result.report))
+    print(f"\nwrote {', '.join(str(p) for p in result.written)}")
+    return 0
+
+
 def _check_waveform(args: argparse.Namespace) -> int:
     from msens.io.columns import column_map
     from msens.io.read import main_check
@@ -592,7 +651,8 @@ def _internal_error(exc: BaseException, *, debug: bool) -> int:
 
 _COMMANDS = {"check-waveform": _check_waveform, "convert": _convert, "run": _run,
              "study": _study, "field": _field, "verify": _verify, "synth": _synth,
-             "compare": _compare, "diagnose": _diagnose, "design": _design, "uq": _uq}
+             "compare": _compare, "diagnose": _diagnose, "design": _design, "uq": _uq,
+             "calibrate": _calibrate}
 
 #: What the first line says each command does first (before its libraries load).
 _FIRST = {"check-waveform": "reading {n} file(s)", "convert": "reading {source}",

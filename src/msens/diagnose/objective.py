@@ -319,13 +319,20 @@ class FeatureObjective:
         self.n_obs = np.full(len(positions), 2.0)
         self.sigma = np.ones(len(positions))
 
+    def features(self, records: np.ndarray) -> np.ndarray:
+        """The model's (TOF in µs, AR) of each sensor, shape (sensors, 2), read as the
+        measured records are (NaN where a pulse is not found)."""
+        f = model_features_of(feature_records(records, self.physics, self.t), self.t)
+        return np.column_stack([np.asarray(f.tof, dtype=float) * 1e6,
+                                np.asarray(f.ar, dtype=float)])[:len(self.rows)]
+
     def residuals(self, records: np.ndarray) -> np.ndarray:
         """Normalised residuals (sensors, 2): (TOF, AR) model minus measured over std."""
-        f = model_features_of(feature_records(records, self.physics, self.t), self.t)
+        f = self.features(records)
         out = np.empty((len(self.rows), 2))
         for j, r in enumerate(self.rows):
-            out[j, 0] = (float(f.tof[j]) * 1e6 - r.tof_us) / r.tof_std_us
-            out[j, 1] = (float(f.ar[j]) - r.ar) / r.ar_std
+            out[j, 0] = (f[j, 0] - r.tof_us) / r.tof_std_us
+            out[j, 1] = (f[j, 1] - r.ar) / r.ar_std
         return np.where(np.isfinite(out), out, 1e3)  # a missing reflection: a huge misfit
 
     def rss(self, records: np.ndarray) -> np.ndarray:

@@ -73,22 +73,25 @@ from msens.diagnose.candidates import (
 )
 from msens.diagnose.diagnosis import Candidate, Diagnosis
 from msens.diagnose.effects import Context
+from msens.diagnose.effects.base import ModelState
 from msens.diagnose.effects import get as get_effect
 from msens.diagnose.fit import recentred, refit_jointly
 from msens.diagnose.likelihood import variance_split
 from msens.diagnose.noise import shot_matrix
 from msens.diagnose.objective import FeatureObjective, WaveformObjective, check_channels
 from msens.diagnose.predict import Predictor, baseline_state, positions, setup_result
-from msens.diagnose.shots import fit_shots
+from msens.diagnose.shots import ShotFits, fit_shots
 from msens.diagnose.verdict import verdict
 from msens.diagnose.where import feature_residuals, feature_table, window_residuals, worst_window
 from msens.errors import InputError
 from msens.io.waveform import Waveform
 from msens.pipeline import calibrate_dissipation, output_times
+from msens.results import SetupResult
 from msens.synth import GAIN_CONVENTION, GAIN_KEY, gain_unit
 
 __all__ = ["THRESHOLD", "Candidate", "Diagnosis", "baseline_dissipation", "diagnose",
-           "diagnose_passes", "diagnose_reference", "match_setup_spec"]
+           "diagnose_passes", "diagnose_reference", "match_setup_spec",
+           "WaveformBaseline", "waveform_baseline"]
 
 _log = logging.getLogger(__name__)
 
@@ -117,6 +120,101 @@ def baseline_dissipation(study: Study, fit: DissipationFit | None = None) -> tup
     if fit is not None:
         return fit.gamma_c, fit.gamma_w
     return study.chain.gamma_contact, study.chain.gamma_wall
+
+
+@dataclasses.dataclass(frozen=True)
+class WaveformBaseline:
+    """The study's model of a measured file and the likelihood it is judged by: what
+    ``diagnose`` starts from and ``calibrate`` samples with.
+
+    Attributes
+    ----------
+    ctx : Context
+        The study and the setup whose sensors are the data's channels.
+    gamma_contact, gamma_wall : float
+        The baseline's dissipation, kg/s (Eq. 10 fit, or the study's values).
+    predictor : Predictor
+    plain : ModelState
+        The baseline without ``added`` effects (with the shots' speed spread).
+    base : ModelState
+        The baseline with ``added`` effects.
+    result : SetupResult
+        The baseline's run (without the speed spread).
+    per_shot : ShotFits or None
+        Each shot's own striker speed and delay (two or more shots).
+    objective : WaveformObjective
+        The data's ensemble and its likelihood (noise and model uncertainty; the model
+        variance fixed from ``records``).
+    records : ndarray, shape (sensors, nt)
+        The baseline's records (forces in N; a physics MsS its DAQ voltage in V).
+    """
+
+    ctx: Context
+    gamma_contact: float
+    gamma_wall: float
+    predictor: Predictor
+    plain: ModelState
+    base: ModelState
+    result: SetupResult
+    per_shot: ShotFits | None
+    objective: WaveformObjective
+    records: np.ndarray
+
+
+def waveform_baseline(waveform: Waveform, study: Study, *, fit: DissipationFit | None = None,
+                      added: Sequence[tuple[str, Mapping[str, float]]] = ()
+                      ) -> WaveformBaseline:
+    """Baseline model and likelihood of a measured file (steps 1, 2 and 4 of the module
+    docstring).
+
+    Parameters
+    ----------
+    waveform : Waveform
+        Measured channels (one or more shots); they select the study's setup.
+    study : Study
+    fit : DissipationFit, optional
+        An Eq. 10 calibration already made.
+    added : sequence of (effect name, parameters)
+        Effects already in the baseline.
+
+    Returns
+    -------
+    WaveformBaseline
+
+    Raises
+    ------
+    InputError
+        No setup of the study matches the data's sensors; a channel has no usable pulse.
+    """
+    setup = match_setup_spec(study, waveform)
+    check_channels(waveform)
+    shot_matrix(waveform, [(s.kind.value, s.particle) for s in setup.sensors])  # fail early
+    ctx = Context(study, setup)
+    gc, gw = baseline_dissipation(study, fit)
+    _log.info("diagnosis of setup %s: baseline model (gamma_c = %.3g kg/s, gamma_w = %.3g "
+              "kg/s%s)", setup.name, gc, gw,
+              "".join(f", + {n}" for n, _ in added))
+    predictor = Predictor(output_times(study))
+    plain = baseline_state(ctx, gc, gw)
+    base = with_added(ctx, plain, added)
+    base_result = setup_result(ctx, base, predictor)
+    shifts, per_shot = None, None
+    if len({c.repeat for c in waveform.channels}) > 1:
+        # each shot's own speed and delay: align the shots on their impact, and average
+        # every model over the shots' spread of speeds as the data are
+        per_shot = fit_shots(waveform, base, base_result, predictor)
+        shifts = np.round((per_shot.delays[0] - per_shot.delays) / waveform.dt).astype(int)
+        plain = dataclasses.replace(plain, velocity_spread=per_shot.spread)
+        base = with_added(ctx, plain, added)
+        _log.info("%d shots: striker speed spread %.2g %%", len(per_shot.speeds),
+                  100 * per_shot.spread)
+    objective = WaveformObjective(waveform, base_result, shifts)
+    records0 = predictor.records([base])[0]
+    # the likelihood's variance: the noise and the model's own uncertainty (physics MsS)
+    objective.add_model_uncertainty(records0)
+    return WaveformBaseline(ctx=ctx, gamma_contact=gc, gamma_wall=gw, predictor=predictor,
+                            plain=plain, base=base, result=base_result, per_shot=per_shot,
+                            objective=objective, records=records0)
 
 
 # ------------------------------------------------------------------------ workflows
@@ -150,32 +248,10 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
         No setup of the study matches the data's sensors; a channel has no usable pulse.
     """
     start = time.perf_counter()
-    setup = match_setup_spec(study, waveform)
-    check_channels(waveform)
-    shot_matrix(waveform, [(s.kind.value, s.particle) for s in setup.sensors])  # fail early
-    ctx = Context(study, setup)
-    gc, gw = baseline_dissipation(study, fit)
-    _log.info("diagnosis of setup %s: baseline model (gamma_c = %.3g kg/s, gamma_w = %.3g "
-              "kg/s%s)", setup.name, gc, gw,
-              "".join(f", + {n}" for n, _ in added))
-    predictor = Predictor(output_times(study))
-    plain = baseline_state(ctx, gc, gw)
-    base = with_added(ctx, plain, added)
-    base_result = setup_result(ctx, base, predictor)
-    shifts, per_shot = None, None
-    if len({c.repeat for c in waveform.channels}) > 1:
-        # each shot's own speed and delay: align the shots on their impact, and average
-        # every model over the shots' spread of speeds as the data are
-        per_shot = fit_shots(waveform, base, base_result, predictor)
-        shifts = np.round((per_shot.delays[0] - per_shot.delays) / waveform.dt).astype(int)
-        plain = dataclasses.replace(plain, velocity_spread=per_shot.spread)
-        base = with_added(ctx, plain, added)
-        _log.info("%d shots: striker speed spread %.2g %%", len(per_shot.speeds),
-                  100 * per_shot.spread)
-    objective = WaveformObjective(waveform, base_result, shifts)
-    records0 = predictor.records([base])[0]
-    # the likelihood's variance: the noise and the model's own uncertainty (physics MsS)
-    objective.add_model_uncertainty(records0)
+    b = waveform_baseline(waveform, study, fit=fit, added=added)
+    ctx, predictor, plain, base = b.ctx, b.predictor, b.plain, b.base
+    setup, gc, gw, per_shot = ctx.setup, b.gamma_contact, b.gamma_wall, b.per_shot
+    base_result, objective, records0 = b.result, b.objective, b.records
     rss0 = objective.rss(records0)
     weights = np.ones(len(rss0))  # rss is chi^2: already over the noise
     fits = fit_candidates(candidate_effects(ctx, effects, added), ctx, base, predictor,

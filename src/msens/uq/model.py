@@ -74,12 +74,18 @@ class Task:
         Values of the propagated inputs, SI, in :attr:`InputSet.propagated` order.
     keep : ndarray of bool, shape (rows,)
         Rows whose waveforms are returned.
+    setups : tuple of str, optional
+        Names of the setups to evaluate (default all).
+    precise : bool
+        Waveforms in float64 (a likelihood's records) instead of float32 (bands).
     """
 
     study: Study
     inputs: InputSet
     values: np.ndarray
     keep: np.ndarray
+    setups: tuple[str, ...] | None = None
+    precise: bool = False
 
 
 @dataclass(frozen=True)
@@ -133,10 +139,11 @@ def row_features(result: SetupResult) -> dict[str, float]:
     return out
 
 
-def row_waveforms(result: SetupResult) -> dict[str, np.ndarray]:
-    """Each sensor's record of one observed setup (float32), by ``setup/sensor`` name."""
+def row_waveforms(result: SetupResult, dtype: type = np.float32) -> dict[str, np.ndarray]:
+    """Each sensor's record of one observed setup (float32 by default), by ``setup/sensor``
+    name: a physics MsS's DAQ voltage (V), any other sensor's force (N)."""
     return {sensor_name(result.setup, i): np.asarray(
-        r.voltage_shape if r.mss is not None else r.force, dtype=np.float32)
+        r.voltage_shape if r.mss is not None else r.force, dtype=dtype)
         for i, r in enumerate(result.sensors)}
 
 
@@ -218,7 +225,8 @@ def evaluate(task: Task) -> Evaluation:
     study = task.study
     t = output_times(study)
     bank = ModelBank()
-    setups = [_Setup(study, s, bank) for s in study.setups]
+    setups = [_Setup(study, s, bank) for s in study.setups
+              if task.setups is None or s.name in task.setups]
     rows = np.atleast_2d(task.values)
     features: dict[str, list[float]] = {}
     waves: dict[str, list[np.ndarray]] = {}
@@ -256,7 +264,8 @@ def evaluate(task: Task) -> Evaluation:
                 for k, v in row_features(result).items():
                     features.setdefault(k, [np.nan] * rows.shape[0])[r] = v
                 if task.keep[r]:
-                    for k, w in row_waveforms(result).items():
+                    for k, w in row_waveforms(
+                            result, np.float64 if task.precise else np.float32).items():
                         waves.setdefault(k, []).append(w)
     return Evaluation(features={k: np.asarray(v, dtype=float) for k, v in features.items()},
                       waveforms={k: np.asarray(v) for k, v in waves.items()}, runs=runs)

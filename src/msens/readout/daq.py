@@ -10,6 +10,7 @@ exact sampled realisation of the continuous-time process, so its aliasing is inc
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -20,18 +21,57 @@ from msens.errors import require
 from msens.readout.electronics import ReadoutCircuit, _linear_recursion, state_space
 from msens.readout.noise import NoiseModel, add_readout_noise
 
+#: Distinct (A, B, τ) first-order-hold steps kept per process by :func:`_foh_matrices`.
+_FOH_MEMO_SIZE = 64
 
-def _foh_matrices(a: np.ndarray, b: np.ndarray, tau: float):
-    """Exact step of ẋ = Ax + Bu over τ with u(t) = u0 + t·du (first-order hold).
 
-    Returns Φ, G0, G1 with x(τ) = Φ x(0) + G0 u0 + G1 du.
+def _foh_matrices(a: np.ndarray, b: np.ndarray, tau: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Exact step of ẋ = Ax + Bu over τ with u(t) = u0 + t·du (first-order hold), memoised.
+
+    A diagnosis or a sweep evaluates the same read-out circuit on the same EMF grid thousands
+    of times: A and B depend only on the circuit and τ only on the EMF step and the DAQ
+    sampling phase, so the matrix exponential behind each step is the same every time. The
+    step is therefore computed once per distinct (A, B, τ) and kept in a small per-process
+    memo (the ``_FOH_MEMO_SIZE`` most recently used; keyed by the exact bytes of A and B
+    and the exact value of τ, so a hit returns exactly what a fresh computation would). The
+    returned arrays are shared between callers and read-only: write into a copy.
+
+    Parameters
+    ----------
+    a : ndarray, shape (n, n)
+        State matrix A, 1/s.
+    b : ndarray, shape (n, m)
+        Input matrix B (state units per input unit per second).
+    tau : float
+        Step, s.
+
+    Returns
+    -------
+    phi : ndarray, shape (n, n)
+        Φ = exp(Aτ), dimensionless.
+    g0 : ndarray, shape (n, m)
+        Response to a constant input u0 over the step (state units per input unit).
+    g1 : ndarray, shape (n, m)
+        Response to an input slope du over the step (state units per input unit per 1/s).
+        With these, x(τ) = Φ x(0) + G0 u0 + G1 du. All three are read-only.
     """
-    n, m = b.shape
+    a = np.ascontiguousarray(a, dtype=float)
+    b = np.ascontiguousarray(b, dtype=float)
+    return _foh_step(a.shape, b.shape, a.tobytes(), b.tobytes(), float(tau))
+
+
+@functools.lru_cache(maxsize=_FOH_MEMO_SIZE)
+def _foh_step(a_shape: tuple[int, int], b_shape: tuple[int, int], a_bytes: bytes,
+              b_bytes: bytes, tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Uncached first-order-hold step of :func:`_foh_matrices` from a hashable key."""
+    n, m = b_shape
     big = np.zeros((n + 2 * m, n + 2 * m))
-    big[:n, :n] = a
-    big[:n, n:n + m] = b
+    big[:n, :n] = np.frombuffer(a_bytes, dtype=float).reshape(a_shape)
+    big[:n, n:n + m] = np.frombuffer(b_bytes, dtype=float).reshape(b_shape)
     big[n:n + m, n + m:] = np.eye(m)
     e = linalg.expm(big * tau)
+    e.flags.writeable = False                      # the views below share this memory
     return e[:n, :n], e[:n, n:n + m], e[:n, n + m:]
 
 

@@ -1,105 +1,138 @@
-"""Groundwork for propagating the small-signal permeability: field solves of the main study at
-several steel reversibilities c, a spline surrogate in log c, and its error on held-out solves.
+"""The reversibility surrogate of ``msens uq`` against direct field solves at held-out values.
 
-``field.reversibility`` (the reversible part of the steel's differential susceptibility,
-1 = differential, ~0.1 = reversible) is declared in ``uncertainty-paper-mss.toml`` but held at
-its nominal value by ``msens uq``: each value is a new bias and coil solve on the study's mesh
-(the nonlinear contact maps do not depend on it and are shared). This script measures what a
-surrogate would cost and how good it is: it solves the transducers at the spline nodes
-:data:`NODES` and at held-out values :data:`HELD_OUT` (cached in the user cache, then
-seconds), interpolates every transducer quantity with a cubic spline in log c, and compares
-the peak DAQ voltage and peak EMF of each coil (the nominal chain run read through the
-interpolated and the directly solved transducer, contact maps read as ``msens diagnose``'s
-remanence variants read them) and the magnets' total pull.
+``field.reversibility`` (the reversible part c of the steel's differential susceptibility,
+1 = differential, ~0.1 = reversible) is propagated by ``msens uq`` through
+:class:`msens.magnetics.reversibility.ReversibilityFamily`: the study's transducers solved at
+the nodes :data:`msens.magnetics.reversibility.NODES` and interpolated by cubic splines in
+log c. This script solves the main study directly at :data:`HELD_OUT` seeded log-uniform
+reversibilities in [0.1, 1] (none within 2 % of a node; each solve is cached in the user
+cache, so a rerun takes seconds) and compares, for each coil, the peak DAQ voltage and peak
+EMF of the nominal chain run read through the surrogate's and the directly solved coil
+(contact maps read as ``msens uq`` reads them), and the magnets' pull on the beads (largest
+difference over the particles relative to the largest pull). With ``--composed`` it also
+checks the surrogate composed with a remanence change
+(:func:`msens.uq.model.at_reversibility`) against direct solves of both changes at once.
 
-Run: ``python benchmarks/uq_reversibility.py`` (prints JSON: seconds per solve, and the
-surrogate's relative errors at the held-out values).
+Run: ``python benchmarks/uq_reversibility.py [--held-out 24] [--nodes 5] [--composed]``
+(prints JSON: seconds per direct solve, the relative errors per held-out value and their
+maximum).
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import time
 from dataclasses import replace
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from msens import api
-from msens.config.fieldsetup import geometry_from_study
+from msens.config.fieldsetup import coil_geometry, geometry_from_study
+from msens.config.schema import CoilSpec
+from msens.magnetics import reversibility
 from msens.magnetics.transducer import magnetic_precompression
 from msens.magnetics.transducer_cache import transducers_for
+from msens.magnetics.variants import remanence_family, scaled_geometry
 from msens.pipeline import run_study
 from msens.readout.mss import MssSensor, mss_signals, readout
+from msens.uq.model import at_reversibility
 
-#: Reversibilities solved for the spline (log-uniform from 0.1 to 1) and held out.
-NODES = (0.1, 0.178, 0.316, 0.562, 1.0)
-HELD_OUT = (0.133, 0.237, 0.422, 0.75)
-FIELDS = ("sensitivity_villari", "dlambda_dapproach", "magnetic_particle_force",
-          "villari_by_offset", "approach_by_offset")
-
-
-def interpolated(members: list[dict], c: float, particle: int, nominal):
-    """The coil at ``particle`` at reversibility ``c`` by cubic splines in log c."""
-    x = np.log(NODES)
-    trs = [m[particle] for m in members]
-
-    def at(name):
-        return CubicSpline(x, np.stack([np.asarray(getattr(t, name), dtype=float)
-                                        for t in trs]), axis=0)(np.log(c))
-
-    return replace(trs[-1], inductance_H=float(at("inductance_H")),
-                   **{f: at(f) for f in FIELDS}).reading_maps_of(nominal)
+#: Held-out reversibilities drawn (seeded, log-uniform in [0.1, 1]).
+HELD_OUT = 24
+SEED = 34
+#: Composed checks: (reversibility, remanence factor).
+COMPOSED = ((0.2051, 0.75), (0.4241, 1.25), (0.7387, 0.75))
 
 
-def main() -> dict:
+def held_out(count: int, nodes: tuple[float, ...], seed: int = SEED) -> list[float]:
+    """``count`` log-uniform reversibilities in [0.1, 1] rounded to 4 digits, none within 2 %
+    of a node, sorted."""
+    rng, out = np.random.default_rng(seed), []
+    while len(out) < count:
+        c = float(np.round(np.exp(rng.uniform(np.log(0.1), 0.0)), 4))
+        if min(abs(np.log(c / n)) for n in nodes) > 0.02 and c not in out:
+            out.append(c)
+    return sorted(out)
+
+
+def peaks(study, setup, tr) -> tuple[float, float]:
+    """Peak |DAQ voltage| and peak |EMF| (V) of the nominal chain run read through ``tr``."""
+    spec = next(s for s in study.setups[0].sensors if s.particle == tr.particle)
+    sensor = MssSensor(tr, readout(coil_geometry(spec.coil or CoilSpec(), tr.particle),
+                                   tr.resistance_ohm, tr.inductance_H, study.electronics))
+    h = setup.history
+    rec = mss_signals(sensor, h.t, h.force, study.electronics.sample_rate_hz,
+                      approach=h.approach)
+    return float(np.max(np.abs(rec.voltage))), float(np.max(np.abs(rec.emf)))
+
+
+def compare(study, setup, nominal, approx: dict, direct: dict, pull_approx, pull_direct) -> dict:
+    """Relative errors of the surrogate's coils and pull against the direct solve's."""
+    row = {}
+    for p, tr0 in nominal.items():
+        (v1, e1) = peaks(study, setup, direct[p].reading_maps_of(tr0))
+        (v2, e2) = peaks(study, setup, approx[p])
+        row[str(p)] = {"peak_voltage_V": [v1, v2], "voltage_error": v2 / v1 - 1.0,
+                       "peak_emf_V": [e1, e2], "emf_error": e2 / e1 - 1.0}
+    row["pull_error"] = float(np.max(np.abs(pull_approx - pull_direct))
+                              / np.max(np.abs(pull_direct)))
+    return row
+
+
+def worst(rows: dict) -> dict:
+    """Largest |relative error| of voltage, EMF and pull over ``rows``."""
+    coils = [v for r in rows.values() for v in r.values() if isinstance(v, dict)]
+    return {"voltage": max(abs(v["voltage_error"]) for v in coils),
+            "emf": max(abs(v["emf_error"]) for v in coils),
+            "pull": max(r["pull_error"] for r in rows.values())}
+
+
+def main(argv: list[str] | None = None) -> dict:
+    args = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    args.add_argument("--held-out", type=int, default=HELD_OUT)
+    args.add_argument("--nodes", type=int, default=0,
+                      help="log-spaced nodes over [0.1, 1] (0: the module's NODES)")
+    args.add_argument("--composed", action="store_true")
+    opts = args.parse_args(argv)
+    nodes = reversibility.NODES if opts.nodes == 0 else tuple(
+        float(v) for v in np.round(np.geomspace(0.1, 1.0, opts.nodes), 4))
     study = api.load_default()
     geometry = geometry_from_study(study)
-    result = run_study(study)
-    setup = result.setups[0]
+    setup = run_study(study).setups[0]
     nominal = setup.transducers
-    members, cost = {}, {}
-    for c in (*NODES, *HELD_OUT):
+    start = time.perf_counter()
+    family = reversibility.reversibility_family(geometry, nodes)
+    report = {"nodes": list(nodes), "family_seconds": time.perf_counter() - start,
+              "solve_seconds": {}, "held_out": {}}
+    for c in held_out(opts.held_out, nodes):
         start = time.perf_counter()
-        members[c] = transducers_for(replace(geometry, reversibility=c))
-        cost[c] = time.perf_counter() - start
-        print(json.dumps({"reversibility": c, "seconds": cost[c]}), flush=True)
-    report = {"solve_seconds": cost, "held_out": {}}
-    t, force, approach = setup.history.t, setup.history.force, setup.history.approach
-    rate = study.electronics.sample_rate_hz
-    for c in HELD_OUT:
-        row = {}
-        pull_direct = magnetic_precompression(members[c])
-        for p, tr0 in nominal.items():
-            direct = members[c][p].reading_maps_of(tr0)
-            approx = interpolated([members[n] for n in NODES], c, p, tr0)
-            peaks = []
-            for tr in (direct, approx):
-                sensor = MssSensor(tr, readout(_coil(study, p), tr.resistance_ohm,
-                                               tr.inductance_H, study.electronics))
-                rec = mss_signals(sensor, t, force, rate, approach=approach)
-                peaks.append((np.max(np.abs(rec.voltage)), np.max(np.abs(rec.emf))))
-            (v1, e1), (v2, e2) = peaks
-            row[str(p)] = {"peak_voltage_V": [v1, v2], "voltage_error": v2 / v1 - 1.0,
-                           "peak_emf_V": [e1, e2], "emf_error": e2 / e1 - 1.0}
-        pull_approx = CubicSpline(np.log(NODES), np.stack(
-            [magnetic_precompression(members[n]) for n in NODES]), axis=0)(np.log(c))
-        row["pull_error_N"] = float(np.max(np.abs(pull_approx - pull_direct)))
-        row["pull_max_N"] = float(np.max(np.abs(np.cumsum(pull_direct))))
-        report["held_out"][str(c)] = row
-    errors = [abs(v[k]) for r in report["held_out"].values() for p, v in r.items()
-              if isinstance(v, dict) for k in ("voltage_error", "emf_error")]
-    report["max_relative_error"] = max(errors)
+        direct = transducers_for(replace(geometry, reversibility=c))
+        report["solve_seconds"][str(c)] = time.perf_counter() - start
+        approx = {p: family.transducer(p, c).reading_maps_of(tr0) for p, tr0 in nominal.items()}
+        report["held_out"][str(c)] = compare(study, setup, nominal, approx, direct,
+                                             family.particle_force(c),
+                                             magnetic_precompression(direct))
+        print(json.dumps({"reversibility": c, **worst({c: report["held_out"][str(c)]})}),
+              flush=True)
+    report["max_relative_error"] = worst(report["held_out"])
+    if opts.composed:
+        remanence = remanence_family(geometry)
+        report["composed"] = {}
+        for c, r in COMPOSED:
+            direct = transducers_for(scaled_geometry(replace(geometry, reversibility=c), r))
+            approx = {p: at_reversibility(family.transducer(p, c), tr0,
+                                          remanence.transducer(p, r))
+                      for p, tr0 in nominal.items()}
+            pull0 = magnetic_precompression(nominal)
+            pull_c = family.particle_force(c)
+            scale = np.linalg.norm(pull_c) / np.linalg.norm(pull0)
+            pull = pull_c + scale * (remanence.particle_force(r) - pull0)
+            report["composed"][f"{c}x{r}"] = compare(study, setup, nominal, approx, direct,
+                                                     pull, magnetic_precompression(direct))
+        report["composed_max_relative_error"] = worst(report["composed"])
     print(json.dumps(report, indent=1))
     return report
-
-
-def _coil(study, particle):
-    from msens.config.fieldsetup import coil_geometry
-    from msens.config.schema import CoilSpec
-
-    spec = next(s for s in study.setups[0].sensors if s.particle == particle)
-    return coil_geometry(spec.coil or CoilSpec(), particle)
 
 
 if __name__ == "__main__":

@@ -131,7 +131,8 @@ def test_reference_rows_of_table2_from_the_command_line(tmp_path, capsys):
 @pytest.mark.parametrize("study, args, fragments", [
     ("paper-table2", ["--param", "chain.nonsense"], ["--param 'chain.nonsense'", "allowed:"]),
     ("paper-mss", ["--param", "sensor[1].coil.turns"], ["whole number", "allowed:"]),
-    ("paper-mss", ["--param", "field.reversibility"], ["held at its nominal value"]),
+    ("paper-mss", ["--param", "field.steel_conductivity_S_per_m"],
+     ["held at its nominal value"]),
     ("paper-table2", ["--param", "striker.drop_height_m", "--param", "striker.drop_height_m"],
      ["more than once"]),
     ("paper-table2", ["--walkers", "7"], ["--walkers must be an even whole number"]),

@@ -10,6 +10,7 @@ from msens import api
 from msens.errors import InputError
 from msens.uq.inputs import (
     CHAIN,
+    FIELD_SURROGATE,
     FIELD_TABLE,
     HELD,
     TAIL,
@@ -38,10 +39,11 @@ def test_builtin_inputs_of_the_main_study(study):
     routes = {i.name: i.route for i in inputs.inputs}
     assert routes["striker.drop_height_m"] == CHAIN
     assert routes["sensor.magnet.remanence_factor"] == FIELD_TABLE
-    assert routes["field.reversibility"] == HELD
+    assert routes["field.reversibility"] == FIELD_SURROGATE
     held = {i.name: i.held_reason for i in inputs.held}
     assert "eddy_currents = false" in held["field.steel_conductivity_S_per_m"]
-    assert "surrogate" in held["field.reversibility"]
+    assert "field.reversibility" not in held
+    assert routes["field.steel_conductivity_S_per_m"] == HELD
     # each distribution lies inside the input's physical range, around the study's value
     for i in inputs.inputs:
         lo, hi = i.distribution.support
@@ -85,8 +87,10 @@ def test_values_are_the_inverse_cdf(study):
     (_file('name = "chain.bead_mass_kg"\ndistribution = "uniform"\nlower = 4.4e-4\n'
            'upper = 4.6e-4', study="paper-table2"), ["'study'", "paper-table2"]),
     ('schema = "msens.uncertainty/1"\n', ["no [[input]] tables"]),
-    (_file('name = "field.reversibility"\ndistribution = "uniform"\nlower = 0.1\n'
-           'upper = 1.0'), ["every input is held", "surrogate"]),
+    (_file('name = "field.steel_conductivity_S_per_m"\ndistribution = "uniform"\n'
+           'lower = 5e6\nupper = 7e6'), ["every input is held", "eddy_currents = false"]),
+    (_file('name = "field.reversibility"\ndistribution = "loguniform"\nlower = 0.05\n'
+           'upper = 1.0'), ["physical range", "allowed 0.1..1", "surrogate"]),
 ])
 def test_bad_files_name_what_is_wrong(study, text, words):
     with pytest.raises(InputError) as err:

@@ -16,9 +16,11 @@ numbers come from). :func:`load_inputs` reads and checks it once against a study
 
 Each input is also told how it reaches the model (:attr:`UncertainInput.route`): through the
 chain and read-out (sampled directly), through the field model's variants (sampled
-directly through tables the field model already has), or held at its nominal value with
-the reason why (a field input that needs solves this version does not make). Nothing here
-solves or simulates: a bad file fails in milliseconds.
+directly through tables the field model already has), through a surrogate of the field
+model built on a few solves (the steel's reversibility:
+:class:`msens.magnetics.reversibility.ReversibilityFamily`), or held at its nominal value
+with the reason why (a field input that needs solves this version does not make). Nothing
+here solves or simulates: a bad file fails in milliseconds.
 """
 
 from __future__ import annotations
@@ -47,6 +49,8 @@ DISTRIBUTIONS = {"uniform": ("lower", "upper"), "loguniform": ("lower", "upper")
 
 #: How an input reaches the model.
 CHAIN, FIELD_TABLE, HELD = "chain and read-out", "field-model tables", "held at nominal"
+#: Through a spline surrogate over a few field solves (the steel's reversibility).
+FIELD_SURROGATE = "field-model surrogate"
 
 
 @dataclass(frozen=True)
@@ -174,7 +178,7 @@ class UncertainInput:
     source : str
         Where its numbers come from.
     route : str
-        :data:`CHAIN`, :data:`FIELD_TABLE` or :data:`HELD`.
+        :data:`CHAIN`, :data:`FIELD_TABLE`, :data:`FIELD_SURROGATE` or :data:`HELD`.
     held_reason : str
         With :data:`HELD`, why the input is held at its nominal value ("" otherwise).
     sensor : int or None
@@ -375,6 +379,7 @@ def _input(t: Table, study: Study, source: str) -> UncertainInput:
 def _nominal_and_range(kind: Kind, sensor: int | None, study: Study,
                        t: Table) -> tuple[float, tuple[float, float], str]:
     # the study's value of the input, its physical range (SI) and the range's reason
+    from msens.magnetics import reversibility
     from msens.magnetics.mechanisms import OFFSET_SPAN
     from msens.magnetics.variants import NODES
     from msens.params.materials import SIGMA_1018
@@ -436,9 +441,12 @@ def _nominal_and_range(kind: Kind, sensor: int | None, study: Study,
     if p in ("sensor.magnet.length_factor", "sensor.magnet.radius_factor"):
         return 1.0, (0.5, 2.0), "half to twice the equivalent magnet's nominal size"
     if p == "field.reversibility":
-        f = study.field
-        value = f.reversibility if f.reversibility is not None else (
-            1.0 if f.small_signal_permeability == "differential" else 0.1)
+        value = study.field.steel_reversibility
+        if not study.field.eddy_currents:  # propagated through the surrogate: its span
+            lo, hi = reversibility.NODES[0], reversibility.NODES[-1]
+            return value, (lo, hi), (f"the span {lo:g}..{hi:g} of the surrogate's field "
+                                     "models (msens.magnetics.reversibility.NODES) within "
+                                     "(0, 1], Jiles-Atherton's c")
         return value, (1e-3, 1.0), ("the reversible part of the differential susceptibility "
                                     "lies in (0, 1] (Jiles-Atherton's c)")
     value = study.field.steel_conductivity_s_per_m or SIGMA_1018
@@ -459,11 +467,17 @@ def _route(kind: Kind, study: Study) -> tuple[str, str]:
             return HELD, ("with eddy currents the coils' frequency responses would need "
                           "variants of their own (not solved in this version)")
         return FIELD_TABLE, ""
+    if p == "field.reversibility":
+        if eddy:
+            return HELD, ("with eddy currents the coils' frequency responses would need a "
+                          "surrogate of their own (not made in this version)")
+        return FIELD_SURROGATE, ""
     return HELD, ("changes the field model's bias solve: it needs a design of field solves "
                   "and a surrogate with its error measured on held-out solves, not made in "
                   "this version; the band is conditional on the nominal value")
 
 
-__all__ = ["CHAIN", "DISTRIBUTIONS", "FIELD_TABLE", "HELD", "KINDS", "SCHEMA", "TAIL",
+__all__ = ["CHAIN", "DISTRIBUTIONS", "FIELD_SURROGATE", "FIELD_TABLE", "HELD", "KINDS",
+           "SCHEMA", "TAIL",
            "Distribution", "InputSet", "Kind", "UncertainInput", "default_inputs_path",
            "load_inputs", "parse_inputs"]

@@ -4,8 +4,10 @@ For each row of sampled input values a study is changed (chain, striker and read
 through :meth:`msens.config.study.Study.replace`, validated as a file would be), each
 physics MsS gets the transducer of its field model as the inputs say (remanence through the
 :class:`~msens.magnetics.variants.RemanenceFamily`, coil offset through its tabulated offset
-profiles, as ``msens diagnose`` varies them: :class:`msens.diagnose.models.FieldModel`; turns
-by :func:`with_turns`), the chains of a chunk of rows are integrated in one batch
+profiles, as ``msens diagnose`` varies them: :class:`msens.diagnose.models.FieldModel`; the
+steel's reversibility through the spline surrogate
+:class:`~msens.magnetics.reversibility.ReversibilityFamily`, see :func:`at_reversibility`;
+turns by :func:`with_turns`), the chains of a chunk of rows are integrated in one batch
 (:func:`msens.chain.integrate.simulate_batch`), and each run is observed by
 :func:`msens.pipeline.observe_setup`, the function ``msens run`` observes its setups with.
 So a row at the nominal values reproduces ``msens run`` exactly, and every feature is the
@@ -33,7 +35,8 @@ from msens.config.study import Study
 from msens.diagnose import physics
 from msens.diagnose.models import ModelBank, PhysicsMss
 from msens.errors import InputError
-from msens.magnetics.transducer import Transducer
+from msens.magnetics.reversibility import ReversibilityFamily, reversibility_family
+from msens.magnetics.transducer import Transducer, magnetic_precompression
 from msens.pipeline import observe_setup, output_times, setup_responses
 from msens.results import SetupResult
 from msens.uq.inputs import CHAIN, FIELD_TABLE, InputSet
@@ -60,6 +63,56 @@ def with_turns(tr: Transducer, turns: int) -> Transducer:
                    approach_by_offset=None if tr.approach_by_offset is None
                    else np.asarray(tr.approach_by_offset) * s,
                    inductance_H=tr.inductance_H * s * s, resistance_ohm=tr.resistance_ohm * s)
+
+
+def _on_top(value: np.ndarray | None, nominal: np.ndarray | None,
+            changed: np.ndarray | None) -> np.ndarray | None:
+    # value + (changed - nominal), scaled by the size (2-norm) of value over that of nominal
+    if value is None or nominal is None or changed is None:
+        return value
+    value, nominal = np.asarray(value, dtype=float), np.asarray(nominal, dtype=float)
+    size = np.linalg.norm(nominal)
+    scale = np.linalg.norm(value) / size if size > 0.0 else 1.0
+    return value + scale * (np.asarray(changed, dtype=float) - nominal)
+
+
+def at_reversibility(surrogate: Transducer, nominal: Transducer,
+                     remanent: Transducer | None = None) -> Transducer:
+    """A coil at another steel reversibility c, with the magnets' remanence change on top.
+
+    Parameters
+    ----------
+    surrogate : Transducer
+        The coil at c with nominal magnets
+        (:meth:`msens.magnetics.reversibility.ReversibilityFamily.transducer`).
+    nominal : Transducer
+        The study's coil (nominal c and magnets; its contact maps, if any, are read).
+    remanent : Transducer, optional
+        The study's coil with the magnets' remanence changed (nominal c), from the
+        :class:`~msens.magnetics.variants.RemanenceFamily`.
+
+    Returns
+    -------
+    Transducer
+        ``surrogate`` reading the contact maps of ``nominal``; with ``remanent``, each
+        interpolated quantity q (sensitivities in Wb/N and Wb/m, offset profiles, inductance
+        in H) becomes q(c) + (|q(c)| / |q(c0)|) (q_r(c0) - q(c0)): the remanence family's
+        change at the nominal c0, scaled by how much c changes the quantity's size (|.|:
+        the 2-norm over its elements). This is an APPROXIMATION (the families are solved
+        along two lines of the (c, remanence) plane, not on its grid): it is exact when c
+        and the remanence act as independent factors on each quantity's shape.
+    """
+    tr = surrogate.reading_maps_of(nominal)
+    if remanent is None:
+        return tr
+    changes = {name: _on_top(getattr(tr, name), getattr(nominal, name),
+                             getattr(remanent, name))
+               for name in ("sensitivity_villari", "dlambda_dapproach", "villari_by_offset",
+                            "approach_by_offset")}
+    inductance = float(_on_top(np.array([tr.inductance_H]), np.array([nominal.inductance_H]),
+                               np.array([remanent.inductance_H]))[0])
+    return replace(tr, inductance_H=inductance, **changes,
+                   source=f"{tr.source}; remanence change of {remanent.source}")
 
 
 @dataclass(frozen=True)
@@ -154,6 +207,8 @@ class _Setup:
         self.index = study.setups.index(setup)
         self.specs: tuple[PhysicsMss | None, ...] = ()
         self.responses = setup_responses(study, setup)
+        self.store = bank.store
+        self._reversibility: ReversibilityFamily | None = None
         if any(s.model is MssModel.PHYSICS for s in setup.sensors):
             eddy = eddy_settings(study) if study.field.eddy_currents else None
             model = bank.register(geometry_from_study(study, setup), eddy,
@@ -164,6 +219,13 @@ class _Setup:
                            electronics=study.electronics)
                 if s.model is MssModel.PHYSICS else None for s in setup.sensors)
 
+    def family(self) -> ReversibilityFamily:
+        # the reversibility surrogate of the setup's field model (solved or read once)
+        if self._reversibility is None:
+            model = next(p for p in self.specs if p is not None).model
+            self._reversibility = reversibility_family(model.geometry, store=self.store)
+        return self._reversibility
+
     def row(self, changed: Study, field: dict) -> tuple[dict | None, np.ndarray | None]:
         # the transducers of the row's physics MsS and their magnets' pull on the beads
         if not self.specs:
@@ -172,14 +234,34 @@ class _Setup:
             p, remanence_factor=field.get("remanence", 1.0),
             offset_m=field.get(("offset", i), 0.0))
             for i, p in enumerate(self.specs))
+        c = field.get("reversibility")
+        model = next(p for p in specs if p is not None).model
+        if c is not None and c == model.geometry.reversibility:
+            c = None  # the study's own field model, exactly as msens run reads it
         transducers = {}
         for i, p in enumerate(specs):
             if p is None:
                 continue
-            tr = physics.sensor(p).transducer
+            if c is None:
+                tr = physics.sensor(p).transducer
+            else:
+                nominal = model.transducers[p.particle]
+                remanent = None if p.remanence_factor == 1.0 else \
+                    model.family().transducer(p.particle, p.remanence_factor)
+                tr = at_reversibility(self.family().transducer(p.particle, c), nominal,
+                                      remanent)
+                if p.offset_m != 0.0:
+                    tr = tr.shifted(p.offset_m)
             turns = field.get(("turns", i))
             transducers[p.particle] = tr if turns is None else with_turns(tr, turns)
-        return transducers, physics.magnetic_force(specs)
+        if c is None:
+            return transducers, physics.magnetic_force(specs)
+        pull = self.family().particle_force(c)
+        factor = field.get("remanence", 1.0)
+        if factor != 1.0:
+            nominal_pull = magnetic_precompression(model.transducers)
+            pull = _on_top(pull, nominal_pull, model.family().particle_force(factor))
+        return transducers, pull
 
 
 def _row_changes(inputs: InputSet, row: np.ndarray) -> tuple[dict, dict]:
@@ -195,6 +277,8 @@ def _row_changes(inputs: InputSet, row: np.ndarray) -> tuple[dict, dict]:
             field[("offset", p.sensor)] = float(v)
         elif pattern == "sensor.magnet.remanence_factor":
             field["remanence"] = float(v)
+        elif pattern == "field.reversibility":
+            field["reversibility"] = float(v)
         elif p.route == CHAIN:
             study_changes[p.name] = float(v)
         else:  # pragma: no cover - inputs.py routes every other field input to HELD
@@ -271,5 +355,6 @@ def evaluate(task: Task) -> Evaluation:
                       waveforms={k: np.asarray(v) for k, v in waves.items()}, runs=runs)
 
 
-__all__ = ["BATCH_RUNS", "Evaluation", "Task", "evaluate", "row_features", "row_waveforms",
+__all__ = ["BATCH_RUNS", "Evaluation", "Task", "at_reversibility", "evaluate", "row_features",
+           "row_waveforms",
            "sensor_name", "waveform_unit", "with_turns"]

@@ -88,12 +88,27 @@ def to_json(result: Propagation, nominal: dict[str, float], *, provenance: dict,
                    "bands": "5-50-95 % quantiles over every run (waveforms: over the "
                             "scheme's A and B rows)"},
         "cost": {"model_runs": int(result.values.shape[0]), "chain_runs": result.runs,
-                 "field_solves": 0, "seconds": result.seconds, "workers": result.workers},
+                 "field_solves": field_solves(result.inputs), "seconds": result.seconds,
+                 "workers": result.workers},
         "inputs": [p.to_json() for p in result.inputs.inputs],
         "held_at_nominal": {p.name: p.held_reason for p in result.inputs.held},
         "outputs": outputs, "reference_coverage": reference_coverage(study, result),
         "waveforms": waveforms,
     }
+
+
+def field_solves(inputs) -> int:
+    """Field models the propagation's surrogates are built on besides the study's own (each
+    solved once, then read from the artifact store): the reversibility surrogate's nodes
+    (:data:`msens.magnetics.reversibility.NODES`) with ``field.reversibility`` propagated,
+    else 0 (the other field inputs read tables of the study's field models)."""
+    from msens.magnetics.reversibility import NODES
+    from msens.uq.inputs import FIELD_SURROGATE
+
+    surrogate = [p for p in inputs.propagated if p.route == FIELD_SURROGATE]
+    if not surrogate:
+        return 0
+    return len(NODES) - sum(1 for c in NODES if c == surrogate[0].nominal)
 
 
 def reference_coverage(study, result: Propagation) -> list[dict]:

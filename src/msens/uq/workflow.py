@@ -30,9 +30,10 @@ from msens.uq.propagate import Propagation, check_samples, propagate
 _log = logging.getLogger(__name__)
 
 FILES = ("uq.json", "uq_waveforms.png", "uq_sobol.png")
-#: Default N of the Saltelli scheme (N (p + 2) model runs: 1,920 for the main study's 13
-#: propagated inputs, 0 field solves; measured 2 min 55 s for the whole command on 2 cores,
-#: 169 s of it the propagation; 12 min with the machine shared at load average 15).
+#: Default N of the Saltelli scheme (N (p + 2) model runs: 2,048 for the main study's 14
+#: propagated inputs, and the 4 field models of the reversibility surrogate, committed;
+#: measured 2 min 36 s for the whole command on 2 cores shared at load average 3, 151 s of
+#: it the propagation).
 DEFAULT_SAMPLES = 128
 
 

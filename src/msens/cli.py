@@ -330,8 +330,8 @@ def _parser() -> argparse.ArgumentParser:
                           "samples them); the others are held at their nominal values")
     cal.add_argument("--walkers", type=int, default=None,
                      help="emcee walkers, even, >= 2 x inputs (default max(16, 4 x inputs))")
-    cal.add_argument("--steps", type=int, default=400,
-                     help="steps per walker, the first half burn-in (default 400)")
+    cal.add_argument("--steps", type=int, default=1000,
+                     help="steps per walker, the first half burn-in (default 1000)")
     cal.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     cal.add_argument("--out", default=None,
                      help="output directory (default: out/<study>-calibrate/)")

@@ -162,7 +162,7 @@ def test_data_of_another_setup_is_refused(twenty, tmp_path, capsys):
 
 
 def test_data_and_reference_together_are_refused(twenty, tmp_path, capsys):
-    study_file, inputs_file = twenty
+    study_file, _inputs_file = twenty
     data = api.synth(api.load(study_file), tmp_path / "w.csv", noise=0.01, seed=1)
     code = main(["calibrate", str(data), "--study", str(study_file), "--reference", "tiny",
                  "--out", str(tmp_path / "o")])

@@ -73,8 +73,8 @@ from msens.diagnose.candidates import (
 )
 from msens.diagnose.diagnosis import Candidate, Diagnosis
 from msens.diagnose.effects import Context
-from msens.diagnose.effects.base import ModelState
 from msens.diagnose.effects import get as get_effect
+from msens.diagnose.effects.base import ModelState
 from msens.diagnose.fit import recentred, refit_jointly
 from msens.diagnose.likelihood import variance_split
 from msens.diagnose.noise import shot_matrix
@@ -89,9 +89,18 @@ from msens.pipeline import calibrate_dissipation, output_times
 from msens.results import SetupResult
 from msens.synth import GAIN_CONVENTION, GAIN_KEY, gain_unit
 
-__all__ = ["THRESHOLD", "Candidate", "Diagnosis", "baseline_dissipation", "diagnose",
-           "diagnose_passes", "diagnose_reference", "match_setup_spec",
-           "WaveformBaseline", "waveform_baseline"]
+__all__ = [
+    "THRESHOLD",
+    "Candidate",
+    "Diagnosis",
+    "WaveformBaseline",
+    "baseline_dissipation",
+    "diagnose",
+    "diagnose_passes",
+    "diagnose_reference",
+    "match_setup_spec",
+    "waveform_baseline",
+]
 
 _log = logging.getLogger(__name__)
 

@@ -43,7 +43,7 @@ _log = logging.getLogger(__name__)
 FILES = ("calibration.json", "calibration_pairs.png", "calibration_predictive.png",
          "calibration_trace.png")
 #: Default steps of every walker (the first half is burn-in).
-DEFAULT_STEPS = 400
+DEFAULT_STEPS = 1000
 #: Posterior draws run again for the posterior predictive.
 PREDICTIVE_DRAWS = 64
 #: Bounds of the sampler settings.

@@ -224,5 +224,14 @@ def sample(log_prob: Callable[[np.ndarray], np.ndarray], start: np.ndarray, *, w
                   acceptance=float(np.mean(sampler.acceptance_fraction)))
 
 
-__all__ = ["BALL", "RHAT_LIMIT", "START_DRAWS", "Chains", "autocorr_time", "sample",
-           "laplace_covariance", "split_rhat", "start_point"]
+__all__ = [
+    "BALL",
+    "RHAT_LIMIT",
+    "START_DRAWS",
+    "Chains",
+    "autocorr_time",
+    "laplace_covariance",
+    "sample",
+    "split_rhat",
+    "start_point",
+]

@@ -28,6 +28,7 @@ from msens.config.study import default_study_path
 from msens.field.eddy_sphere import conducting_sphere
 from msens.field.geometry import BEAD_DIAMETER
 from msens.params.materials import SIGMA_1018
+from msens.vocabulary import TIME_LABEL, coil_name
 
 VARIANTS = {
     "differential": {},
@@ -97,8 +98,8 @@ def plot(records: dict, path: str) -> None:
         color, ls = styles[name]
         ax.plot(rec.t_daq[keep] * 1e6, rec.voltage[keep] * 1e3, color=color, ls=ls, lw=1.3,
                 label=name)
-    ax.set_xlabel("time since impact (µs)")
-    ax.set_ylabel("DAQ voltage, coil @13 (mV)")
+    ax.set_xlabel(TIME_LABEL)
+    ax.set_ylabel(f"DAQ voltage, {coil_name(13)} (mV)")
     ax.set_title("Small-signal permeability of the steel and eddy currents (main study)",
                  fontsize=10)
     ax.grid(alpha=0.3)

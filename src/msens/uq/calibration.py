@@ -336,6 +336,9 @@ def run_calibrate(study: Study, out: str | Path, *, data=None, reference: str | 
     _log.info("calibrate %s on %s: %d inputs (%s), %d walkers x %d steps", study.name,
               measurement, k, ", ".join(coords.names), walkers, steps)
 
+    _log.info("calibrate: start point from the nominal values and %d prior draws, then "
+              "Nelder-Mead (up to %d runs) and the posterior's curvature there",
+              START_DRAWS * k, 30 * k)
     rng = np.random.default_rng(seed)
     draws = np.column_stack([p.distribution.values(rng.random(START_DRAWS * k))
                              for p in coords.inputs])

@@ -238,10 +238,13 @@ def sobol_figure(result: Propagation):
     units = {p.name: p.kind.unit for p in result.inputs.propagated}
     axes[0, 0].set_yticks(y, [f"{n} ({units[n]})" for n in names])
     axes[0, 0].invert_yaxis()
-    axes[0, 0].legend(fontsize=7, loc="lower right")
+    # one legend for all panels, above them: inside a panel it would hide a bar
+    handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.suptitle(f"Which input to measure: Sobol indices (N = {result.base_samples}, "
                  f"{result.values.shape[0]} runs)", fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.97))
+    fig.legend(handles, labels, fontsize=8, ncol=2, loc="upper right",
+               bbox_to_anchor=(0.99, 0.995), frameon=False)
     return fig
 
 

@@ -9,14 +9,13 @@ the model runs, field solves (0: the field inputs go through the committed table
 time; per output the largest difference of its first-order and total indices between N and
 4N, and the 5-50-95 % bands of both.
 
-Run: ``python benchmarks/uq_convergence.py [--samples 128] [--workers 2]`` (N = 128: 7,680
-model runs at 4N; read-out dominated, about 0.35 s per run and worker).
+Run: ``python benchmarks/uq_convergence.py [--samples 256] [--workers 2]`` (the runs of 4N).
 
-Measured (2026-11-27, the shared 2-core machine at load average 12-15, 2 workers): 4N = 512,
-7,680 model runs (chain runs), 0 field solves, 1,432 s; N = 128 (the ``msens uq`` default,
-1,920 runs) alone took 732 s. Between N = 128 and 512 every total index agrees within 0.037
-and the first-order indices within 0.062 (two of 208 above 0.05: peak EMF of coil 13 against
-gamma_c 0.062, peak DAQ voltage of coil 18 against coil 18's offset 0.052).
+Measured (2026-11-27, 2 workers on the shared 2-core machine, 14 propagated inputs including
+the permeability surrogate): N = 128 against 512 (8,192 runs, 523 s): 447 of 448 indices
+within 0.05, the worst 0.056 (total index of coil 18's incident peak on the reversibility);
+N = 256 against 1,024 (16,384 runs, 1,164 s): all within 0.05, the worst 0.034 (first-order
+index of coil 13's AR on the cable capacitance). ``msens uq`` therefore defaults to N = 256.
 """
 
 from __future__ import annotations
@@ -57,7 +56,7 @@ def prefix(result, samples: int):
 
 def main() -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--samples", type=int, default=128)
+    parser.add_argument("--samples", type=int, default=256)
     parser.add_argument("--workers", type=int, default=None)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--save", default=None, help="also save the 4N features here (.npz)")

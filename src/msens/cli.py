@@ -304,8 +304,8 @@ def _parser() -> argparse.ArgumentParser:
                     help="uncertain inputs (msens.uncertainty/1; default: the built-in "
                          "file of a built-in study)")
     uq.add_argument("--out", required=True, help="output directory")
-    uq.add_argument("--samples", type=int, default=128,
-                    help="base samples N, a power of two: N (inputs + 2) runs (default 128)")
+    uq.add_argument("--samples", type=int, default=256,
+                    help="base samples N, a power of two: N (inputs + 2) runs (default 256)")
     uq.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     uq.add_argument("--scheduler", default=None, metavar="ADDRESS",
                     help="Dask distributed scheduler address (default: local processes)")

@@ -30,11 +30,10 @@ from msens.uq.propagate import Propagation, check_samples, propagate
 _log = logging.getLogger(__name__)
 
 FILES = ("uq.json", "uq_waveforms.png", "uq_sobol.png")
-#: Default N of the Saltelli scheme (N (p + 2) model runs: 2,048 for the main study's 14
-#: propagated inputs, and the 4 field models of the reversibility surrogate, committed;
-#: measured 2 min 36 s for the whole command on 2 cores shared at load average 3, 151 s of
-#: it the propagation).
-DEFAULT_SAMPLES = 128
+#: Default N of the Saltelli scheme (N (p + 2) model runs: 4,096 for the main study's 14
+#: propagated inputs): the smallest power of two at which the main study's Sobol indices
+#: agree with those of 4N within 0.05 (``benchmarks/uq_convergence.py``).
+DEFAULT_SAMPLES = 256
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.hostile.conftest import TWENTY, assert_input_error
+from benchmarks.calibrate_coverage import INPUTS as COVERAGE_INPUTS
+from benchmarks.calibrate_coverage import STUDY
+from tests.hostile.conftest import assert_input_error
 
 from msens import api
 from msens.cli import main
@@ -22,21 +24,8 @@ from msens.uq.inputs import load_inputs
 from msens.uq.mcmc import split_rhat
 from msens.uq.posterior import Coordinates, Likelihood, select
 
-INPUTS = """schema = "msens.uncertainty/1"
-[[input]]
-name = "striker.drop_height_m"
-distribution = "uniform"
-lower = 6.7e-3
-upper = 7.7e-3
-reason = "drop height set by hand to +-0.5 mm"
-[[input]]
-name = "chain.gamma_contact_kg_per_s"
-distribution = "triangular"
-lower = 4.07
-mode = 4.71
-upper = 5.56
-reason = "Eq. 10 fit spread"
-[[input]]
+#: The coverage benchmark's priors and one more input held at nominal.
+INPUTS = COVERAGE_INPUTS + """[[input]]
 name = "chain.youngs_modulus_pa"
 distribution = "uniform"
 lower = 190e9
@@ -48,7 +37,7 @@ reason = "datasheet spread"
 @pytest.fixture
 def twenty(tmp_path: Path):
     study = tmp_path / "s.toml"
-    study.write_text(TWENTY)
+    study.write_text(STUDY)
     inputs = tmp_path / "u.toml"
     inputs.write_text(INPUTS)
     return study, inputs
@@ -153,7 +142,7 @@ def test_bad_input_is_refused_before_any_simulation(tmp_path, capsys, study, arg
 def test_data_of_another_setup_is_refused(twenty, tmp_path, capsys):
     study_file, inputs_file = twenty
     other = tmp_path / "other.toml"
-    other.write_text(TWENTY.replace("particle = 15", "particle = 16"))
+    other.write_text(STUDY.replace("particle = 15", "particle = 16"))
     data = api.synth(api.load(other), tmp_path / "w.csv", noise=0.01, seed=1)
     code = main(["calibrate", str(data), "--study", str(study_file), "--inputs",
                  str(inputs_file), "--out", str(tmp_path / "o")])
@@ -164,6 +153,6 @@ def test_data_of_another_setup_is_refused(twenty, tmp_path, capsys):
 def test_data_and_reference_together_are_refused(twenty, tmp_path, capsys):
     study_file, _inputs_file = twenty
     data = api.synth(api.load(study_file), tmp_path / "w.csv", noise=0.01, seed=1)
-    code = main(["calibrate", str(data), "--study", str(study_file), "--reference", "tiny",
+    code = main(["calibrate", str(data), "--study", str(study_file), "--reference", "coverage",
                  "--out", str(tmp_path / "o")])
     assert_input_error(code, capsys.readouterr().err, "either DATA", "not both")

@@ -28,6 +28,7 @@ from msens.errors import InputError
 from msens.io.output import DPI, OutputDir
 from msens.uq.inputs import InputSet, load_inputs
 from msens.uq.mcmc import (
+    RHAT_LIMIT,
     START_DRAWS,
     Chains,
     autocorr_time,
@@ -107,8 +108,6 @@ class Calibration:
     @property
     def converged(self) -> bool:
         """Whether every input's split R-hat is at most :data:`~msens.uq.mcmc.RHAT_LIMIT`."""
-        from msens.uq.mcmc import RHAT_LIMIT
-
         return bool(np.all(np.isfinite(self.rhat)) and np.all(self.rhat <= RHAT_LIMIT))
 
 

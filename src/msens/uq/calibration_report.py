@@ -96,7 +96,7 @@ def to_json(cal, inputs, *, provenance: dict) -> dict:
             "features": {k: {"label": feature_label(k)[0], "unit": feature_label(k)[1],
                              "band_5_50_95": _band(v)} for k, v in cal.predictive.items()},
             "reference": cal.reference},
-        "cost": {"model_runs": cal.runs, "field_solves": 0, "seconds": cal.seconds},
+        "cost": {"model_runs": cal.runs, "seconds": cal.seconds},
         "provenance": provenance,
     }
     if cal.band is not None:

@@ -22,81 +22,26 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from itertools import pairwise
+from typing import ClassVar
 
-import numpy as np
-from scipy.interpolate import CubicSpline
-
-from msens.errors import internal, require
+from msens.errors import internal
 from msens.field.geometry import SensorGeometry
-from msens.magnetics.transducer import Transducer, magnetic_precompression
+from msens.magnetics.family import QUANTITIES, TransducerFamily
 from msens.magnetics.transducer_cache import transducers_for
 
 #: Reversibilities at which the field model is solved: five log-spaced values over [0.1, 1]
 #: (rounded to three digits: they are the keys of the stored solves).
 NODES = (0.1, 0.178, 0.316, 0.562, 1.0)
-#: Transducer quantities that depend on c, interpolated per element.
-QUANTITIES = ("sensitivity_villari", "dlambda_dapproach", "magnetic_particle_force",
-              "villari_by_offset", "approach_by_offset")
 
 
 @dataclass(frozen=True)
-class ReversibilityFamily:
-    """Transducers of one geometry at the reversibilities :attr:`nodes`.
+class ReversibilityFamily(TransducerFamily):
+    """Transducers of one geometry at the reversibilities :attr:`nodes` (unit 1; the
+    nominal geometry carries the study's c), splines in log c."""
 
-    Attributes
-    ----------
-    geometry : SensorGeometry
-        Nominal geometry (its ``reversibility`` is the study's c).
-    nodes : tuple of float
-        Reversibilities solved, increasing, unit 1.
-    members : tuple of dict
-        ``{particle: Transducer}`` at each node (without contact maps).
-    """
-
-    geometry: SensorGeometry
-    nodes: tuple[float, ...]
-    members: tuple[dict[int, Transducer], ...]
-
-    @property
-    def bounds(self) -> tuple[float, float]:
-        """Smallest and largest reversibility covered."""
-        return self.nodes[0], self.nodes[-1]
-
-    def _at(self, values: list, c: float) -> np.ndarray:
-        # cubic spline in log c through the nodes' values (stacked along axis 0)
-        return CubicSpline(np.log(self.nodes), np.stack(values), axis=0)(np.log(c))
-
-    def particle_force(self, c: float) -> np.ndarray:
-        """Static magnetic force on each particle at reversibility ``c``, N, shape (n,)
-        (+ toward the wall, as :func:`msens.magnetics.transducer.magnetic_precompression`)."""
-        self._check(c)
-        return self._at([magnetic_precompression(m) for m in self.members], c)
-
-    def transducer(self, particle: int, c: float) -> Transducer:
-        """The coil at ``particle`` with the steel's reversibility ``c`` (interpolated).
-
-        Every quantity of :data:`QUANTITIES` (Wb/N, Wb/m, N; the offset profiles with their
-        offsets axis) and the inductance (H) come from the spline in log c; the particle's
-        contacts, stiffness, resistance, turns and offsets grid are the same at every c.
-        All coils of one c carry the same ``source``, so
-        :func:`~msens.magnetics.transducer.magnetic_precompression` counts their magnets
-        once.
-        """
-        self._check(c)
-        trs = [m[particle] for m in self.members]
-        base = trs[-1]
-        out = {name: None if getattr(base, name) is None else self._at(
-            [np.asarray(getattr(t, name), dtype=float) for t in trs], c)
-            for name in QUANTITIES}
-        inductance = float(self._at([t.inductance_H for t in trs], c))
-        return replace(base, inductance_H=inductance, **out,
-                       source=f"{base.source}; reversibility {c:.6g} (spline in log c over "
-                              f"{len(self.nodes)} field models)")
-
-    def _check(self, c: float) -> None:
-        lo, hi = self.bounds
-        require(lo <= c <= hi,
-                f"reversibility {c} outside the solved range {lo:g}..{hi:g}")
+    parameter: ClassVar[str] = "reversibility"
+    log_axis: ClassVar[bool] = True
+    source_format: ClassVar[str] = "reversibility {x:.6g} (spline in log c over {n} field models)"
 
 
 def reversibility_family(geometry: SensorGeometry, nodes: tuple[float, ...] = NODES,

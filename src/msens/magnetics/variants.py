@@ -4,7 +4,8 @@ A magnet of another strength (another batch or grade, ageing, temperature) chang
 state: the magnets' pull on the beads and every contact's sensitivity. Each field model is a
 nonlinear solve (~20 s), so :class:`RemanenceFamily` solves the geometry at a few remanence
 factors (:data:`NODES`, all magnets scaled together) through the cached transducer core and
-interpolates every quantity with a cubic spline in the factor; a diagnosis or a sweep then
+interpolates every quantity with a cubic spline in the factor
+(:class:`~msens.magnetics.family.TransducerFamily`); a diagnosis or a sweep then
 evaluates any factor in microseconds. The interpolation error against a direct solve is
 checked in ``tests/magnetics/test_variants.py``.
 """
@@ -13,13 +14,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from itertools import pairwise
+from typing import ClassVar
 
-import numpy as np
-from scipy.interpolate import CubicSpline
-
-from msens.errors import internal, require
+from msens.errors import internal
 from msens.field.geometry import SensorGeometry
-from msens.magnetics.transducer import Transducer, magnetic_precompression
+from msens.magnetics.family import TransducerFamily
 from msens.magnetics.transducer_cache import transducers_for
 
 #: Remanence factors (B_r / nominal) at which the field model is solved.
@@ -35,58 +34,12 @@ def scaled_geometry(geometry: SensorGeometry, factor: float) -> SensorGeometry:
 
 
 @dataclass(frozen=True)
-class RemanenceFamily:
-    """Transducers of one geometry at the remanence factors :data:`NODES`.
+class RemanenceFamily(TransducerFamily):
+    """Transducers of one geometry at the remanence factors :attr:`nodes` (all magnets
+    scaled together; factor 1 is the nominal geometry), splines in the factor."""
 
-    Attributes
-    ----------
-    geometry : SensorGeometry
-        Nominal geometry (factor 1).
-    nodes : tuple of float
-    members : tuple of dict
-        ``{particle: Transducer}`` at each node.
-    """
-
-    geometry: SensorGeometry
-    nodes: tuple[float, ...]
-    members: tuple[dict[int, Transducer], ...]
-
-    @property
-    def bounds(self) -> tuple[float, float]:
-        """Smallest and largest factor covered."""
-        return self.nodes[0], self.nodes[-1]
-
-    def _spline(self, values: list[np.ndarray]) -> CubicSpline:
-        return CubicSpline(np.array(self.nodes), np.stack(values), axis=0)
-
-    def particle_force(self, factor: float) -> np.ndarray:
-        """Static magnetic force on each particle at ``factor``, N, shape (n,)."""
-        self._check(factor)
-        return self._spline([magnetic_precompression(m) for m in self.members])(factor)
-
-    def transducer(self, particle: int, factor: float) -> Transducer:
-        """The coil at ``particle`` with the magnets at ``factor`` (interpolated)."""
-        self._check(factor)
-        trs = [m[particle] for m in self.members]
-        nominal = trs[self.nodes.index(1.0)] if 1.0 in self.nodes else trs[0]
-
-        def at(name: str) -> np.ndarray | float:
-            return self._spline([np.asarray(getattr(t, name), dtype=float) for t in trs])(
-                factor)
-
-        return replace(nominal, sensitivity_villari=at("sensitivity_villari"),
-                       dlambda_dapproach=at("dlambda_dapproach"),
-                       inductance_H=float(at("inductance_H")),
-                       magnetic_particle_force=at("magnetic_particle_force"),
-                       villari_by_offset=at("villari_by_offset"),
-                       approach_by_offset=at("approach_by_offset"),
-                       source=f"{nominal.source}; remanence x {factor:.6g} (spline over "
-                              f"{len(self.nodes)} field models)")
-
-    def _check(self, factor: float) -> None:
-        lo, hi = self.bounds
-        require(lo <= factor <= hi,
-                f"remanence factor {factor} outside the solved range {lo:g}..{hi:g}")
+    parameter: ClassVar[str] = "remanence factor"
+    source_format: ClassVar[str] = "remanence x {x:.6g} (spline over {n} field models)"
 
 
 def remanence_family(geometry: SensorGeometry, nodes: tuple[float, ...] = NODES,

@@ -157,8 +157,10 @@ def sobol_indices(inputs: InputSet, y: np.ndarray, seed: int) -> Indices:
         return Indices(zero, zero, zero, zero, "does not vary with the inputs")
     with warnings.catch_warnings(), np.errstate(divide="ignore", invalid="ignore"):
         warnings.simplefilter("ignore", RuntimeWarning)
+        # SALib seeds its bootstrap only for a truthy seed (seed 0 would draw from numpy's
+        # global generator: intervals that change from run to run), hence seed + 1
         s = sobol.analyze(problem(inputs), y, calc_second_order=False,
-                          num_resamples=RESAMPLES, conf_level=CONFIDENCE, seed=seed)
+                          num_resamples=RESAMPLES, conf_level=CONFIDENCE, seed=seed + 1)
     return Indices(np.asarray(s["S1"]), np.asarray(s["ST"]), np.asarray(s["S1_conf"]),
                    np.asarray(s["ST_conf"]))
 

@@ -115,4 +115,4 @@ def number(value: object, name: str, low: float, high: float, what: str = "") ->
                          f"{shorten(value)}")
     if not (math.isfinite(value) and low <= value <= high):
         raise InputError(f"{name} must be from {low:g} to {high:g}{what}, got {value!r}")
-    return float(value)
+    return float(value) + 0.0  # -0.0 -> 0.0: numpy refuses a negative-signed zero scale

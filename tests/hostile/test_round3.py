@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import errno
 import json
+import math
 import os
 import zipfile
 from pathlib import Path
@@ -393,3 +394,29 @@ def test_measured_record_too_coarse_for_the_pulse(tmp_path, capsys):
                   str(tmp_path / "d")]):
         code, err = run_cli(argv, capsys, seconds=60)
         assert_input_error(code, err, "coarse.csv", "too coarse", "Hz")
+
+
+def test_negative_zero_is_zero(tiny, tmp_path, capsys):
+    """A signed zero passes every ">= 0" check but not numpy's (``normal(scale=-0.0)``:
+    "scale < 0", an internal error of ``synth --noise -0``): readers return +0.0."""
+    from msens.io.tomlreader import Table
+    from msens.preflight import number
+
+    assert math.copysign(1.0, number(-0.0, "--noise", 0.0, 1.0)) == 1.0
+    value = Table({"x": -0.0}, "t", "s.toml").number("x", low=0.0)
+    assert math.copysign(1.0, value) == 1.0
+    study = tiny()
+    code, err = run_cli(["synth", str(study), "--out", str(tmp_path / "n.csv"), "--noise",
+                         "-0"], capsys, seconds=60)
+    assert code == 0, err
+
+
+@pytest.mark.parametrize("grade", ['[["ceramic8", "N38"]]', '[1.5, "N38"]', "3"])
+def test_sweep_grade_that_is_not_a_name(tmp_path, capsys, grade):
+    """A list inside the grade list reached a set lookup: unhashable type (internal)."""
+    sweep = tmp_path / "g.toml"
+    sweep.write_text(f'schema = "msens.sweep/1"\nname = "g"\nsensor = 6\n[magnet]\n'
+                     f'grade = {grade}\n[model]\ncontact_map = false\n')
+    code, err = run_cli(["design", str(TINY_MSS), "--sweep", str(sweep), "--out",
+                         str(tmp_path / "d"), "-q"], capsys, seconds=15)
+    assert_input_error(code, err, "magnet.grade", "unknown magnet grade")

@@ -47,7 +47,7 @@ from typing import Any
 from msens.config.fieldsetup import geometry_from_study, mss_setup
 from msens.config.schema import SensorSpec
 from msens.config.study import Study
-from msens.errors import InputError
+from msens.errors import InputError, shorten
 from msens.field.geometry import SensorGeometry
 from msens.field.parts import BiasMagnet, SensorUnit, Tube
 from msens.io.tomlreader import Table, read_document
@@ -304,8 +304,8 @@ def _range(t: Table, key: str, raw: dict) -> list[float]:
 
 def _check_value(entry: str, v: Any, kind: str, low: float, high: float) -> Any:
     if kind == "grade":
-        if v not in MAGNET_GRADES:
-            raise InputError(f"{entry}: unknown magnet grade {v!r}; allowed: "
+        if not isinstance(v, str) or v not in MAGNET_GRADES:
+            raise InputError(f"{entry}: unknown magnet grade {shorten(v)}; allowed: "
                              f"{', '.join(sorted(MAGNET_GRADES))}")
         return v
     if kind == "wire":
@@ -313,7 +313,7 @@ def _check_value(entry: str, v: Any, kind: str, low: float, high: float) -> Any:
         gauge = text.removeprefix("AWG")
         if not gauge.isdigit() or not low <= int(gauge) <= high:
             raise InputError(f"{entry}: wire must be 'AWG{int(low)}' .. 'AWG{int(high)}' "
-                             f"(gauges with heavy-build data), got {v!r}")
+                             f"(gauges with heavy-build data), got {shorten(v)}")
         return f"AWG{int(gauge)}"
     if kind == "int":
         if isinstance(v, bool) or not isinstance(v, int):

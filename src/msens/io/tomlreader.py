@@ -93,7 +93,7 @@ class Table:
             raise self.error(name, f"must be {rel} {low:g}, got {shorten(given)}")
         if high is not None and value > high:
             raise self.error(name, f"must be <= {high:g}, got {shorten(given)}")
-        return value
+        return value + 0.0  # -0.0 -> 0.0 (a signed zero passes ">= 0" but not numpy's checks)
 
     def integer(self, name: str, default: int | None = None, *, required: bool = False,
                 low: int | None = None, high: int | None = None) -> int:

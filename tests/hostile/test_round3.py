@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from tests.hostile.conftest import TINY, assert_input_error, run_cli
 
+import msens
 from msens import api
 from msens.errors import MESSAGE_LIMIT, InputError, shorten
 from msens.io.atomic import TEMP_MARK, atomic_write, atomic_write_bytes
@@ -150,6 +151,8 @@ def test_run_checks_scheduler_without_remote_work(tiny, tmp_path, capsys):
     lambda s, d: api.run("study.toml"),
     lambda s, d: api.run(s, scheduler=8786),
     lambda s, d: api.design(s, SWEEP_COIL, d / "o", workers=1.5),
+    lambda s, d: msens.write_waveform(None, d / "x.csv"),
+    lambda s, d: msens.write_waveform({"time_s": [0, 1]}, d / "x.csv"),
 ])
 def test_python_api_refuses_wrong_types(tmp_path, call):
     study = api.load(TINY_MSS)

@@ -317,12 +317,12 @@ def _check_value(entry: str, v: Any, kind: str, low: float, high: float) -> Any:
         return f"AWG{int(gauge)}"
     if kind == "int":
         if isinstance(v, bool) or not isinstance(v, int):
-            raise InputError(f"{entry} must be an integer, got {v!r}")
+            raise InputError(f"{entry} must be an integer, got {shorten(v)}")
     elif isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-        raise InputError(f"{entry} must be a finite number, got {v!r}")
+        raise InputError(f"{entry} must be a finite number, got {shorten(v)}")
     if not low <= v <= high:
-        raise InputError(f"{entry} = {v!r} is out of range: allowed {low:g} .. {high:g}")
-    return int(v) if kind == "int" else float(v)
+        raise InputError(f"{entry} = {shorten(v)} is out of range: allowed {low:g} .. {high:g}")
+    return int(v) if kind == "int" else float(v) + 0.0  # -0.0 -> 0.0
 
 
 def _recommend(t: Table | None) -> Recommend:

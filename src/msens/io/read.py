@@ -19,7 +19,7 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from msens.errors import InputError
+from msens.errors import InputError, shorten
 from msens.io._files import check_path
 from msens.io.columns import ColumnMap
 from msens.io.csv import read_csv, write_csv
@@ -103,9 +103,13 @@ def write_waveform(
     Raises
     ------
     InputError
-        For an unknown suffix, a missing folder, or an existing file without
-        ``overwrite``.
+        For something that is not a :class:`Waveform`, an unknown suffix, a missing
+        folder, or an existing file without ``overwrite``.
     """
+    if not isinstance(waveform, Waveform):
+        raise InputError(f"write_waveform needs a Waveform (msens.Waveform or "
+                         f"msens.read_waveform), got {type(waveform).__name__} "
+                         f"{shorten(waveform)}")
     p = check_path(path, "waveform file")
     _WRITERS[_suffix(p)](waveform, p, overwrite=overwrite)
     return p

@@ -34,6 +34,6 @@ out.mkdir(parents=True, exist_ok=True)
 write_waveform(waveform, out / "scope-mss-msens.csv", overwrite=True)  # msens's own format
 
 # msens compare reads the export through the TOML map, as --columns does
-report, written = ms.compare(ms.load_default(), mapped(scope, here / "scope-columns.toml"), out)
-print(ms.format_comparison(report))
-print("\nwrote " + ", ".join(str(p) for p in [out / "scope-mss-msens.csv", *written]))
+result = ms.compare(ms.load_default(), mapped(scope, here / "scope-columns.toml"), out)
+print(result.table())  # the table msens compare prints, and the files it wrote
+print(f"(and {out / 'scope-mss-msens.csv'})")

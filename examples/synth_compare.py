@@ -19,7 +19,7 @@ import msens.api as ms
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(tempfile.mkdtemp(prefix="msens-"))
 out.mkdir(parents=True, exist_ok=True)
 study = ms.load_default()
-data = ms.synth(study, out / "data.csv", shots=3, seed=1)
-report, written = ms.compare(study, data, out)
-print(ms.format_comparison(report))
-print(f"\nwrote {data}, " + ", ".join(str(p) for p in written))
+data = ms.synth(study, out / "data.csv", shots=3, seed=1)  # a SynthResult: path-like
+result = ms.compare(study, data.path, out)
+print(result.table())  # the table msens compare prints, and the files it wrote
+print(f"(and {data.path}: {data.shots} shots of {', '.join(data.channels)})")

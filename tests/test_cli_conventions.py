@@ -212,15 +212,23 @@ def test_synth_refuses_bad_output_at_once(tmp_path, capsys, monkeypatch, out, fr
     assert (tmp_path / "exists.csv").read_text() == "mine"
 
 
-def test_synth_overwrite_replaces_its_file(tmp_path, monkeypatch):
+def test_synth_overwrite_replaces_its_file(tmp_path, monkeypatch, capsys):
+    from types import SimpleNamespace
+
     from msens import api
 
     calls = []
-    monkeypatch.setattr(api, "synth", lambda study, out, **kw: calls.append((out, kw)) or out)
+
+    def fake_synth(study, out, **kw):  # the command prints what its result's table says
+        calls.append((out, kw))
+        return SimpleNamespace(table=lambda: f"wrote {out}")
+
+    monkeypatch.setattr(api, "synth", fake_synth)
     target = tmp_path / "w.csv"
     target.write_text("old")
     assert main(["synth", "paper-table2", "--out", str(target), "--overwrite"]) == 0
     assert calls[0][0] == target and calls[0][1]["overwrite"] is True
+    assert capsys.readouterr().out == f"wrote {target}\n"
 
 
 # --- defaults -------------------------------------------------------------------------------

@@ -32,7 +32,7 @@ STAGES = {
     4: ("calibrate",),
     5: ("magnetics",),
     6: ("config",),
-    7: ("results",),
+    7: ("results", "tables"),
     8: ("budget", "preflight", "pipeline", "synth", "compare", "field_outputs"),
     9: ("plots", "plots_mss"),
     10: ("design", "diagnose", "workflows", "uq"),

@@ -22,7 +22,6 @@ import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 
 import msens
-from msens.api import format_comparison
 from msens.io.mapped import mapped
 
 root = Path.cwd()
@@ -42,11 +41,12 @@ print(f"{waveform.time.size} samples, {waveform.time[0] * 1e6:.0f} to "
 
 # %%
 # Compare it with the main study. ``compare`` writes ``compare.json`` and ``overlay.png``
-# into the output folder and returns the report.
+# into the output folder and returns a :class:`msens.CompareResult`: ``result.to_json()`` is
+# the content of ``compare.json``, ``result.table()`` the text ``msens compare`` prints.
 
 out = Path(tempfile.mkdtemp(prefix="msens-compare-"))
-report, written = msens.compare(msens.load_default(), mapped(scope, columns), out)
-print(format_comparison(report))  # the table msens compare prints
+result = msens.compare(msens.load_default(), mapped(scope, columns), out)
+print(result.table())  # the table msens compare prints
 
 # %%
 # The overlay: the measured record after alignment and calibration against the model's,

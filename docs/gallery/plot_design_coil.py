@@ -24,7 +24,6 @@ import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 
 import msens
-from msens.api import format_design
 
 sweep = """\
 schema = "msens.sweep/1"
@@ -48,7 +47,7 @@ work = Path(tempfile.mkdtemp(prefix="msens-design-"))
 
 result = msens.design(msens.load_default(), work / "sweep.toml", work / "out", workers=1,
                       progress=False)
-print(format_design(result))  # what msens design prints: the recommendation and why
+print(result.table())  # what msens design prints: the recommendation and why
 
 # %%
 # ``designs.csv`` has one row per design. The paper's coil (1100 turns, 7 mm, AWG36) is one of

@@ -23,12 +23,11 @@ import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 
 import msens
-from msens.api import format_diagnosis
 
 out = Path(tempfile.mkdtemp(prefix="msens-diagnose-"))
-report, written = msens.diagnose(msens.load_paper_table2(), None, out, reference="bead")
+result = msens.diagnose(msens.load_paper_table2(), None, out, reference="bead")
 
-print(format_diagnosis(report))  # the table msens diagnose prints
+print(result.table())  # the table msens diagnose prints; result.to_json(): diagnosis.json
 
 # %%
 # Read the table from the top (score: ΔBIC against the baseline; misfit: in units of the

@@ -33,20 +33,32 @@ write_outputs
 summary
     The content of ``summary.json`` of a :class:`StudyResult`.
 field
-    Solve the field model of the study's MsS sensors; write its files.
+    Solve the field model of the study's MsS sensors; write its files; returns a
+    :class:`FieldResult`.
 synth
-    Write synthetic measurements of one setup of a study.
+    Write synthetic measurements of one setup of a study; returns a :class:`SynthResult`.
 compare
-    Compare a measured waveform with the model of a study.
+    Compare a measured waveform with the model of a study; returns a :class:`CompareResult`.
 diagnose
-    Name the effect the model misses from a measurement; returns the report.
+    Name the effect the model misses from a measurement; returns a :class:`DiagnoseResult`.
 design
     Sweep coil or magnet designs; returns a :class:`DesignResult`.
 
 Results and data
 ----------------
+Every workflow's result has ``to_json()`` (the content of the JSON file the workflow
+writes), ``table()`` (the text the command prints) and the files it wrote.
+
 StudyResult, SetupResult, SensorResult
     What a run produced: per study, per setup, per sensor.
+FieldResult
+    The field model of the study's MsS sensors and its files.
+SynthResult
+    A file of synthetic measurements (path-like).
+CompareResult
+    A measured waveform against the model: ``compare.json`` and the overlay.
+DiagnoseResult
+    The passes of a diagnosis: ``diagnosis.json`` and its figure.
 Diagnosis
     One pass of the discrepancy workflow.
 DesignResult
@@ -106,8 +118,12 @@ _LAZY: dict[str, tuple[str, str]] = {
     "StudyResult": ("msens.results", "StudyResult"),
     "SetupResult": ("msens.results", "SetupResult"),
     "SensorResult": ("msens.results", "SensorResult"),
+    "FieldResult": ("msens.workflows.field", "FieldResult"),
+    "SynthResult": ("msens.workflows.synth", "SynthResult"),
+    "CompareResult": ("msens.workflows.compare", "CompareResult"),
+    "DiagnoseResult": ("msens.workflows.diagnose", "DiagnoseResult"),
     "Diagnosis": ("msens.diagnose.diagnosis", "Diagnosis"),
-    "DesignResult": ("msens.design", "DesignResult"),
+    "DesignResult": ("msens.design.workflow", "DesignResult"),
     "Waveform": ("msens.io.waveform", "Waveform"),
     "read_waveform": ("msens.io.read", "read_waveform"),
     "write_waveform": ("msens.io.read", "write_waveform"),
@@ -117,14 +133,18 @@ _LAZY: dict[str, tuple[str, str]] = {
 _SHADOWED = frozenset(("compare", "design", "diagnose", "field", "synth"))
 
 __all__ = [
+    "CompareResult",
     "DesignResult",
+    "DiagnoseResult",
     "Diagnosis",
+    "FieldResult",
     "InputError",
     "InternalError",
     "SensorResult",
     "SetupResult",
     "Study",
     "StudyResult",
+    "SynthResult",
     "Waveform",
     "__version__",
     "compare",

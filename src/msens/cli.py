@@ -461,7 +461,7 @@ def _run(args: argparse.Namespace) -> int:
     with heartbeat(_log, "run: writing the outputs"):
         written = api.write_outputs(result, target, figures=not args.no_figures,
                                     fig_format=args.fig_format)
-    print(api.format_summary(result))
+    print(result.table())
     print(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
     return 0
 
@@ -491,8 +491,8 @@ def _field(args: argparse.Namespace) -> int:
     study = _load_study(args.study, args.sets)
     api = _api()
 
-    report = api.field(study, _out(args, study, "field"), fig_format=args.fig_format)
-    print(report)
+    result = api.field(study, _out(args, study, "field"), fig_format=args.fig_format)
+    print(result.table())
     return 0
 
 
@@ -515,9 +515,9 @@ def _synth(args: argparse.Namespace) -> int:
     _output_file(out, "--out", overwrite=args.overwrite)
     if args.out is None:
         out.parent.mkdir(parents=True, exist_ok=True)
-    path = api.synth(study, out, setup=args.setup, shots=args.shots, noise=args.noise,
-                     seed=args.seed, overwrite=args.overwrite)
-    print(f"wrote {path}")
+    result = api.synth(study, out, setup=args.setup, shots=args.shots, noise=args.noise,
+                       seed=args.seed, overwrite=args.overwrite)
+    print(result.table())
     return 0
 
 
@@ -537,10 +537,8 @@ def _compare(args: argparse.Namespace) -> int:
     study = _load_study(args.study, args.sets)
     api = _api()
 
-    report, written = api.compare(study, data, _out(args, study, "compare"),
-                                  fig_format=args.fig_format)
-    print(api.format_comparison(report))
-    print(f"\nwrote {', '.join(str(p) for p in written)}")
+    result = api.compare(study, data, _out(args, study, "compare"), fig_format=args.fig_format)
+    print(result.table())
     return 0
 
 
@@ -555,11 +553,9 @@ def _diagnose(args: argparse.Namespace) -> int:
     study = _load_study(args.study, args.sets)
     api = _api()
 
-    report, written = api.diagnose(study, data, _out(args, study, "diagnose"),
-                                   reference=args.reference, passes=args.passes,
-                                   fig_format=args.fig_format)
-    print(api.format_diagnosis(report))
-    print(f"\nwrote {', '.join(str(p) for p in written)}")
+    result = api.diagnose(study, data, _out(args, study, "diagnose"), reference=args.reference,
+                          passes=args.passes, fig_format=args.fig_format)
+    print(result.table())
     return 0
 
 
@@ -574,7 +570,7 @@ def _design(args: argparse.Namespace) -> int:
     result = api.design(study, Path(args.sweep), _out(args, study, "design"),
                         scheduler=args.scheduler, workers=args.workers,
                         progress=not args.quiet, fig_format=args.fig_format)
-    print(api.format_design(result))
+    print(result.table())
     return 0
 
 

@@ -49,6 +49,7 @@ from msens.signals.features import (
 from msens.signals.processing import integrate_drift_corrected
 from msens.synth import GAIN_CONVENTION, GAIN_KEY, UNITS, UNITS_KEY, is_physics_mss
 from msens.synth import gain_unit as measured_gain_unit
+from msens.tables import processing_line as processing_line
 
 
 def lowpassed_features(records: np.ndarray, t: np.ndarray) -> PulseFeatures:
@@ -465,16 +466,3 @@ def model_processing() -> dict:
     """What a workflow that reads the model's features as measured ones does to them beyond
     ``msens run`` (the ``model_processing`` of ``compare.json`` and ``diagnosis.json``)."""
     return {"lowpass_hz": FEATURE_CUTOFF_HZ, "description": MODEL_PROCESSING}
-
-
-def processing_line(report: dict) -> str:
-    """The table line naming what compare does to the model that ``msens run`` does not,
-    with the largest change it makes to a TOF and to the speed."""
-    tof = max((abs(ch["model"]["tof_us"] - ch["run"]["tof_us"]) for ch in report["channels"]),
-              default=0.0)
-    text = f"{report['model_processing']['description']} (changes a TOF by {tof:.2g} us"
-    speed = report.get("speed")
-    if speed is not None:
-        text += (f", the speed by {abs(speed['model_m_per_s'] - speed['run_m_per_s']):.2g} "
-                 "m/s")
-    return text + ")"

@@ -137,6 +137,23 @@ class StudyResult:
         lines.append("  .rows(), .rows_frame(), .records_frame(), .setups[i].sensors[j])")
         return "\n".join(lines)
 
+    def to_json(self) -> dict:
+        """The content of ``summary.json``: :func:`summary` with this run's
+        :func:`provenance`, as plain JSON values (non-finite numbers are None)."""
+        import json
+
+        from msens.io.output import to_json
+
+        return json.loads(to_json(summary(self, provenance(self.study))))
+
+    def table(self) -> str:
+        """The table ``msens run`` prints: per sensor TOF (µs), AR, incident peak (N) and
+        speed (m/s), with the paper's values where the study has them
+        (:func:`msens.tables.format_summary`)."""
+        from msens.tables import format_summary
+
+        return format_summary(self)
+
     def rows_frame(self):
         """The Table-2 rows (:meth:`rows`) as a pandas DataFrame, one row per sensor.
 
@@ -276,6 +293,18 @@ def _compare(row: dict, ref: ReferenceRow) -> dict:
         cmp["paper_model_ar_error_pct"] = 100.0 * (ref.model_ar - ref.ar) / ref.ar
         cmp["ar_vs_paper_model"] = row["ar"] - ref.model_ar
     return cmp
+
+
+def provenance(study: Study) -> dict:
+    """What made a result file: the msens version and the study's content hash (SHA-256 of
+    its canonical JSON form, so the same study gives the same hash wherever its file is)."""
+    import dataclasses
+
+    from msens.io.hashing import content_hash
+    from msens.version import version
+
+    return {"msens_version": version(),
+            "study_sha256": content_hash(dataclasses.replace(study, source=""))}
 
 
 def summary(result: StudyResult, provenance: dict) -> dict:

@@ -1,7 +1,12 @@
 """Workflows: each owns one use of msens from a study to its result and files.
 
-One module per workflow; :mod:`msens.api` and the command line only delegate to them.
-So far:
+One module per workflow; :mod:`msens.api` and the command line only delegate to them. Each
+returns a typed result with ``to_json()`` (the content of the JSON file it writes),
+``table()`` (the text the command prints; the tables themselves are in :mod:`msens.tables`)
+and ``figures`` (the figures written): :class:`~msens.results.StudyResult` (run; its files
+are written by :func:`~msens.workflows.run.write_outputs`), :class:`FieldResult`,
+:class:`SynthResult`, :class:`CompareResult`, :class:`DiagnoseResult` and
+:class:`msens.design.DesignResult`. So far:
 
 - :mod:`.run` — simulate every setup of a study; ``summary.json``, the figures, the text
   table.
@@ -30,10 +35,11 @@ _HOMES = {
     "common": ("check_format", "figure_names", "provenance"),
     "run": ("FIGURES", "PHYSICS_FIGURES", "figure_makers", "format_summary", "prepare_outputs",
             "summary", "write_outputs"),
-    "field": ("FIELD_OUTPUTS", "format_field"),
-    "compare": ("check_measurement", "format_comparison"),
+    "field": ("FIELD_OUTPUTS", "FieldResult", "format_field"),
+    "synth": ("SynthResult",),
+    "compare": ("CompareResult", "check_measurement", "format_comparison"),
     "design": ("format_design",),
-    "diagnose": ("format_diagnosis", "reference_passes"),
+    "diagnose": ("DiagnoseResult", "format_diagnosis", "reference_passes"),
 }
 
 __all__ = names(_HOMES)

@@ -1,12 +1,12 @@
-"""What every workflow shares: figure formats, figure names and provenance."""
+"""What every workflow shares: figure formats, figure names and provenance
+(:func:`msens.results.provenance`: the msens version and the study's content hash)."""
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Iterable
 
-from msens.config.study import Study
 from msens.errors import InputError
+from msens.results import provenance as provenance
 
 
 def check_format(fig_format: str) -> str:
@@ -29,13 +29,3 @@ def figure_names(names: Iterable[str], fig_format: str) -> list[str]:
     from msens.io.output import figure_name
 
     return [figure_name(n, fig_format) if n.endswith(".png") else n for n in names]
-
-
-def provenance(study: Study) -> dict:
-    """What made a result file: the msens version and the study's content hash (SHA-256 of
-    its canonical JSON form, so the same study gives the same hash wherever its file is)."""
-    from msens.io.hashing import content_hash
-    from msens.version import version
-
-    return {"msens_version": version(),
-            "study_sha256": content_hash(dataclasses.replace(study, source=""))}

@@ -5,11 +5,15 @@ plausible amplitudes, a pulse in every record), so mismatched data fail in about
 then once more against the model's run (records neither inverted nor time-scaled). The same
 checks open a diagnosis (:func:`check_measurement`). The comparison itself is
 :func:`msens.compare.compare`; this module writes ``compare.json`` and the overlay figure
-and formats the text table.
+and returns them as a :class:`CompareResult` (its text table:
+:func:`msens.tables.format_comparison`).
 """
 
 from __future__ import annotations
 
+import copy
+import json
+from dataclasses import dataclass
 from pathlib import Path
 
 from msens import budget
@@ -18,20 +22,53 @@ from msens.compare import (
     check_units,
     match_setup,
     match_setup_spec,
-    processing_line,
     shot_records,
 )
 from msens.compare import compare as compare_records
 from msens.config.study import Study
-from msens.io.output import DPI, OutputDir
+from msens.io.output import DPI, OutputDir, to_json
 from msens.io.waveform import Waveform
 from msens.pipeline import run_study
 from msens.results import StudyResult
 from msens.signals.signalcheck import check_amplitudes, check_pulses, check_shots
+from msens.tables import files_line
+from msens.tables import format_comparison as format_comparison
 from msens.workflows.common import check_format, figure_names, provenance
 
 #: The files ``compare`` writes (the overlay in the chosen figure format).
 FILES = ("compare.json", "overlay.png")
+
+
+@dataclass(frozen=True)
+class CompareResult:
+    """What ``compare`` produced: the comparison and the files written.
+
+    Attributes
+    ----------
+    report : dict
+        The content of ``compare.json`` as plain JSON values (per channel the measured
+        features over the shots and the model's; TOF in µs; non-finite numbers are None);
+        read it through :meth:`to_json`, which returns a copy.
+    files : tuple of Path
+        The files written: ``compare.json``, then the overlay figure.
+    """
+
+    report: dict
+    files: tuple[Path, ...]
+
+    @property
+    def figures(self) -> tuple[Path, ...]:
+        """The figures written (the overlay of measured and model records)."""
+        return tuple(p for p in self.files if p.suffix != ".json")
+
+    def to_json(self) -> dict:
+        """The content of ``compare.json`` (a copy)."""
+        return copy.deepcopy(self.report)
+
+    def table(self) -> str:
+        """What ``msens compare`` prints: the table (:func:`format_comparison`) and the
+        files written."""
+        return f"{format_comparison(self.report)}\n\n{files_line(self.files)}"
 
 
 def check_measurement(study: Study, waveform: Waveform, source: str) -> StudyResult:
@@ -72,7 +109,7 @@ def check_measurement(study: Study, waveform: Waveform, source: str) -> StudyRes
 
 
 def compare(study: Study, data: Path, out: Path, *,
-            fig_format: str = "png") -> tuple[dict, list[Path]]:
+            fig_format: str = "png") -> CompareResult:
     """Compare measured ``data`` with the model of ``study``; write ``compare.json`` and an
     overlay figure (``overlay.<fig_format>``: png, pdf or svg) into ``out``.
 
@@ -89,10 +126,9 @@ def compare(study: Study, data: Path, out: Path, *,
 
     Returns
     -------
-    report : dict
-        The content of ``compare.json``.
-    written : list of Path
-        The files written.
+    CompareResult
+        The content of ``compare.json`` (:meth:`CompareResult.to_json`), the text table
+        (:meth:`CompareResult.table`) and the files written.
 
     Raises
     ------
@@ -116,30 +152,4 @@ def compare(study: Study, data: Path, out: Path, *,
     fig = plots.overlay(setup, shot_records(setup, waveform))
     written.append(target.savefig("overlay.png", fig, fmt=fig_format, dpi=DPI))
     plots.close(fig)
-    return report, written
-
-
-def format_comparison(report: dict) -> str:
-    """Plain-text table of a comparison report (the content of ``compare.json``).
-
-    The conversion factor K (paper Eq. 11, model per measured volt: the inverse of the
-    gain ``gain_measured_per_model``) is printed with its unit (``K_unit``): N/V for bead and
-    rod channels, N/(V s) for a four-contact MsS, V/V for a physics MsS. TOF and AR are those
-    of the compared records (for a physics MsS, of its integrated DAQ voltage).
-    """
-    # K's unit follows its value in a column of its own: a channel's K is one quantity
-    head = (f"{'channel':<10} {'K':>10} {'':<7} {'TOF us':>16} {'AR':>14} "
-            f"{'nRMSE':>7} {'corr':>6}")
-    lines = [f"setup {report['setup']}, {report['shots']} shot(s)", head, "-" * len(head)]
-    for ch in report["channels"]:
-        m, s = ch["model"], ch["measured"]
-        lines.append(
-            f"{ch['channel']:<10} {s['conversion_factor_K']['mean']:>10.4g} "
-            f"{ch.get('K_unit', '?'):<7} "
-            f"{s['tof_us']['mean']:>7.1f} ({m['tof_us']:>6.1f}) "
-            f"{s['ar']['mean']:>6.3f} ({m['ar']:>5.3f}) {s['nrmse']['mean']:>7.4f} "
-            f"{s['correlation']['mean']:>6.3f}")
-    lines.append("(model values in parentheses)")
-    if "model_processing" in report:
-        lines.append(processing_line(report))
-    return "\n".join(lines)
+    return CompareResult(json.loads(to_json(report)), tuple(written))

@@ -3,7 +3,8 @@
 The request is checked first (the study, the scheduler's address, the worker count, the
 output folder, the study's run budget); the sweep itself, its cache and its files
 (``designs.csv``, the Pareto figure, ``recommendation.json``) are
-:func:`msens.design.run_design`'s.
+:func:`msens.design.run_design`'s, and so is the result, a :class:`msens.design.DesignResult`
+(its text table: :func:`msens.tables.format_design`).
 """
 
 from __future__ import annotations
@@ -13,10 +14,11 @@ from typing import TYPE_CHECKING
 
 from msens import budget, preflight
 from msens.config.study import Study
+from msens.tables import format_design as format_design
 from msens.workflows.common import check_format, provenance
 
 if TYPE_CHECKING:
-    from msens.design import DesignResult
+    from msens.design.workflow import DesignResult
 
 
 def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str | None = None,
@@ -41,9 +43,17 @@ def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str |
         Show a progress bar.
     fig_format : {"png", "pdf", "svg"}
         Format of the Pareto figure.
+
+    Returns
+    -------
+    DesignResult
+        The recommendation (:meth:`~msens.design.DesignResult.to_json`: the content of
+        ``recommendation.json``), the counts, the text table
+        (:meth:`~msens.design.DesignResult.table`) and the files written.
     """
     # the sweep library loads when a sweep runs, not with msens.api
-    from msens.design import load_sweep, run_design
+    from msens.design.sweep import load_sweep
+    from msens.design.workflow import run_design
 
     preflight.study(study)
     scheduler = preflight.check_scheduler(scheduler)
@@ -53,10 +63,3 @@ def design(study: Study, sweep: str | Path, out: str | Path, *, scheduler: str |
     return run_design(study, load_sweep(sweep), out, scheduler=scheduler, workers=workers,
                       progress=progress, provenance=provenance(study),
                       fig_format=check_format(fig_format))
-
-
-def format_design(result: DesignResult) -> str:
-    """Plain-text summary of a design sweep."""
-    from msens.design import format_result
-
-    return format_result(result)

@@ -4,12 +4,15 @@ The measurement is either a waveform file (checked as :mod:`msens.workflows.comp
 it; its sensors choose the setup) or the ``[reference]`` rows of one setup of the study.
 Each pass fits the candidate effects of :mod:`msens.diagnose` and adds the best one; the
 passes stop when none is needed. The workflow writes ``diagnosis.json`` and its figure
-(:mod:`msens.diagnose.report`) and formats the text table.
+(:mod:`msens.diagnose.report`) and returns them as a :class:`DiagnoseResult` (its text
+table: :func:`msens.tables.format_diagnosis`).
 """
 
 from __future__ import annotations
 
+import copy
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -17,6 +20,8 @@ from msens import budget
 from msens.config.study import Study
 from msens.errors import InputError
 from msens.io.output import OutputDir
+from msens.tables import files_line
+from msens.tables import format_diagnosis as format_diagnosis
 from msens.workflows.common import check_format, figure_names, provenance
 from msens.workflows.compare import check_measurement
 
@@ -25,6 +30,40 @@ if TYPE_CHECKING:
 
 #: Most passes a diagnosis makes.
 MAX_PASSES = 7
+
+
+@dataclass(frozen=True)
+class DiagnoseResult:
+    """What ``diagnose`` produced: the passes, the report and the files written.
+
+    Attributes
+    ----------
+    report : dict
+        The content of ``diagnosis.json`` (the candidates with their scores, each pass, the
+        verdict); read it through :meth:`to_json`, which returns a copy.
+    passes : tuple of Diagnosis
+        Each pass's diagnosis, in order (:class:`msens.diagnose.Diagnosis`).
+    files : tuple of Path
+        The files written: ``diagnosis.json``, then its figure.
+    """
+
+    report: dict
+    passes: tuple[Diagnosis, ...]
+    files: tuple[Path, ...]
+
+    @property
+    def figures(self) -> tuple[Path, ...]:
+        """The figures written."""
+        return tuple(p for p in self.files if p.suffix != ".json")
+
+    def to_json(self) -> dict:
+        """The content of ``diagnosis.json`` (a copy)."""
+        return copy.deepcopy(self.report)
+
+    def table(self) -> str:
+        """What ``msens diagnose`` prints: the table (:func:`format_diagnosis`) and the
+        files written."""
+        return f"{format_diagnosis(self.report)}\n\n{files_line(self.files)}"
 
 
 def reference_passes(study: Study, reference: str, passes: int) -> list[Diagnosis]:
@@ -44,7 +83,7 @@ def reference_passes(study: Study, reference: str, passes: int) -> list[Diagnosi
 
 
 def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | None = None,
-             passes: int = 1, fig_format: str = "png") -> tuple[dict, list[Path]]:
+             passes: int = 1, fig_format: str = "png") -> DiagnoseResult:
     """Name the effect the model of ``study`` misses; write ``diagnosis.json`` and
     ``diagnosis.<fig_format>`` (png, pdf or svg) into ``out``.
 
@@ -65,10 +104,9 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
 
     Returns
     -------
-    report : dict
-        The content of ``diagnosis.json``.
-    written : list of Path
-        The files written.
+    DiagnoseResult
+        The passes, the content of ``diagnosis.json`` (:meth:`DiagnoseResult.to_json`), the
+        text table (:meth:`DiagnoseResult.table`) and the files written.
 
     Raises
     ------
@@ -99,46 +137,4 @@ def diagnose(study: Study, data: Path | None, out: Path, *, reference: str | Non
     written = write_diagnosis(results, target, provenance=provenance(study),
                               fig_format=fig_format)
     report = json.loads(written[0].read_text())
-    return report, written
-
-
-def format_diagnosis(report: dict) -> str:
-    """Plain-text summary of ``diagnosis.json``: the candidates with their scores, each pass
-    and the verdict."""
-    lines = [f"setup {report['setup']} ({report['mode']}): disagreement mostly at the "
-             f"{report['disagreement']['where']}",
-             f"{'effect':<24} {'score (dBIC)':>13} {'misfit':>10}  parameters"]
-    for c in report["candidates"]:
-        pars = _parameters_text(c["parameters"], c.get("intervals", {}))
-        flag = ("" if c.get("plausible", True) else "  [implausible]") + \
-            ("" if c.get("significant", True) else "  [below floor]") + \
-            ("  [at bound]" if c.get("at_bound") else "")
-        lines.append(f"{c['effect']:<24} {c['score']:>13.1f} {c['misfit']:>10.4g}  {pars}"
-                     + flag)
-    for i, p in enumerate(report["passes"], 1):
-        pars = _parameters_text(p["parameters"], p.get("parameter_intervals", {}))
-        lines.append(f"pass {i}: {p['effect']}" + (f" ({pars})" if pars else "")
-                     + f"; misfit {p['misfit_before']:.4g} -> {p['misfit_after']:.4g}; "
-                     + ("explained" if p.get("explained") else "NOT explained"))
-    if "summary" in report["passes"][-1]:
-        lines.append(f"verdict: {report['passes'][-1]['summary']}")
-    mu = (report.get("noise") or {}).get("model_uncertainty")
-    if mu and mu.get("model_uncertainty_share", 0.0) > 0.0:
-        lines.append(f"the residual is measured against the noise ({100 * mu['noise_share']:.0f} "
-                     f"% of the variance) and the model's own uncertainty "
-                     f"({100 * mu['model_uncertainty_share']:.0f} %)")
-    if any(c.get("intervals") for c in report["candidates"]):
-        lines.append("[lo, hi]: 95 % interval from the curvature of the fit; [at bound]: the "
-                     "fit sits at an end of its searched range and is not named")
-    return "\n".join(lines)
-
-
-def _parameters_text(parameters: dict, intervals: dict) -> str:
-    """``name=value [lo, hi]`` per parameter (the interval where there is one)."""
-    out = []
-    for k, v in parameters.items():
-        iv = intervals.get(k) or {}
-        lo, hi = iv.get("lower"), iv.get("upper")
-        out.append(f"{k}={v:.4g}" + (f" [{lo:.4g}, {hi:.4g}]" if lo is not None
-                                      and hi is not None else ""))
-    return ", ".join(out)
+    return DiagnoseResult(report, tuple(results), tuple(written))

@@ -1,26 +1,84 @@
 """The field workflow: solve the field model of a study's MsS sensors and write its files.
 
 ``field.json`` (the model's numbers), ``field.vtu`` (ParaView), the bias-field map and a 3-D
-view (:mod:`msens.field_outputs`), and a short text report of the coils, the beads near them
-and the magnets' pull at their contacts.
+view (:mod:`msens.field_outputs`), returned as a :class:`FieldResult` whose text table
+(:func:`msens.tables.format_field`) reports the coils, the beads near them and the magnets'
+pull at their contacts.
 """
 
 from __future__ import annotations
 
+import copy
+import json
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from msens.config.study import Study
 from msens.io.output import OutputDir
+from msens.tables import format_field as format_field
 from msens.workflows.common import check_format
+
+if TYPE_CHECKING:
+    from msens.field.sensor_model import FieldReport
 
 #: The files ``field`` writes (the map in the chosen figure format; the 3-D view PNG).
 FIELD_OUTPUTS = ("field.json", "field.vtu", "field_B.png", "field_3d.png")
 
 
-def field(study: Study, out: Path, *, fig_format: str = "png") -> str:
+@dataclass(frozen=True)
+class FieldResult:
+    """What ``field`` produced: the field model, its numbers and the files written.
+
+    Attributes
+    ----------
+    model : FieldReport
+        The solved model: mesh sizes, the coils (resistance, inductances), the beads' flux
+        density and the contacts' magnetic compression (SI units).
+    report : dict
+        The content of ``field.json``; read it through :meth:`to_json`, which returns a copy.
+    written : dict of str to str
+        File name: path written, or why it was skipped (``"skipped: ..."``, the 3-D view
+        without a working off-screen renderer).
+    timings_s : dict of str to float
+        Wall seconds of the stages (mesh, bias_solve, inductance, post).
+    """
+
+    model: FieldReport
+    report: dict
+    written: dict[str, str]
+    timings_s: dict[str, float]
+
+    @property
+    def files(self) -> tuple[Path, ...]:
+        """The files written."""
+        return tuple(Path(v) for v in self.written.values() if not v.startswith("skipped"))
+
+    @property
+    def figures(self) -> tuple[Path, ...]:
+        """The figures written (the field map, the 3-D view where it could be rendered)."""
+        return tuple(p for p in self.files if p.suffix not in (".json", ".vtu"))
+
+    def to_json(self) -> dict:
+        """The content of ``field.json`` (a copy)."""
+        return copy.deepcopy(self.report)
+
+    def table(self) -> str:
+        """What ``msens field`` prints (:func:`format_field`): the model's size and bias-solve
+        time, the coils, the beads and contacts near them, the files written."""
+        return format_field(self.model, self.written, timings_s=self.timings_s)
+
+
+def field(study: Study, out: Path, *, fig_format: str = "png") -> FieldResult:
     """Solve the field model of the study's MsS sensors; write ``field.json``, ``field.vtu``
     and figures (the field map in ``fig_format``: png, pdf or svg; the 3-D view is always
-    PNG) into ``out``; return a short text report.
+    PNG) into ``out``.
+
+    Returns
+    -------
+    FieldResult
+        The model, the content of ``field.json`` (:meth:`FieldResult.to_json`), the text
+        report (:meth:`FieldResult.table`) and the files written.
 
     Raises
     ------
@@ -40,7 +98,8 @@ def field(study: Study, out: Path, *, fig_format: str = "png") -> str:
     for name, path in written.items():
         if not path.startswith("skipped"):
             target.record(name)
-    return format_field(report, written, timings_s=seconds)
+    data = json.loads(Path(written["field.json"]).read_text(encoding="utf-8"))
+    return FieldResult(report, data, dict(written), dict(seconds))
 
 
 def _solve_timed(geometry):
@@ -72,31 +131,3 @@ def _solve_timed(geometry):
         coils = stage("inductance", lambda: coil_results(sol, geometry))
         report = stage("post", lambda: field_report(geometry, sol, path, coils))
     return report, seconds
-
-
-def format_field(report, written: dict[str, str], *,
-                 timings_s: dict[str, float] | None = None) -> str:
-    """Plain-text summary of a field-model report (of
-    :func:`msens.field.sensor_model.run_field_model`) and of the files
-    ``written`` (name: path, or why it was skipped); ``timings_s``: the stages' wall
-    seconds as the caller measured them (the bias solve's is quoted when given)."""
-    sensors = [u.coil.particle for u in report.geometry.sensors]
-    near = {p + d for p in sensors for d in (-2, -1, 0, 1, 2)}
-    lines = [f"field model: {report.dofs} dofs, {report.elements} elements, "
-             f"{report.newton_iterations} Newton iterations"
-             + ("" if not timings_s or "bias_solve" not in timings_s
-                else f", bias solve {timings_s['bias_solve']:.1f} s"),
-             "NOTE: the bias magnet is an axisymmetric equivalent of the undocumented "
-             "bridge magnet", "", "coil  R (Ohm)  L_air (mH)  L_bias (mH)"]
-    for c in report.coils:
-        l_air, l_bias = c.air_core_inductance_H * 1e3, c.inductance_H * 1e3
-        lines.append(f"{c.particle:>4}  {c.resistance_ohm:>7.2f}  {l_air:>10.2f}  {l_bias:>11.2f}")
-    lines += ["", "bead  Bz centre (T)"]
-    lines += [f"{b.particle:>4}  {b.B_center_T[1]:>13.3f}" for b in report.beads
-              if b.particle in near]
-    lines += ["", "contact  magnetic compression (N)"]
-    lines += [f"{c.upper:>3}-{c.lower:<3}  {c.magnetic_force_N:>10.2f}" for c in report.contacts
-              if c.upper in near and c.lower in near]
-    lines += ["", "wrote " + ", ".join(f"{k} ({v})" if v.startswith("skipped") else k
-                                     for k, v in written.items())]
-    return "\n".join(lines)

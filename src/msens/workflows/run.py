@@ -3,7 +3,9 @@
 :func:`run` checks the request (the study's budget, the scheduler's address) and runs the
 study (:func:`msens.pipeline.run_study`); :func:`write_outputs` writes ``summary.json`` and
 the figures into a folder checked beforehand (:func:`prepare_outputs`), never over a user's
-file; :func:`format_summary` is the terminal's table.
+file. The run's result is a :class:`~msens.results.StudyResult`: its ``to_json()`` is the
+content of ``summary.json`` and its ``table()`` the terminal's table
+(:func:`format_summary`).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from msens.config.study import Study
 from msens.io.output import DPI, OutputDir
 from msens.pipeline import run_study
 from msens.results import StudyResult
+from msens.tables import format_summary as format_summary
 from msens.workflows.common import check_format, figure_names, provenance
 
 #: Figures of every run (listed as PNG; written in the chosen format).
@@ -110,21 +113,3 @@ def write_outputs(result: StudyResult, out: str | Path | OutputDir, *,
         if field_map is not None:
             written.append(field_map)
     return written
-
-
-def format_summary(result: StudyResult) -> str:
-    """A short plain-text table of the rows, for the terminal."""
-    lines = [f"study {result.study.name}: gamma_c = {result.gamma_contact:.3g} kg/s, "
-             f"gamma_w = {result.gamma_wall:.3g} kg/s"
-             + (" (fitted, paper Eq. 10)" if result.fit is not None else "")]
-    head = f"{'setup':<6} {'pos':<7} {'part':>4} {'TOF us':>8} {'AR':>6} {'peak N':>7} " \
-           f"{'speed m/s':>9} {'exp TOF':>8} {'exp AR':>6}"
-    lines += [head, "-" * len(head)]
-    for r in result.rows():
-        ref = r.get("reference", {})
-        lines.append(
-            f"{r['setup']:<6} {r['position']:<7} {r['particle']:>4} {r['tof_us']:>8.1f} "
-            f"{r['ar']:>6.3f} {r['incident_peak_N']:>7.2f} {r['speed_m_per_s']:>9.1f} "
-            f"{ref.get('experiment_tof_us', float('nan')):>8.1f} "
-            f"{ref.get('experiment_ar', float('nan')):>6.2f}")
-    return "\n".join(lines)

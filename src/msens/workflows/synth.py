@@ -3,11 +3,14 @@
 The request is checked before anything is simulated (the options' ranges, a setup the study
 has, the output file, and the memory the shots need); then the study runs once and its
 records pass through the rig effects of :mod:`msens.synth` (amplifier gain, offset, trigger
-delay, noise) into a waveform file.
+delay, noise) into a waveform file, returned as a :class:`SynthResult` (path-like: it
+passes wherever the file's path does).
 """
 
 from __future__ import annotations
 
+import os
+from dataclasses import dataclass
 from pathlib import Path
 
 from msens import preflight
@@ -17,10 +20,79 @@ from msens.errors import InputError
 from msens.io.read import write_waveform
 from msens.pipeline import run_study
 from msens.synth import RigEffects, synthesize
+from msens.tables import files_line
+from msens.workflows.common import provenance
+
+
+@dataclass(frozen=True)
+class SynthResult(os.PathLike):
+    """What ``synth`` produced: a waveform file of synthetic measurements.
+
+    Path-like (``os.fspath``, ``str`` and :func:`msens.read_waveform` give the file), so it
+    passes wherever the file's path does, as a column-mapped file does.
+
+    Attributes
+    ----------
+    path : Path
+        The waveform file written (CSV, NPZ or TDMS).
+    study : str
+        The study's name.
+    setup : str
+        The setup simulated.
+    channels : tuple of str
+        The file's channels (``mss@13``, ...).
+    shots : int
+        Repeated shots.
+    samples : int
+        Samples per record.
+    noise : float
+        Noise as a fraction of each channel's peak.
+    seed : int
+        Seed of the rig effects' random numbers.
+    provenance : dict
+        The msens version and the study's content hash.
+    """
+
+    path: Path
+    study: str
+    setup: str
+    channels: tuple[str, ...]
+    shots: int
+    samples: int
+    noise: float
+    seed: int
+    provenance: dict
+
+    def __fspath__(self) -> str:
+        return os.fspath(self.path)
+
+    def __str__(self) -> str:
+        return str(self.path)
+
+    @property
+    def files(self) -> tuple[Path, ...]:
+        """The files written (the waveform file)."""
+        return (self.path,)
+
+    @property
+    def figures(self) -> tuple[Path, ...]:
+        """The figures written: none (``msens compare`` draws the records)."""
+        return ()
+
+    def to_json(self) -> dict:
+        """What was synthesised, as JSON values (synth writes no JSON file of its own)."""
+        return {"file": str(self.path), "study": self.study, "setup": self.setup,
+                "channels": list(self.channels), "shots": self.shots,
+                "samples": self.samples, "noise": self.noise, "seed": self.seed,
+                "provenance": dict(self.provenance)}
+
+    def table(self) -> str:
+        """What ``msens synth`` prints: the file written."""
+        return files_line(self.files)
 
 
 def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
-          noise: float = 0.01, seed: int = 0, overwrite: bool = False) -> Path:
+          noise: float = 0.01, seed: int = 0, overwrite: bool = False) -> SynthResult:
     """Write synthetic measurements of one setup of ``study`` to ``out`` (never over an
     existing file unless ``overwrite``).
 
@@ -42,8 +114,8 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
 
     Returns
     -------
-    Path
-        ``out``.
+    SynthResult
+        The file ``out`` (path-like) and what was synthesised.
 
     Raises
     ------
@@ -82,4 +154,5 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
     waveform = synthesize(chosen, RigEffects(shots=shots, noise=noise, seed=seed),
                           metadata=meta)
     write_waveform(waveform, out, overwrite=overwrite)
-    return out
+    return SynthResult(out, study.name, name, tuple(c.name for c in waveform.channels),
+                       shots, len(waveform.time), noise, seed, provenance(study))

@@ -25,7 +25,7 @@ _CALIBRATION_CONTACTS = 8
 #: (``[field] skin_size_m``). Measured with the bead surfaces graded only, on the one-coil
 #: tiny study (9 beads refined): 40 µm gives 38,600 elements in 3.6 s of meshing, 20 µm
 #: 71,500 in 7 s, 10 µm 139,000 in 17 s; 1 µm would be about 1.3 million, meshed for minutes
-#: and solved at every frequency. Grading the pole pieces too (issue 33) adds ~33,000 per
+#: and solved at every frequency. Grading the pole pieces too adds ~33,000 per
 #: bridge magnet at 40 µm: the one-coil model has 71,600 elements (7 s of meshing), the main
 #: study (two coils) 132,000 against 66,400; at the default 30 µm (1 % of a finer reference
 #: at 100 kHz) the main study has ~175,000 (estimated 150,000 added), hence the bound.

@@ -1,4 +1,4 @@
-"""Discrepancy workflow (issue 7): find where model and measurement disagree, name the missing
+"""Discrepancy workflow: find where model and measurement disagree, name the missing
 effect from a library (:mod:`msens.diagnose.effects`), add it, and show the gap shrink."""
 
 from msens.diagnose.effects import NAMES as EFFECT_NAMES

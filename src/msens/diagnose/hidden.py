@@ -1,4 +1,4 @@
-"""Synthetic data with a hidden effect: the test bench of the diagnosis (issue 7 item 4).
+"""Synthetic data with a hidden effect: the test bench of the diagnosis.
 
 :func:`hidden_case` draws an effect's parameter at random (seeded) within a plausible range,
 simulates the baseline model *with* the effect, and dresses the records as a measurement

@@ -1,7 +1,7 @@
 """The discrepancy workflow: where do model and measurement disagree, and which missing
 effect closes the gap?
 
-Steps (issue 7):
+Steps:
 
 1. *Baseline.* The study's model of the setup whose sensors match the data, with the contact
    and wall dissipation calibrated by paper Eq. 10 on the study's own amplitude ratios

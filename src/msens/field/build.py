@@ -78,7 +78,7 @@ class MeshOptions:
     skin_parts : str or None
         Which conducting surfaces the skin grading covers: ``"conducting"`` (beads near a coil,
         pole pieces, magnets; what any ``skin_size`` gives, set automatically) or ``"beads"``
-        (the bead surfaces only: the grading before issue 33, kept for comparisons). None
+        (the bead surfaces only: the older grading, kept for comparisons). None
         without ``skin_size``.
     """
 
@@ -97,7 +97,7 @@ class MeshOptions:
     skin_growth: float = field(default=0.25, metadata={"omit_if_default": True})
     pole_skin_size: float | None = field(default=None, metadata={"omit_if_default": True})
     # None without a skin; "conducting" with one, so every skin mesh's key names its rule and
-    # a mesh graded only at the beads (before issue 33) is never read for one graded
+    # a mesh graded only at the beads (the older rule) is never read for one graded
     # everywhere.
     skin_parts: str | None = field(default=None, metadata={"omit_if_default": True})
 

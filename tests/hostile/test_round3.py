@@ -151,6 +151,8 @@ def test_run_checks_scheduler_without_remote_work(tiny, tmp_path, capsys):
     lambda s, d: api.run("study.toml"),
     lambda s, d: api.run(s, scheduler=8786),
     lambda s, d: api.design(s, SWEEP_COIL, d / "o", workers=1.5),
+    lambda s, d: api.synth(s, d / "x.csv", setup=[]),  # was taken for the first setup
+    lambda s, d: api.synth(s, d / "x.csv", setup=""),
     lambda s, d: msens.write_waveform(None, d / "x.csv"),
     lambda s, d: msens.write_waveform({"time_s": [0, 1]}, d / "x.csv"),
 ])

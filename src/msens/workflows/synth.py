@@ -16,7 +16,7 @@ from pathlib import Path
 from msens import preflight
 from msens.config import plausible
 from msens.config.study import Study
-from msens.errors import InputError
+from msens.errors import InputError, shorten
 from msens.io.read import write_waveform
 from msens.pipeline import run_study
 from msens.synth import RigEffects, synthesize
@@ -131,9 +131,9 @@ def synth(study: Study, out: Path, *, setup: str | None = None, shots: int = 1,
     if not 0 <= seed < 2**63:  # numpy's generators take non-negative seeds
         raise InputError(f"--seed must be from 0 to 2**63 - 1, got {seed}")
     names = [s.name for s in study.setups]
-    name = setup or names[0]
-    if name not in names:
-        raise InputError(f"--setup must be one of {', '.join(names)}, got {name!r}")
+    name = names[0] if setup is None else setup  # '' or [] is not "the first setup"
+    if not isinstance(name, str) or name not in names:
+        raise InputError(f"--setup must be one of {', '.join(names)}, got {shorten(name)}")
     if out.exists() and not overwrite:
         raise InputError(f"refusing to overwrite '{out}' (the command's --overwrite replaces it)")
     chosen_setup = study.setup(name)

@@ -577,14 +577,12 @@ def _design(args: argparse.Namespace) -> int:
 def _uq(args: argparse.Namespace) -> int:
     api = _api()
     from msens.uq import run_uq
-    from msens.uq.report import format_table
 
     study = api.load(args.study) if args.study else api.load_default()
     result = run_uq(study, Path(args.out), inputs=args.inputs, samples=args.samples,
                     seed=args.seed, scheduler=args.scheduler, workers=args.workers,
                     fig_format=args.fig_format, progress=not args.quiet)
-    print(format_table(result.report))
-    print(f"\nwrote {', '.join(str(p) for p in result.written)}")
+    print(result.table())
     return 0
 
 
@@ -602,14 +600,12 @@ def _calibrate(args: argparse.Namespace) -> int:
 
         waveform = read_waveform(_data(args.data, args.columns))
     from msens.uq.calibration import run_calibrate
-    from msens.uq.calibration_report import format_table
 
     result = run_calibrate(study, _out(args, study, "calibrate"), data=waveform,
                            reference=args.reference, inputs=args.inputs, params=args.params,
                            walkers=args.walkers, steps=args.steps, seed=args.seed,
                            fig_format=args.fig_format, progress=not args.quiet)
-    print(format_table(result.report))
-    print(f"\nwrote {', '.join(str(p) for p in result.written)}")
+    print(result.table())
     return 0
 
 

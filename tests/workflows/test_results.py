@@ -145,3 +145,59 @@ def test_diagnose_result_is_diagnosis_json_and_the_printed_table(tmp_path, monke
     assert result.table().startswith(api.format_diagnosis(result.to_json()) + "\n\nwrote ")
     assert result.figures == (out / "diagnosis.png",)
     assert len(result.passes) == 1 and result.passes[0].effect == result.to_json()["effect"]
+
+
+UQ_INPUTS = """schema = "msens.uncertainty/1"
+[[input]]
+name = "striker.drop_height_m"
+distribution = "uniform"
+lower = 6.7e-3
+upper = 7.7e-3
+reason = "test"
+[[input]]
+name = "electronics.cable_capacitance_F"
+distribution = "uniform"
+lower = 50e-12
+upper = 200e-12
+reason = "test"
+"""
+
+
+def test_uq_result_is_uq_json_and_the_printed_table(tmp_path, monkeypatch, capsys):
+    import msens.uq
+
+    seen = []
+    real = msens.uq.run_uq
+    monkeypatch.setattr(msens.uq, "run_uq", lambda *a, **k: seen.append(real(*a, **k))
+                        or seen[-1])
+    (tmp_path / "u.toml").write_text(UQ_INPUTS)
+    out = tmp_path / "uq"
+    assert main(["uq", "--inputs", str(tmp_path / "u.toml"), "--out", str(out), "--samples",
+                 "4", "--workers", "1", "-q"]) == 0
+    result = seen[0]
+    assert result.to_json() == _json(out / "uq.json")
+    assert capsys.readouterr().out == result.table() + "\n"
+    assert {p.name for p in result.figures} == {"uq_waveforms.png", "uq_sobol.png"}
+
+
+def test_calibrate_result_is_calibration_json_and_the_printed_table(tmp_path, monkeypatch,
+                                                                    capsys):
+    from benchmarks.calibrate_coverage import INPUTS, STUDY
+
+    import msens.uq.calibration
+
+    seen = []
+    real = msens.uq.calibration.run_calibrate
+    monkeypatch.setattr(msens.uq.calibration, "run_calibrate",
+                        lambda *a, **k: seen.append(real(*a, **k)) or seen[-1])
+    (tmp_path / "s.toml").write_text(STUDY)
+    (tmp_path / "u.toml").write_text(INPUTS)
+    data = api.synth(api.load(tmp_path / "s.toml"), tmp_path / "w.csv", seed=4)
+    out = tmp_path / "cal"
+    assert main(["calibrate", str(data), "--study", str(tmp_path / "s.toml"), "--inputs",
+                 str(tmp_path / "u.toml"), "--param", "striker.drop_height_m", "--walkers",
+                 "8", "--steps", "20", "--out", str(out), "-q"]) == 0
+    result = seen[0]
+    assert result.to_json() == _json(out / "calibration.json")
+    assert capsys.readouterr().out == result.table() + "\n"
+    assert result.figures and all(p.suffix == ".png" for p in result.figures)

@@ -120,6 +120,32 @@ class CalibrateResult:
     report: dict
     written: tuple[Path, ...]
 
+    @property
+    def files(self) -> tuple[Path, ...]:
+        """The files written (``calibration.json`` and the figures)."""
+        return self.written
+
+    @property
+    def figures(self) -> tuple[Path, ...]:
+        """The figures written."""
+        return tuple(p for p in self.written if p.suffix != ".json")
+
+    def to_json(self) -> dict:
+        """The content of ``calibration.json`` (a copy, as JSON values)."""
+        import json
+
+        from msens.io.output import to_json
+
+        return json.loads(to_json(self.report))
+
+    def table(self) -> str:
+        """What ``msens calibrate`` prints: the table
+        (:func:`msens.uq.calibration_report.format_table`) and the files written."""
+        from msens.tables import files_line
+        from msens.uq.calibration_report import format_table
+
+        return f"{format_table(self.report)}\n\n{files_line(self.written)}"
+
 
 def check_sampler(walkers: int | None, steps: int, k: int) -> int:
     """The number of walkers (default max(16, 4 k), even), after checking both settings.

@@ -52,6 +52,32 @@ class UqResult:
     report: dict
     written: tuple[Path, ...]
 
+    @property
+    def files(self) -> tuple[Path, ...]:
+        """The files written (``uq.json`` and the figures)."""
+        return self.written
+
+    @property
+    def figures(self) -> tuple[Path, ...]:
+        """The figures written."""
+        return tuple(p for p in self.written if p.suffix != ".json")
+
+    def to_json(self) -> dict:
+        """The content of ``uq.json`` (a copy, as JSON values)."""
+        import json
+
+        from msens.io.output import to_json
+
+        return json.loads(to_json(self.report))
+
+    def table(self) -> str:
+        """What ``msens uq`` prints: the table
+        (:func:`msens.uq.report.format_table`) and the files written."""
+        from msens.tables import files_line
+        from msens.uq.report import format_table
+
+        return f"{format_table(self.report)}\n\n{files_line(self.written)}"
+
 
 def _calibrated(study: Study) -> Study:
     # a study that asks for the Eq. 10 fit: its fitted dissipation as the nominal values

@@ -18,6 +18,7 @@ Results do not depend on where a task ran: each task is a pure function of its a
 
 from __future__ import annotations
 
+import logging
 import multiprocessing
 import os
 import re
@@ -177,7 +178,8 @@ def run_tasks(fn: Callable[[Any], Any], args: Sequence[Any], *,
     scheduler : str, optional
         Address of a Dask distributed scheduler (``tcp://host:port``); None = local.
     workers : int, optional
-        Local worker processes (default :func:`default_workers`); ignored with Dask.
+        Local worker processes (default :func:`default_workers`; never more than that, nor
+        more than the tasks); ignored with Dask.
 
     Yields
     ------
@@ -196,7 +198,13 @@ def run_tasks(fn: Callable[[Any], Any], args: Sequence[Any], *,
             yield i, fn(a)
         return
     ctx = multiprocessing.get_context("forkserver")
-    k = min(n, len(args))
+    # more processes than CPUs only multiply the memory (each may hold a field model):
+    # --workers 1000 on a magnet sweep of 24 designs would start 24 solvers on 2 cores
+    k = min(n, len(args), default_workers())
+    if k < min(n, len(args)):
+        logging.getLogger(__name__).info(
+            "%d worker processes asked for, %d CPUs available: using %d", n,
+            default_workers(), k)
     with ProcessPoolExecutor(max_workers=k, mp_context=ctx, initializer=_share_cores,
                              initargs=(max(1, default_workers() // k),)) as pool:
         pending = {pool.submit(fn, a): i for i, a in enumerate(args)}

@@ -30,6 +30,12 @@ def blas_threads(_) -> int:
                if i["user_api"] == "blas")
 
 
+def pid_after(delay: float) -> int:
+    """This worker's process id, after ``delay`` s (so that every worker gets a task)."""
+    time.sleep(delay)
+    return os.getpid()
+
+
 def square(payload: tuple[int, float, str]) -> dict:
     index, delay, log = payload
     time.sleep(delay)

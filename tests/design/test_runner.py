@@ -36,6 +36,15 @@ def test_run_tasks_local_processes_match_serial(tmp_path):
     assert sorted(serial) == list(range(len(args)))
 
 
+def test_no_more_worker_processes_than_cpus():
+    """--workers 10**21 on a sweep of many designs would start a solver per design."""
+    from msens.parallel import default_workers
+
+    tasks = default_workers() + 2
+    pids = {pid for _, pid in run_tasks(standin.pid_after, [0.3] * tasks, workers=10**21)}
+    assert 1 <= len(pids) <= default_workers()
+
+
 def test_task_map_is_a_map_in_input_order(tmp_path):
     """TaskMap (what a workflow hands the physics as ``workers``): results in the order of
     the arguments whatever order the tasks finish in; its length is its worker count."""

@@ -62,7 +62,7 @@ def _output_subset(sel, n, p, out_F, out_d, out_u, out_v, store_uv):
 def _initial_states(u, v, A, gam, loading, n, closed, damp, cA, cg):
     """Contact states at t = 0 into ``closed``, ``damp``, ``cA``, ``cg``; returns whether a
     contact closes exactly at t = 0 (the first step is then taken in sqrt(t))."""
-    touching = False
+    touching = np.bool_(False)  # not a literal (see msens.chain.kernel.phases)
     for k in range(n):
         g = gap(u, k)
         r = gap(v, k)
@@ -190,9 +190,9 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
     if septic:
         jerks(u, v, a0, cA, cg, inv_m, drag_m, j0)
     # The jerks are only formed for steps with samples: j0 holds those at the step's start
-    # when j0_ok.
-    j0_ok = True
-    j = 0
+    # when j0_ok. (Typed starting values, not literals: see msens.chain.kernel.phases.)
+    j0_ok = np.bool_(True)
+    j = np.int64(0)
     # Samples at the initial time.
     while j < nt and t_out[j] <= 0.0:
         j = sample(t_out, j, -1.0, 1.0, 0.0, u, v, a0, j0, u, v, a0, j0, cA, cg, law, septic,
@@ -213,7 +213,7 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
             _, j0_ok = switch(0, k_open, t, u, v, a0, j0, j0_ok, closed, damp, A, gam, cA, cg,
                               law, load_p, inv_m, drag_m, t_left, q_left, s_left)
             continue
-        k_pred = -1
+        k_pred = np.int64(-1)
         if loading and not j0_ok:
             jerks(u, v, a0, cA, cg, inv_m, drag_m, j0)
             j0_ok = True
@@ -231,7 +231,7 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
             h = t_end - t
             if mode == STEP_SQRT_END:
                 mode = STEP_REGULAR
-                k_open = -1
+                k_open = np.int64(-1)
         if h <= 0.0:
             h = dt  # only rounding left: finish the last samples with one more step
         h, mode, k_open, taken = take_step(h, mode, k_open, u, v, a0, closed, damp, gam, hkk,
@@ -268,7 +268,7 @@ def _step_loop(t_out, dt, grade_levels, rate_tol, law, store_uv, subset, sqrt_st
         if not (loading and kmin < 0):  # else a1 is already that of (u1, v1)
             accelerations(u1, v1, cA, cg, law, load_p, inv_m, drag_m, a1)
         if not (k_pred >= 0 and kmin < 0 and prediction_holds(k_pred, h, v1, a1, damp)):
-            k_pred = -1
+            k_pred = np.int64(-1)
         if loading:
             keep_history(v, a0, j0, r_prev, q_prev, s_prev, n)
             h_prev = h

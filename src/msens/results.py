@@ -2,7 +2,8 @@
 
 :class:`StudyResult` holds every setup's chain history and sensor records
 (:class:`SetupResult`, :class:`SensorResult`); :func:`summary` is the content of
-``summary.json`` and :func:`physics_summary` its physics-MsS part (per coil: voltages, each
+``summary.json`` (with :func:`provenance`: :meth:`StudyResult.to_json`) and
+:func:`physics_summary` its physics-MsS part (per coil: voltages, each
 mechanism's share of the signal, the frequency response with eddy currents). The workflows
 (:mod:`msens.pipeline`, :mod:`msens.compare`, :mod:`msens.synth`, :mod:`msens.diagnose`)
 produce and read these records; nothing here runs a model.
@@ -118,6 +119,12 @@ class StudyResult:
         Damping coefficients used (fitted when the study asks for the Eq. 10 fit).
     fit : DissipationFit or None
     setups : tuple of SetupResult
+
+    Notes
+    -----
+    :meth:`to_json` is the content of ``summary.json`` and :meth:`table` the table
+    ``msens run`` prints; a run writes no file itself: its files and figures are written by
+    :func:`msens.workflows.run.write_outputs`, which returns their paths.
     """
 
     study: Study

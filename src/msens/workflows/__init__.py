@@ -5,8 +5,10 @@ returns a typed result with ``to_json()`` (the content of the JSON file it write
 ``table()`` (the text the command prints; the tables themselves are in :mod:`msens.tables`)
 and ``figures`` (the figures written): :class:`~msens.results.StudyResult` (run; its files
 are written by :func:`~msens.workflows.run.write_outputs`), :class:`FieldResult`,
-:class:`SynthResult`, :class:`CompareResult`, :class:`DiagnoseResult` and
-:class:`msens.design.DesignResult`. So far:
+:class:`SynthResult`, :class:`CompareResult`, :class:`DiagnoseResult`,
+:class:`msens.design.DesignResult`, and :class:`msens.uq.UqResult` and
+:class:`msens.uq.CalibrateResult` of the uq and calibrate workflows (:mod:`msens.uq`). So
+far:
 
 - :mod:`.run` — simulate every setup of a study; ``summary.json``, the figures, the text
   table.

@@ -18,8 +18,10 @@ classified as
   record cannot hold (a pulse narrower than two samples, a TOF that is not positive, or a
   missing feature without a note saying why): confident nonsense (issue 38).
 
-Besides mutated studies, waveform files and sweeps, the campaign draws hostile command-line
-arguments (``--scheduler``, ``--workers``, ``--out``, ``--shots``, ``--columns``...) and
+Besides mutated studies, waveform files, sweeps and uncertainty files (``msens uq`` and
+``msens calibrate`` read them), the campaign draws hostile command-line arguments
+(``--scheduler``, ``--workers``, ``--out``, ``--shots``, ``--columns``, ``--set``,
+``--samples``, ``--steps``, ``--param``...) for every command and
 Python API calls (``msens.api.load(None)``, ``synth(study, "x.csv", shots=2.5)``...), and
 studies mutated only in the keys that decide whether a record resolves the pulse (sample
 rates, record length, bead count, drop height, damping).
@@ -59,6 +61,26 @@ from tests.hostile.conftest import TWENTY  # noqa: E402
 from tests.hostile.tomltext import dumps  # noqa: E402
 
 import msens.cli  # noqa: E402
+
+#: Uncertain inputs of the tiny study (msens.uncertainty/1) for ``uq`` and ``calibrate``.
+INPUTS = """schema = "msens.uncertainty/1"
+study = "tiny"
+[[input]]
+name = "striker.drop_height_m"
+distribution = "uniform"
+lower = 6.7e-3
+upper = 7.7e-3
+reason = "drop height set by hand"
+source = "fuzz campaign"
+[[input]]
+name = "chain.gamma_contact_kg_per_s"
+distribution = "triangular"
+lower = 4.07
+mode = 4.71
+upper = 5.56
+reason = "Eq. 10 fit"
+source = "fuzz campaign"
+"""
 
 HOSTILE_VALUES: list[Any] = [
     0, -1, 1, 0.0, -0.0, 1e-300, -1e-300, 5e-324, 1e300, 1e308, -1e308, math.nan, math.inf,
@@ -365,6 +387,15 @@ OUTS = ["", ".", "/", "/proc/self/msens-fuzz.csv", "/proc/x/y.csv", "/dev/null",
         "/sys/msens.csv", "x.txt", "noext", "a/" * 200 + "x.csv", "y" * 300 + ".csv",
         "/mnt/msens-full/x.csv", "/mnt/msens-ro/x.csv", "~nobody/x.csv"]
 NUMBERS = ["0", "-3", "2.5", "1e9", "nan", "inf", "-0", "10001", "x", "", "999999999999999999999"]
+#: --set KEY=VALUE arguments: malformed, unknown, out of range, of the wrong type, huge.
+SETS = ["", "=", "chain.beads", "chain.beads=", "=3", "chain..beads=3", ".chain.beads=3",
+        "chain.beads=x", "chain.beads=[1", "chain.beads=3.5", "chain.beads=-0",
+        "chain.beads=1e400", "chain.beads=99999999999999999999999", "chain=3",
+        "chain.beads.x=3", "sensor.99.particle=3", "sensor.0.particle=3", "sensor.x.particle=3",
+        "sensor.1.kind='mss'", "striker.drop_height_m=nan", "striker.drop_height_m=-0.0",
+        "striker.drop_height_m=inf", "simulation.t_end_s=1e-300", "nope.key=1",
+        "name=" + "x" * 3000, "x" * 3000 + "=1", "chain.beads={a=1}", "schema='x'",
+        'name="\u0000"', "chain.damping='linear'", "chain.damping=3"]
 
 
 def cli_case(rng: random.Random, work: Path, i: int) -> tuple[str, list[str]]:
@@ -373,11 +404,38 @@ def cli_case(rng: random.Random, work: Path, i: int) -> tuple[str, list[str]]:
     sweep, record = str(work / "sweep-coil.toml"), str(work / "record.csv")
     out = str(work / f"a{i}")
     command = rng.choice(["run", "design", "synth", "convert", "check-waveform", "compare",
-                          "diagnose", "field"])
-    if command == "run":
+                          "diagnose", "field", "uq", "calibrate", "study"])
+    inputs = str(work / "inputs.toml")
+    if command == "uq":
+        argv = ["uq", tiny, "--inputs", inputs, "--samples", "8", "--workers", "1",
+                "--out", out, "-q"]
+        extra = rng.choice([["--samples", rng.choice([*NUMBERS, "7", "3", "65536"])],
+                            ["--seed", rng.choice(NUMBERS)], ["--workers", rng.choice(NUMBERS)],
+                            ["--scheduler", rng.choice(ADDRESSES)], ["--out", rng.choice(OUTS)],
+                            ["--inputs", rng.choice(["/dev/zero", "/tmp", "", record, tiny])],
+                            ["--format", rng.choice(["jpg", "", "PDF"])]])
+    elif command == "calibrate":
+        argv = ["calibrate", record, "--study", tiny, "--inputs", inputs,
+                "--param", "striker.drop_height_m", "--param", "chain.gamma_contact_kg_per_s",
+                "--steps", "10", "--walkers", "4", "--out", out, "-q"]
+        extra = rng.choice([["--steps", rng.choice(NUMBERS)], ["--walkers", rng.choice(NUMBERS)],
+                            ["--seed", rng.choice(NUMBERS)], ["--out", rng.choice(OUTS)],
+                            ["--param", rng.choice(["", "x", "chain.beads", "chain",
+                                                    "striker.drop_height_m", "x" * 400])],
+                            ["--reference", rng.choice(["", "nope", "tiny"])],
+                            ["--columns", rng.choice(["", "time", "x" * 3000])],
+                            ["--set", rng.choice(SETS)],
+                            ["--inputs", rng.choice(["/dev/zero", "/tmp", "", record])]])
+    elif command == "study":
+        argv = ["study", tiny]
+        extra = rng.choice([["--set", rng.choice(SETS)],
+                            ["--set", rng.choice(SETS), "--set", rng.choice(SETS)],
+                            ["--out", rng.choice([*OUTS, tiny, str(work / f"st{i}.toml")])]])
+    elif command == "run":
         argv = ["run", tiny, "--out", out, "--no-figures"]
         extra = rng.choice([["--scheduler", rng.choice(ADDRESSES)], ["--out", rng.choice(OUTS)],
-                            ["--format", rng.choice(["png", "jpg", "", "PDF"])]])
+                            ["--format", rng.choice(["png", "jpg", "", "PDF"])],
+                            ["--set", rng.choice(SETS)]])
     elif command == "design":
         argv = ["design", mss, "--sweep", sweep, "--out", out, "-q"]
         extra = rng.choice([["--scheduler", rng.choice(ADDRESSES)],
@@ -471,7 +529,8 @@ def cases(args: argparse.Namespace, work: Path):
     shipped = {"paper-mss": tomllib.loads((ROOT / "studies" / "paper-mss.toml").read_text()),
                "paper-table2": tomllib.loads((ROOT / "src" / "msens" / "data" /
                                               "paper-table2.toml").read_text()),
-               "tiny": tomllib.loads(TWENTY)}
+               "tiny": tomllib.loads(TWENTY),
+               "inputs": tomllib.loads(INPUTS)}
     # the shipped sweeps, moved to the tiny physics study's sensor (particle 6); the magnet
     # sweep cut to two designs (each is a field solve: 24 would take minutes, legitimately)
     sweeps = {p.stem: tomllib.loads(p.read_text())
@@ -485,6 +544,7 @@ def cases(args: argparse.Namespace, work: Path):
     design_study = ROOT / "tests" / "data" / "tiny-mss.toml"
     tiny = work / "tiny.toml"
     tiny.write_text(TWENTY)
+    (work / "inputs.toml").write_text(INPUTS)
     (work / "tiny-mss.toml").write_text(design_study.read_text())
     (work / "sweep-coil.toml").write_text(dumps(sweeps["sweep-coil"]))
     os.environ["MSENS_FUZZ_WORK"] = str(work)
@@ -494,7 +554,8 @@ def cases(args: argparse.Namespace, work: Path):
         write_waveform(good, work / f"record{suffix}")
     n = args.cases
     plan = (["study:paper-mss"] * int(0.08 * n) + ["study:paper-table2"] * int(0.08 * n)
-            + ["study:tiny"] * int(0.17 * n) + ["resolve"] * int(0.10 * n)
+            + ["study:tiny"] * int(0.12 * n) + ["inputs"] * int(0.05 * n)
+            + ["resolve"] * int(0.10 * n)
             + ["wave:csv"] * int(0.10 * n) + ["wave:npz"] * int(0.04 * n)
             + ["wave:tdms"] * int(0.04 * n) + ["wave:record"] * int(0.07 * n)
             + ["sweep"] * int(0.10 * n) + ["cli"] * int(0.12 * n) + ["api"] * int(0.10 * n))
@@ -509,6 +570,23 @@ def cases(args: argparse.Namespace, work: Path):
         if what == "api":
             name, expr = api_case(rng)
             yield f"api:{name}", expr, expr
+            continue
+        if what == "inputs":
+            doc, notes = mutate(shipped["inputs"], rng)
+            path = work / f"in{i}.toml"
+            try:
+                path.write_text(dumps(doc))
+            except (TypeError, ValueError):
+                path.write_text(str(doc))
+                notes.append("not TOML")
+            if rng.random() < 0.5:
+                argv = ["uq", str(tiny), "--inputs", str(path), "--samples", "8",
+                        "--workers", "1", "--out", str(out), "-q"]
+            else:
+                argv = ["calibrate", str(work / "record.csv"), "--study", str(tiny),
+                        "--inputs", str(path), "--steps", "10", "--walkers", "8",
+                        "--out", str(out), "-q"]
+            yield f"inputs:{argv[0]}", "; ".join(notes), argv
             continue
         if what == "resolve":
             doc, notes = resolve_case(shipped["tiny"], rng)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +22,7 @@ from msens.cli import main
 from msens.io.read import read_waveform
 from msens.uq.calibration import run_calibrate
 from msens.uq.inputs import load_inputs
-from msens.uq.mcmc import split_rhat
+from msens.uq.mcmc import autocorr_time, split_rhat
 from msens.uq.posterior import Coordinates, Likelihood, select
 
 #: The coverage benchmark's priors and one more input held at nominal.
@@ -51,6 +52,26 @@ def test_split_rhat_is_one_for_agreeing_chains_and_large_for_stuck_ones():
     assert np.all(split_rhat(stuck) > 2.0)
     drift = agree + np.linspace(0, 5, 2000)[:, None, None]  # not stationary: halves differ
     assert np.all(split_rhat(drift) > 1.1)
+
+
+def test_autocorr_time_of_ar1_chains_and_of_a_parameter_that_never_moved():
+    """AR(1) with coefficient rho has tau = (1 + rho) / (1 - rho); a parameter whose
+    walkers never moved (every proposal of a short run rejected) has no tau: NaN, and no
+    division warning (pytest turns warnings into errors)."""
+    rng = np.random.default_rng(3)
+    rho, steps, walkers = 0.8, 20_000, 8
+    x = np.zeros((steps, walkers))
+    for t in range(1, steps):
+        x[t] = rho * x[t - 1] + rng.normal(size=walkers)
+    chains = np.stack([x, np.full_like(x, 0.25)], axis=2)
+    tau = autocorr_time(chains)
+    assert tau[0] == pytest.approx((1 + rho) / (1 - rho), rel=0.15)
+    assert np.isnan(tau[1])
+    stuck_walker = chains.copy()
+    stuck_walker[:, 0, 0] = 1.0  # one walker of a moving parameter stood still
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # emcee divided by that walker's zero variance
+        assert np.isnan(autocorr_time(stuck_walker)[1])
 
 
 def test_likelihood_is_diagnose_s(twenty, tmp_path):

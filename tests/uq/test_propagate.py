@@ -175,6 +175,20 @@ def test_command_writes_strict_json_and_figures(tmp_path, capsys):
     assert "paper-mss/mss@13/tof_us" in capsys.readouterr().out
 
 
+def test_one_uncertain_input_draws_its_figures(tmp_path, capsys):
+    """With one input the Sobol panels had no room (tight_layout warned: an error under
+    pytest's warnings-as-errors, an internal error for a user running with -W error)."""
+    path = tmp_path / "one.toml"
+    path.write_text(CHAIN_INPUTS.split("[[input]]\nname = \"electronics")[0])
+    code = main(["uq", "--inputs", str(path), "--out", str(tmp_path / "out"), "--samples",
+                 "4", "--workers", "1", "-q"])
+    assert code == 0, capsys.readouterr().err
+    report = json.loads((tmp_path / "out" / "uq.json").read_text())
+    sobol = report["outputs"]["paper-mss/mss@13/peak_voltage_V"]["sobol"]
+    assert set(sobol) == {"striker.drop_height_m"}
+    assert (tmp_path / "out" / "uq_sobol.png").stat().st_size > 10_000
+
+
 def test_inputs_set_is_frozen(inputs):
     assert isinstance(inputs, InputSet)
     with pytest.raises(AttributeError):

@@ -102,10 +102,21 @@ def autocorr_time(chains: np.ndarray) -> np.ndarray:
 
     emcee's estimator, averaged over the walkers, without its check that the chain is
     longer than 50 tau (a short chain gives an estimate, and R-hat judges convergence).
+    A parameter whose walkers did not move (a few steps with every proposal rejected) has
+    no autocorrelation time: NaN (null in the JSON), never a division warning.
+
+    Parameters
+    ----------
+    chains : ndarray, shape (steps, walkers, k)
     """
     from emcee.autocorr import integrated_time
 
-    return np.asarray(integrated_time(chains, tol=0), dtype=float)
+    tau = np.full(chains.shape[2], np.nan)
+    moving = np.ptp(chains, axis=0).max(axis=0) > 0
+    if moving.any():
+        with np.errstate(divide="ignore", invalid="ignore"):  # a walker that stood still
+            tau[moving] = integrated_time(chains[:, :, moving], tol=0)
+    return tau
 
 
 def start_point(log_prob: Callable[[np.ndarray], np.ndarray], prior_draws: np.ndarray,

@@ -217,8 +217,11 @@ def sobol_figure(result: Propagation):
     names = [p.name for p in result.inputs.propagated]
     cols = 2 if len(shown) > 1 else 1
     rows = int(np.ceil(len(shown) / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(6.0 * cols, 0.28 * len(names) * rows + 1.6),
-                             squeeze=False, sharey=True)
+    # a bar pair per input, and room for each panel's title and axis label (with one or
+    # two inputs the bars alone left no room: tight_layout gave up with a warning)
+    height = max(0.28 * len(names) * rows + 1.6, 1.9 * rows + 0.6)
+    fig, axes = plt.subplots(rows, cols, figsize=(6.0 * cols, height), squeeze=False,
+                             sharey=True)
     y = np.arange(len(names))
     for ax, k in zip(axes.flat, shown, strict=False):
         ix = result.indices[k]

@@ -14,6 +14,7 @@ classified as
 - ``long-work``: over the time limit (or 60 s of CPU) while still reporting progress on
   field-model work: a study whose changed sensor geometry needs a new field model and its
   contact maps solves them (minutes, legitimately); counted apart, listed for review;
+- ``py-warning``: a Python warning (numpy, matplotlib...) reached stderr;
 - ``unresolved-ok``: exit 0 from ``msens run`` whose summary reports a TOF or AR that its
   record cannot hold (a pulse narrower than two samples, a TOF that is not positive, or a
   missing feature without a note saying why): confident nonsense (issue 38).
@@ -178,6 +179,9 @@ def run_case(argv: list[str], timeout: float, mem_gb: float) -> dict:
         outcome = "traceback"
     elif "msens: internal error" in err:
         outcome = "internal"
+    elif _py_warning(err):
+        outcome = "py-warning"
+        errors = [_py_warning(err)]
     elif res["code"] == 0 and nonsense:
         outcome = "unresolved-ok"
         errors = [nonsense]
@@ -191,6 +195,15 @@ def run_case(argv: list[str], timeout: float, mem_gb: float) -> dict:
             "field_work": _field_work(err),
             "message": errors[0] if errors else err.strip().splitlines()[-1:] and
             err.strip().splitlines()[-1], "traceback": res["traceback"]}
+
+
+def _py_warning(stderr: str) -> str | None:
+    """A Python warning that reached the user (``file.py:12: RuntimeWarning: ...``): under
+    ``python -W error`` it is an internal error; msens says what it means or avoids it."""
+    import re
+
+    m = re.search(r"^\S+:\d+: (\w*Warning): (.*)$", stderr, re.MULTILINE)
+    return f"{m.group(1)}: {m.group(2)[:200]}" if m else None
 
 
 def _api_case(expr: str) -> int:

@@ -15,6 +15,7 @@ import numpy as np
 from tqdm import tqdm
 
 from msens.calibrate import DissipationFit, fit_dissipation
+from msens.chain import warmup
 from msens.chain.equilibrium import static_contact_forces
 from msens.chain.integrate import ChainResult, simulate
 from msens.chain.model import Chain
@@ -23,6 +24,7 @@ from msens.config.assemble import build_chain
 from msens.config.schema import MssModel, SensorSpec, SetupSpec
 from msens.config.study import Study
 from msens.errors import InputError
+from msens.numba_cache import BackgroundCompile, compile_in_background
 from msens.progress import COMPILE_ESTIMATE_TEXT, heartbeat
 from msens.readout.sensors import SensorKind, observe, time_derivative
 from msens.results import SensorResult, SetupResult, StudyResult
@@ -253,12 +255,14 @@ def simulate_setup(study: Study, setup: SetupSpec, t: np.ndarray, *, gamma_conta
                          "precompression") from None
     # the long wait of a first run: numba compiles the kernel once per install (kept in the
     # user cache folder), with a heartbeat line every few seconds meanwhile
-    _log.info("setup %s: simulating the chain (%d particles, %.3g ms; the first run after "
-              "installing also compiles the chain kernel, %s on an idle 2-core machine)",
-              setup.name, chain.n_particles, t[-1] * 1e3, COMPILE_ESTIMATE_TEXT)
+    compiling = warmup.cached(warmup.SIMULATE) is not True
+    _log.info("setup %s: simulating the chain (%d particles, %.3g ms%s)", setup.name,
+              chain.n_particles, t[-1] * 1e3,
+              f"; compiling the chain kernel first, {COMPILE_ESTIMATE_TEXT} on an idle 2-core "
+              "machine, once per install" if compiling else "")
     start = time.perf_counter()
     with heartbeat(_log, f"setup {setup.name}: simulating the chain",
-                   note=" (a first run also compiles the chain kernel)"):
+                   note=" (compiling the chain kernel)" if compiling else ""):
         history = simulate(chain, study.striker.velocity_m_per_s, t, dt=study.simulation.dt_s)
     _log.info("setup %s: simulated in %.1f s", setup.name, time.perf_counter() - start)
     return chain, history
@@ -287,25 +291,68 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
     """
     from msens import budget
 
-    _log.info("study %s: checking its memory and time budget", study.name)
-    with heartbeat(_log, f"study {study.name}: checking its budget"):
-        budget.check(study)  # before any work: refuse what would exhaust memory or time
-    t = output_times(study)
-    fit = fit if fit is not None else calibrate_dissipation(study, t)
-    gc = fit.gamma_c if fit is not None else study.chain.gamma_contact
-    gw = fit.gamma_w if fit is not None else study.chain.gamma_wall
-    setups = []
-    for setup in study.setups:
-        transducers = setup_transducers(study, setup)
-        chain, history = simulate_setup(study, setup, t, gamma_contact=gc, gamma_wall=gw,
-                                        extra=(static_forces or {}).get(setup.name),
-                                        transducers=transducers)
-        observed = observe_setup(setup, chain, history, transducers=transducers,
-                                 study=study,
-                                 responses=setup_responses(study, setup, workers=workers))
-        check_arrivals(study, observed)
-        observed = budget.flag_unresolved(study, observed)  # no reflection: no TOF/AR
-        check_speeds(study, observed)
-        setups.append(observed)
+    fitting = fit is None and study.dissipation_fit is not None
+    job = kernel_in_background(((warmup.BATCH,) if fitting else ()) + (warmup.SIMULATE,))
+    try:
+        _log.info("study %s: checking its memory and time budget", study.name)
+        with heartbeat(_log, f"study {study.name}: checking its budget"):
+            budget.check(study)  # before any work: refuse what would exhaust memory or time
+        t = output_times(study)
+        if fitting:
+            await_kernel(job, warmup.BATCH)
+        fit = fit if fit is not None else calibrate_dissipation(study, t)
+        gc = fit.gamma_c if fit is not None else study.chain.gamma_contact
+        gw = fit.gamma_w if fit is not None else study.chain.gamma_wall
+        setups = []
+        for setup in study.setups:
+            transducers = setup_transducers(study, setup)
+            await_kernel(job, warmup.SIMULATE)
+            chain, history = simulate_setup(study, setup, t, gamma_contact=gc, gamma_wall=gw,
+                                            extra=(static_forces or {}).get(setup.name),
+                                            transducers=transducers)
+            observed = observe_setup(setup, chain, history, transducers=transducers,
+                                     study=study,
+                                     responses=setup_responses(study, setup, workers=workers))
+            check_arrivals(study, observed)
+            observed = budget.flag_unresolved(study, observed)  # no reflection: no TOF/AR
+            check_speeds(study, observed)
+            setups.append(observed)
+    finally:
+        if job is not None:
+            job.stop()  # interrupted or failed before the kernel was needed: no orphan
     return StudyResult(study=study, gamma_contact=gc, gamma_wall=gw, fit=fit,
                        setups=tuple(setups))
+
+
+def kernel_in_background(variants: tuple[str, ...]) -> BackgroundCompile | None:
+    """Start compiling those of the chain kernel's ``variants`` (:mod:`msens.chain.warmup`)
+    that numba's cache lacks, in a second process, in this order; None if the cache holds
+    them all (or cannot tell, or no process could be started: each is then compiled here
+    on first use).
+
+    The first run after installing then uses the second core: the kernel compiles while
+    this process reads the study, checks its budget and loads the field model; and it loads
+    the kernel from the cache, so it computes the same bits as every later run.
+    """
+    missing = tuple(v for v in variants if warmup.cached(v) is False)
+    if not missing:
+        return None
+    job = compile_in_background("msens.chain.warmup", *missing)
+    if job is not None:
+        _log.info("compiling the chain kernel in a second process (once per install, %s on "
+                  "an idle 2-core machine) while this one prepares the run",
+                  COMPILE_ESTIMATE_TEXT)
+    return job
+
+
+def await_kernel(job: BackgroundCompile | None, variant: str) -> None:
+    """Wait (with a heartbeat) until ``job`` has compiled ``variant`` into numba's cache; if
+    it failed, say so: the variant is then compiled in this process on first use."""
+    if job is None or warmup.done_line(variant) in job.said:
+        return
+    with heartbeat(_log, "waiting for the chain kernel's compilation in a second process"):
+        problem = job.wait_for(warmup.done_line(variant))
+    if problem is not None or warmup.cached(variant) is not True:
+        _log.warning("compiling the chain kernel in a second process failed (%s); compiling "
+                     "it here instead, %s on an idle 2-core machine",
+                     problem or "nothing was cached", COMPILE_ESTIMATE_TEXT)

@@ -254,6 +254,19 @@ def simulate(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
     ChainResult
     """
     t = _check_times(t_out)
+    args, block = _integrate_args(chain, striker_velocity, t, dt, states)
+    dt = args[9]
+    steps = kernel.integrate(*args)
+    n = chain.n_particles
+    return ChainResult(t=t, force=block[0, :, :n], approach=block[1, :, :n],
+                       displacement=block[2, :, :n] if states else None,
+                       velocity=block[3, :, :n] if states else None, dt=dt, steps=int(steps))
+
+
+def _integrate_args(chain: Chain, striker_velocity: float, t: np.ndarray, dt: float | None,
+                    states: bool) -> tuple[tuple, np.ndarray]:
+    # The arguments of kernel.integrate for simulate (their types choose the compiled
+    # variant: msens.chain.warmup compiles it from the same function), and the output block.
     load = chain.load()
     f0 = contact_forces_from_loads(load)  # shared by the default step and the equilibrium
     dt = _stable_step(chain, striker_velocity, f0) if dt is None else _check_dt(dt)
@@ -264,14 +277,11 @@ def simulate(chain: Chain, striker_velocity: float, t_out: ArrayLike, *,
     # kernel's padded length (full-width vector stores); the results are views of n columns.
     block = np.empty((4 if states else 2, t.size, kernel.padded_length(n)))
     dummy = np.empty((1, n))
-    out = [block[0], block[1], block[2] if states else dummy, block[3] if states else dummy]
-    steps = kernel.integrate(u0, v0, chain.mass, chain.stiffness, chain.damping, chain.drag,
-                             _LAW_CODE[chain.damping_law], load, t, dt,
-                             GRADE_LEVELS[chain.damping_law], _rate_tol(striker_velocity), states,
-                             *out, np.arange(block.shape[2]))
-    return ChainResult(t=t, force=block[0, :, :n], approach=block[1, :, :n],
-                       displacement=block[2, :, :n] if states else None,
-                       velocity=block[3, :, :n] if states else None, dt=dt, steps=int(steps))
+    out = (block[0], block[1], block[2] if states else dummy, block[3] if states else dummy)
+    args = (u0, v0, chain.mass, chain.stiffness, chain.damping, chain.drag,
+            _LAW_CODE[chain.damping_law], load, t, dt, GRADE_LEVELS[chain.damping_law],
+            _rate_tol(striker_velocity), states, *out, np.arange(block.shape[2]))
+    return args, block
 
 
 def simulate_batch(chains: Sequence[Chain], striker_velocities: ArrayLike, t_out: ArrayLike, *,
@@ -309,9 +319,29 @@ def simulate_batch(chains: Sequence[Chain], striker_velocities: ArrayLike, t_out
     law = chains[0].damping_law
     if any(c.n_particles != n for c in chains) or any(c.damping_law is not law for c in chains):
         raise ValueError("all chains of a batch must have the same n_particles and damping_law")
+    t = _check_times(t_out)
+    args, sel = _batch_args(chains, striker_velocities, t, dt, contacts)
+    steps_dt, force, approach = args[9], args[12], args[13]
+    # Small chunks, handed out dynamically: run times differ (contact events) and a thread
+    # may share its core with other work; numba's default splits the runs evenly up front.
+    with numba.parallel_chunksize(BATCH_CHUNK):
+        steps = kernel.integrate_batch(*args)
+    if contacts is not None:
+        return ChainResult(t=t, force=force, approach=approach, dt=steps_dt, steps=steps,
+                           contacts=sel)
+    return ChainResult(t=t, force=force[..., :n], approach=approach[..., :n], dt=steps_dt,
+                       steps=steps)
+
+
+def _batch_args(chains: list[Chain], striker_velocities: ArrayLike, t: np.ndarray,
+                dt: float | ArrayLike | None, contacts: ArrayLike | None,
+                ) -> tuple[tuple, np.ndarray]:
+    # The arguments of kernel.integrate_batch for simulate_batch (see _integrate_args), and
+    # the output contacts.
+    n = chains[0].n_particles
+    law = chains[0].damping_law
     runs = len(chains)
     v = np.broadcast_to(np.asarray(striker_velocities, dtype=float), (runs,)).copy()
-    t = _check_times(t_out)
     if dt is None:
         steps_dt = np.array([stable_step(c, vi) for c, vi in zip(chains, v, strict=True)])
     else:
@@ -326,21 +356,11 @@ def simulate_batch(chains: Sequence[Chain], striker_velocities: ArrayLike, t_out
     v0 = np.zeros((runs, n))
     v0[:, 0] = v
     sel = np.arange(kernel.padded_length(n)) if contacts is None else _check_contacts(contacts, n)
-    block = np.empty((2, runs, t.size, sel.size))  # see simulate
-    force, approach = block[0], block[1]
-    # Small chunks, handed out dynamically: run times differ (contact events) and a thread
-    # may share its core with other work; numba's default splits the runs evenly up front.
-    with numba.parallel_chunksize(BATCH_CHUNK):
-        steps = kernel.integrate_batch(u0, v0, stack["mass"], stack["stiffness"],
-                                       stack["damping"], stack["drag"], _LAW_CODE[law], load,
-                                       t, steps_dt, GRADE_LEVELS[law],
-                                       np.array([_rate_tol(vi) for vi in v]), force, approach,
-                                       sel)
-    if contacts is not None:
-        return ChainResult(t=t, force=force, approach=approach, dt=steps_dt, steps=steps,
-                           contacts=sel)
-    return ChainResult(t=t, force=force[..., :n], approach=approach[..., :n], dt=steps_dt,
-                       steps=steps)
+    block = np.empty((2, runs, t.size, sel.size))  # see _integrate_args
+    args = (u0, v0, stack["mass"], stack["stiffness"], stack["damping"], stack["drag"],
+            _LAW_CODE[law], load, t, steps_dt, GRADE_LEVELS[law],
+            np.array([_rate_tol(vi) for vi in v]), block[0], block[1], sel)
+    return args, sel
 
 
 def _check_contacts(contacts: ArrayLike, n: int) -> np.ndarray:

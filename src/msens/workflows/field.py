@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 import json
+import logging
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -88,13 +89,17 @@ def field(study: Study, out: Path, *, fig_format: str = "png") -> FieldResult:
     """
     from msens.config.fieldsetup import geometry_from_study
     from msens.field_outputs import write_field_outputs
+    from msens.progress import heartbeat
 
     geometry = geometry_from_study(study)
     target = OutputDir(out)
     target.check([f"field_B.{check_format(fig_format)}" if n == "field_B.png" else n
                   for n in FIELD_OUTPUTS])
     report, seconds = _solve_timed(geometry)
-    written = write_field_outputs(report, out, fig_format=fig_format, timings_s=seconds)
+    log = logging.getLogger(__name__)
+    log.info("field: writing field.json, field.vtu, the field map and the 3-D view to %s", out)
+    with heartbeat(log, "field: writing the files and figures"):
+        written = write_field_outputs(report, out, fig_format=fig_format, timings_s=seconds)
     for name, path in written.items():
         if not path.startswith("skipped"):
             target.record(name)

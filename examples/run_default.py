@@ -2,9 +2,9 @@
 
     python examples/run_default.py
 
-The first run in a new install compiles the chain kernel once (about 1.5 min on an idle 2-core
-machine, msens.progress.KERNEL_COMPILE_S; kept in the user cache folder, so reinstalling
-does not repeat it); after that it takes a few seconds.
+The first run in a new install compiles the chain kernel once (msens.progress.KERNEL_COMPILE_S
+on an idle 2-core machine, in a second process while the run prepares; kept in the user cache
+folder, so reinstalling does not repeat it); after that it takes a few seconds.
 """
 
 import msens.api as ms

@@ -59,6 +59,25 @@ def _output_subset(sel, n, p, out_F, out_d, out_u, out_v, store_uv):
 
 
 @nb.njit(cache=True, inline="always")
+def _pad(u_init, v_init, mass, A, gam, drag, load, u, v, inv_m, drag_m, load_p, gam_p):
+    """The particle arrays into the padded ones (zeros past n), with inverse masses and drag
+    over mass. Loops, not slice assignments: those compile numba's shape-mismatch error
+    message (string formatting, ~2.5 s of the kernel's first compilation)."""
+    n = u_init.shape[0]
+    if (v_init.shape[0] != n or mass.shape[0] != n or A.shape[0] != n or gam.shape[0] != n
+            or drag.shape[0] != n or load.shape[0] != n):
+        raise ValueError("u_init, v_init, mass, A, gam, drag, load need one entry per "
+                         "particle (contact)")
+    for k in range(n):
+        inv_m[k] = 1.0 / mass[k]
+        drag_m[k] = drag[k] / mass[k]
+        load_p[k] = load[k]
+        u[k] = u_init[k]
+        v[k] = v_init[k]
+        gam_p[k] = gam[k]
+
+
+@nb.njit(cache=True, inline="always")
 def _initial_states(u, v, A, gam, loading, n, closed, damp, cA, cg):
     """Contact states at t = 0 into ``closed``, ``damp``, ``cA``, ``cg``; returns whether a
     contact closes exactly at t = 0 (the first step is then taken in sqrt(t))."""
@@ -103,15 +122,12 @@ def integrate(u_init, v_init, mass, A, gam, drag, law, load, t_out, dt, grade_le
     m = p + 1
     subset = _output_subset(sel, n, p, out_F, out_d, out_u, out_v, store_uv)
     inv_m = zeros64(p)
-    inv_m[:n] = 1.0 / mass
     drag_m = zeros64(p)
-    drag_m[:n] = drag / mass
     load_p = zeros64(p)
-    load_p[:n] = load
     u = zeros64(m)
     v = zeros64(m)
-    u[:n] = u_init
-    v[:n] = v_init
+    gam_p = zeros64(p)
+    _pad(u_init, v_init, mass, A, gam, drag, load, u, v, inv_m, drag_m, load_p, gam_p)
     u1 = zeros64(m)
     v1 = zeros64(m)
     a0 = zeros64(m)
@@ -138,8 +154,6 @@ def integrate(u_init, v_init, mass, A, gam, drag, law, load, t_out, dt, grade_le
     # copy of gamma and scratch flags (gam itself stays unpadded: measured faster).
     closed = zeros64(p)
     damp = zeros64(p)
-    gam_p = zeros64(p)
-    gam_p[:n] = gam
     flag = zeros64(p)
     cA = zeros64(p)
     cg = zeros64(p)

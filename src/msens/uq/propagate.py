@@ -26,6 +26,7 @@ import numpy as np
 from msens.config.study import Study
 from msens.errors import InputError
 from msens.parallel import run_tasks
+from msens.progress import heartbeat
 from msens.uq.inputs import InputSet
 from msens.uq.model import Evaluation, Task, evaluate
 
@@ -214,7 +215,10 @@ def propagate(study: Study, inputs: InputSet, *, samples: int = 64, seed: int = 
     features = {k: np.concatenate([e.features[k] for e in parts]) for k in names}
     waveforms = {k: np.concatenate([e.waveforms[k] for e in parts if k in e.waveforms])
                  for k in parts[0].waveforms}
-    indices = {k: sobol_indices(inputs, y, seed) for k, y in features.items()}
+    _log.info("uq: Sobol indices of %d outputs (SALib, %d bootstrap resamples each)",
+              len(features), RESAMPLES)
+    with heartbeat(_log, "uq: Sobol indices"):
+        indices = {k: sobol_indices(inputs, y, seed) for k, y in features.items()}
     where = f"Dask scheduler {scheduler}" if scheduler else \
         f"local processes ({workers or 'all CPUs'})"
     return Propagation(inputs=inputs, base_samples=samples, seed=seed, unit=unit,

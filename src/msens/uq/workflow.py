@@ -149,13 +149,16 @@ def run_uq(study: Study, out: str | Path, *, inputs: str | Path | None = None,
     workers = check_workers(workers)
     load_inputs(inputs, study)  # every input checked before any work
     from msens import budget
+    from msens.progress import heartbeat
 
     budget.check(study)
-    study = _calibrated(study)
-    checked = load_inputs(inputs, study)
+    _log.info("uq: the nominal prediction (msens run) and the models the inputs need")
+    with heartbeat(_log, "uq: the nominal prediction"):
+        study = _calibrated(study)
+        checked = load_inputs(inputs, study)
+        nominal = nominal_features(study, checked)
     if scheduler is None and workers is None and not pools_allowed():
         workers = 1
-    nominal = nominal_features(study, checked)
     bar = None
     if progress and _log.isEnabledFor(logging.INFO):
         from tqdm import tqdm
@@ -174,13 +177,15 @@ def run_uq(study: Study, out: str | Path, *, inputs: str | Path | None = None,
     finally:
         if bar is not None:
             bar.close()
-    report = rep.to_json(result, nominal, provenance=provenance(study), study=study)
-    written = [target.write_json("uq.json", report)]
-    for name, make in ((names[1], lambda: rep.waveform_figure(result)),
-                       (names[2], lambda: rep.sobol_figure(result))):
-        fig = make()
-        written.append(target.savefig(name, fig, fmt=fig_format, dpi=DPI))
-        plots.close(fig)
+    _log.info("uq: writing uq.json and the figures to %s", target.path)
+    with heartbeat(_log, "uq: writing uq.json and the figures"):
+        report = rep.to_json(result, nominal, provenance=provenance(study), study=study)
+        written = [target.write_json("uq.json", report)]
+        for name, make in ((names[1], lambda: rep.waveform_figure(result)),
+                           (names[2], lambda: rep.sobol_figure(result))):
+            fig = make()
+            written.append(target.savefig(name, fig, fmt=fig_format, dpi=DPI))
+            plots.close(fig)
     return UqResult(propagation=result, report=report, written=tuple(written))
 
 

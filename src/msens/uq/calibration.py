@@ -26,6 +26,7 @@ import numpy as np
 from msens.config.study import Study
 from msens.errors import InputError
 from msens.io.output import DPI, OutputDir
+from msens.progress import heartbeat
 from msens.uq.inputs import InputSet, load_inputs
 from msens.uq.mcmc import (
     RHAT_LIMIT,
@@ -345,17 +346,21 @@ def run_calibrate(study: Study, out: str | Path, *, data=None, reference: str | 
         from msens.diagnose.workflow import match_setup_spec
         from msens.workflows.compare import check_measurement
 
-        check_measurement(study, data, str(getattr(data, "path", data)))
-        setup = match_setup_spec(study, data)
-        check_channels(data)
-        shot_matrix(data, [(s.kind.value, s.particle) for s in setup.sensors])
+        _log.info("calibrate: checking the measurement against the model's record")
+        with heartbeat(_log, "calibrate: checking the measurement"):
+            check_measurement(study, data, str(getattr(data, "path", data)))
+            setup = match_setup_spec(study, data)
+            check_channels(data)
+            shot_matrix(data, [(s.kind.value, s.particle) for s in setup.sensors])
     budget.check(study)
 
-    study = _calibrated(study)
-    checked = load_inputs(inputs, study)
-    coords = Coordinates.of(checked, columns)
-    objective, setup, measurement = _objective(study, data, reference)
-    likelihood = Likelihood(study, checked, setup, objective)
+    _log.info("calibrate: the model's baseline and the likelihood")
+    with heartbeat(_log, "calibrate: the model's baseline"):
+        study = _calibrated(study)
+        checked = load_inputs(inputs, study)
+        coords = Coordinates.of(checked, columns)
+        objective, setup, measurement = _objective(study, data, reference)
+        likelihood = Likelihood(study, checked, setup, objective)
     posterior = Posterior(coords, likelihood)
     k = len(columns)
     _log.info("calibrate %s on %s: %d inputs (%s), %d walkers x %d steps", study.name,
@@ -367,10 +372,12 @@ def run_calibrate(study: Study, out: str | Path, *, data=None, reference: str | 
     rng = np.random.default_rng(seed)
     draws = np.column_stack([p.distribution.values(rng.random(START_DRAWS * k))
                              for p in coords.inputs])
-    z0 = start_point(posterior, coords.coordinates(draws), max_evals=30 * k)
-    support = np.array([p.distribution.support for p in coords.inputs])
-    lower, upper = coords.coordinates(support[:, 0])[0], coords.coordinates(support[:, 1])[0]
-    cov = laplace_covariance(posterior, z0, lower, upper)
+    with heartbeat(_log, "calibrate: start point"):
+        z0 = start_point(posterior, coords.coordinates(draws), max_evals=30 * k)
+        support = np.array([p.distribution.support for p in coords.inputs])
+        lower = coords.coordinates(support[:, 0])[0]
+        upper = coords.coordinates(support[:, 1])[0]
+        cov = laplace_covariance(posterior, z0, lower, upper)
     bar = None
     if progress and _log.isEnabledFor(logging.INFO):
         from tqdm import tqdm
@@ -396,8 +403,9 @@ def run_calibrate(study: Study, out: str | Path, *, data=None, reference: str | 
     chi2_best = float(likelihood.chi2(coords.rows(best))[0])
     pick = rng.choice(theta.shape[0], size=min(PREDICTIVE_DRAWS, theta.shape[0]), replace=False)
     _log.info("calibrate: posterior predictive from %d draws", pick.size)
-    features, refs, band = predictive(study, checked, coords, theta[pick], objective,
-                                      setup.name, rng)
+    with heartbeat(_log, "calibrate: posterior predictive"):
+        features, refs, band = predictive(study, checked, coords, theta[pick], objective,
+                                          setup.name, rng)
     variance = objective.variance_split() if hasattr(objective, "variance_split") else \
         {"noise_share": 1.0, "model_uncertainty_share": 0.0}
     cal = Calibration(mode="features" if reference else "waveform", setup=setup.name,
@@ -407,14 +415,16 @@ def run_calibrate(study: Study, out: str | Path, *, data=None, reference: str | 
                       reference=refs, band=band, variance=variance,
                       runs=likelihood.runs + len(study.setups) * pick.size,
                       seconds=time.perf_counter() - start_time)
-    report = rep.to_json(cal, checked, provenance=provenance(study))
-    written = [target.write_json(names[0], report)]
-    for name, make in ((names[1], lambda: rep.pairs_figure(cal)),
-                       (names[2], lambda: rep.predictive_figure(cal)),
-                       (names[3], lambda: rep.trace_figure(cal))):
-        fig = make()
-        written.append(target.savefig(name, fig, fmt=fig_format, dpi=DPI))
-        plots.close(fig)
+    _log.info("calibrate: writing %s and the figures to %s", names[0], target.path)
+    with heartbeat(_log, "calibrate: writing the files and figures"):
+        report = rep.to_json(cal, checked, provenance=provenance(study))
+        written = [target.write_json(names[0], report)]
+        for name, make in ((names[1], lambda: rep.pairs_figure(cal)),
+                           (names[2], lambda: rep.predictive_figure(cal)),
+                           (names[3], lambda: rep.trace_figure(cal))):
+            fig = make()
+            written.append(target.savefig(name, fig, fmt=fig_format, dpi=DPI))
+            plots.close(fig)
     return CalibrateResult(calibration=cal, report=report, written=tuple(written))
 
 

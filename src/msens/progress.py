@@ -26,11 +26,11 @@ HEARTBEAT_S = 4.0
 
 #: Wall time of the chain kernel's first compilation on an idle 2-core machine, s (numba,
 #: the variant ``msens run`` needs, in the second process of :mod:`msens.chain.warmup`: it
-#: took 24.9 + 2.1 s of CPU, a single-threaded compile, so about as many seconds of wall
-#: time on an idle core; 28.5 s wall at load 4; before the kernel's literal-free typing 38.8 s
-#: of CPU and a 47.7 s chain stage at load 0.8). A loaded machine takes longer. It happens
-#: once per install: the compiled code is kept in the user cache folder
-#: (:mod:`msens.numba_cache`).
+#: took 22.9 + 1.9 s of CPU, a single-threaded compile, so about as many seconds of wall
+#: time on an idle core; 25.8 s wall at load 4.7; before the kernel's literal-free typing
+#: and loop padding 38.8 s of CPU and a 47.7 s chain stage at load 0.8). A loaded machine
+#: takes longer. It happens once per install: the compiled code is kept in the user cache
+#: folder (:mod:`msens.numba_cache`).
 KERNEL_COMPILE_S = 30.0
 
 

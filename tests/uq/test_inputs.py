@@ -105,5 +105,16 @@ def test_a_study_without_a_builtin_file_is_told_to_give_one(study, tmp_path):
     other = study.replace({"name": "my-rig", "reference": None})
     with pytest.raises(InputError, match="--inputs FILE"):
         load_inputs(None, other)
-    with pytest.raises(InputError, match="cannot be read"):
+    with pytest.raises(InputError, match="not found"):
         load_inputs(tmp_path / "missing.toml", other)
+
+
+@pytest.mark.parametrize("where", ["/dev/zero", "folder", "binary"])
+def test_an_uncertainty_file_that_cannot_be_read(study, tmp_path, where):
+    """/dev/zero was read until memory ran out (found by the fuzz campaign)."""
+    path = {"/dev/zero": "/dev/zero", "folder": str(tmp_path)}.get(where, tmp_path / "b.toml")
+    if where == "binary":
+        path.write_bytes(b"\xff\xfe\x00bad")
+    with pytest.raises(InputError, match="uncertainty file") as info:
+        load_inputs(path, study)
+    assert "\n" not in str(info.value)

@@ -279,11 +279,10 @@ def load_inputs(path: str | Path | None, study: Study) -> InputSet:
             raise InputError(f"study {study.name!r} has no built-in uncertainty file: give "
                              "one with --inputs FILE (schema msens.uncertainty/1; see "
                              f"{default_inputs_path_example()})")
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"--inputs '{path}' cannot be read: {exc}") from None
+    from msens.io._files import read_text
+
+    # a regular UTF-8 file of bounded size (/dev/zero was read until memory ran out)
+    text = read_text(path, what="uncertainty file (--inputs)")
     return parse_inputs(text, study, source=str(path))
 
 

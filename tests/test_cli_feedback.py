@@ -151,3 +151,23 @@ def test_verify_reports_each_check_as_it_goes(monkeypatch):
     rows = verify.run_all(progress=lambda row: order.append(f"reported {row.name}"))
     assert order == ["ran a", "reported a", "ran b", "reported b"]
     assert [r.name for r in rows] == ["a", "b"]
+
+
+def test_a_bar_is_redrawn_while_its_tasks_run():
+    """uq's bar stood still for 10 s while a chunk of runs was out on a busy machine."""
+    from msens.progress import refreshing
+
+    class Bar:
+        calls = 0
+
+        def refresh(self):
+            Bar.calls += 1
+
+    with refreshing(Bar(), every=0.05):
+        time.sleep(0.4)
+    seen = Bar.calls
+    assert seen >= 3
+    time.sleep(0.2)
+    assert Bar.calls == seen  # the thread ended with the block
+    with refreshing(None):  # -q: no bar
+        pass

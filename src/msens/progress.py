@@ -88,6 +88,32 @@ def heartbeat(logger: logging.Logger, stage: str, *, every: float = HEARTBEAT_S,
             thread.join()
 
 
+@contextmanager
+def refreshing(bar, *, every: float = 2.0) -> Iterator[None]:
+    """Redraw a progress bar (tqdm) every ``every`` seconds while the ``with`` block runs.
+
+    A bar moves when a task finishes; with tasks of several seconds on a busy machine it
+    stood still for 10 s. Redrawn, its elapsed time and estimate move: the screen shows the
+    work going on. ``bar=None`` (no bar: ``-q``) does nothing.
+    """
+    if bar is None:
+        yield
+        return
+    stop = threading.Event()
+
+    def redraw() -> None:
+        while not stop.wait(every):
+            bar.refresh()  # tqdm takes its own lock
+
+    thread = threading.Thread(target=redraw, name="msens-bar", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+
+
 def stopwatch() -> Callable[[], float]:
     """A function giving the wall seconds since this call (for progress lines that say how
     long a stage has run)."""

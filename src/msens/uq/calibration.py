@@ -26,7 +26,7 @@ import numpy as np
 from msens.config.study import Study
 from msens.errors import InputError
 from msens.io.output import DPI, OutputDir
-from msens.progress import heartbeat
+from msens.progress import heartbeat, refreshing
 from msens.uq.inputs import InputSet, load_inputs
 from msens.uq.mcmc import (
     RHAT_LIMIT,
@@ -390,8 +390,9 @@ def run_calibrate(study: Study, out: str | Path, *, data=None, reference: str | 
             bar.refresh()
 
     try:
-        chains = sample(posterior, z0, walkers=walkers, steps=steps, seed=seed, cov=cov,
-                        progress=tick)
+        with refreshing(bar):
+            chains = sample(posterior, z0, walkers=walkers, steps=steps, seed=seed, cov=cov,
+                            progress=tick)
     finally:
         if bar is not None:
             bar.close()

@@ -149,7 +149,7 @@ def run_uq(study: Study, out: str | Path, *, inputs: str | Path | None = None,
     workers = check_workers(workers)
     load_inputs(inputs, study)  # every input checked before any work
     from msens import budget
-    from msens.progress import heartbeat
+    from msens.progress import heartbeat, refreshing
 
     budget.check(study)
     _log.info("uq: the nominal prediction (msens run) and the models the inputs need")
@@ -172,8 +172,9 @@ def run_uq(study: Study, out: str | Path, *, inputs: str | Path | None = None,
             bar.refresh()
 
     try:
-        result = propagate(study, checked, samples=samples, seed=seed, scheduler=scheduler,
-                           workers=workers, progress=tick)
+        with refreshing(bar):
+            result = propagate(study, checked, samples=samples, seed=seed,
+                               scheduler=scheduler, workers=workers, progress=tick)
     finally:
         if bar is not None:
             bar.close()

@@ -425,3 +425,24 @@ def test_sweep_grade_that_is_not_a_name(tmp_path, capsys, grade):
     code, err = run_cli(["design", str(TINY_MSS), "--sweep", str(sweep), "--out",
                          str(tmp_path / "d"), "-q"], capsys, seconds=15)
     assert_input_error(code, err, "magnet.grade", "unknown magnet grade")
+
+
+@pytest.mark.parametrize("name", ["../../../tmp/msens-escape", "a/b", "..", ".hidden",
+                                  "a\\\\b", "tab\\there", " lead", "x" * 101, ""])
+def test_study_name_cannot_climb_out_of_the_output_folder(tiny, tmp_path, capsys, name):
+    """The default output folder is out/<name>: '../../../tmp/x' wrote outside it."""
+    code, err = _run(tiny, tmp_path, capsys, ('name = "tiny"', f'name = "{name}"'))
+    assert_input_error(code, err, "'name' must be 1 to 100 characters")
+    assert not Path("/tmp/msens-escape").exists()
+
+
+def test_setup_names_are_checked_the_same_way():
+    from msens.config.study import parse_study
+
+    text = TINY_MSS.read_text()
+    with pytest.raises(InputError, match=r"'setup\[1\]\.name' must be 1 to 100"):
+        parse_study('schema = "msens.study/1"\nname = "ok name"\n[chain]\nbeads = 10\n'
+                    '[striker]\ndrop_height_m = 7.2e-3\n[[setup]]\nname = "../up"\n'
+                    '[[setup.sensor]]\nkind = "bead"\nparticle = 4\n')
+    assert parse_study(text.replace('name = "tiny-mss"', 'name = "my rig, run 2"')).name \
+        == "my rig, run 2"

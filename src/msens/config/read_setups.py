@@ -124,7 +124,7 @@ def _setups(root: Table, chain: ChainSpec, name: str,
                                       "[[precompression]] or [[chain.insert]]")
         out = []
         for st in setup_tables:
-            sname = st.string("name", required=True)
+            sname = st.label("name")
             out.append(_setup(st, sname, chain, st.tables("insert"), st.tables("sensor"),
                               st.tables("precompression")))
             st.finish()

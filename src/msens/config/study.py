@@ -60,7 +60,9 @@ class Study:
     Attributes
     ----------
     name : str
-        The study's name (names its output folder and, in a plain study, its one setup).
+        The study's name (names its output folder and, in a plain study, its one setup):
+        1 to 100 characters without ``/``, ``\\`` or control characters, not starting with
+        a dot or a space.
     chain, striker, setups, simulation, electronics, field : records
         The ``[chain]``, ``[striker]``, ``[[sensor]]``/``[[setup]]``, ``[simulation]``,
         ``[electronics]`` and ``[field]`` tables (:mod:`msens.config.schema`).
@@ -170,7 +172,7 @@ def parse_study(text: str, *, source: str = "<memory>", base_dir: Path | None = 
 
 
 def _study(root: Table, source: str, base_dir: Path | None) -> Study:
-    name = root.string("name", required=True)
+    name = root.label("name")
     chain_t = root.table("chain", required=True)
     chain = _chain(chain_t)
     top_inserts = chain_t.tables("insert")

@@ -120,6 +120,21 @@ class Table:
             raise self.error(name, f"must be one of {allowed}, got {shorten(value)}")
         return value
 
+    def label(self, name: str, *, required: bool = True) -> str:
+        """A name that may become part of a file or folder name (a study's ``name`` is the
+        default output folder ``out/<name>``): 1 to 100 characters, no path separator, no
+        control character, not starting with a dot or a space (``..`` would climb out of
+        ``out/``)."""
+        value = self.string(name, required=required)
+        if value is None:
+            return value
+        bad = [c for c in value if c in "/\\" or ord(c) < 32 or ord(c) == 127]
+        if not 1 <= len(value) <= 100 or bad or value[0] in ". " or value[-1] == " ":
+            raise self.error(name, "must be 1 to 100 characters without '/', '\\' or "
+                             "control characters, not starting with '.' or a space (it "
+                             f"names output folders such as out/<name>), got {shorten(value)}")
+        return value
+
     def boolean(self, name: str, default: bool | None = None, *, required: bool = False) -> bool:
         value = self._raw(name, default, required)
         if not isinstance(value, bool):

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -27,6 +28,13 @@ _MODULES = {
     "bg_fail": """
         def main(argv):
             raise RuntimeError("no compiler today")
+    """,
+    "bg_where": """
+        import msens
+
+        def main(argv):
+            print(msens.__file__, flush=True)
+            return 0
     """,
     "bg_sleep": """
         import time
@@ -146,3 +154,23 @@ def test_unknown_variant():
         warmup.cached("fast")
     with pytest.raises(ValueError, match="unknown kernel variant 'fast'"):
         warmup.compile_variants(["fast"])
+
+
+def test_the_second_process_imports_the_same_msens(modules, tmp_path):
+    """A parent that imports msens from a folder it put on its own path (not in the
+    environment): the second process imports that msens too, not the installed one."""
+    copy = tmp_path / "copy"
+    shutil.copytree(Path(numba_cache.__file__).resolve().parent, copy / "msens",
+                    ignore=shutil.ignore_patterns("__pycache__", "*.nb[ic]"))
+    parent = textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {str(copy)!r})
+        from msens import numba_cache
+        assert numba_cache.__file__.startswith({str(copy)!r}), numba_cache.__file__
+        job = numba_cache.compile_in_background("bg_where")
+        assert job.wait() is None, job.said
+        print(job.said[-1])
+    """)
+    done = subprocess.run([sys.executable, "-c", parent], capture_output=True, text=True,
+                          timeout=300, check=True, env=dict(os.environ))
+    assert done.stdout.strip() == str(copy / "msens" / "__init__.py")

@@ -69,10 +69,19 @@ def use_user_cache() -> Path | None:
     return path
 
 
-#: Run in the second process: exit as soon as its standard input closes (the parent ended,
-#: however it ended), then import the module and call its ``main`` with the arguments.
-_CHILD = ("import sys; from msens.numba_cache import run_child; "
-          "sys.exit(run_child(sys.argv[1:]))")
+#: Run in the second process: import the parent's msens (its folder first on the path only
+#: when another msens, or none, would be found: never the whole site-packages ahead of the
+#: standard library), exit as soon as its standard input closes (the parent ended, however
+#: it ended), then import the module and call its ``main`` with the arguments.
+_CHILD = """
+import importlib.util, os, sys
+here = sys.argv.pop(1)
+spec = importlib.util.find_spec("msens")
+if spec is None or os.path.realpath(os.path.dirname(os.path.dirname(spec.origin))) != here:
+    sys.path.insert(0, here)
+from msens.numba_cache import run_child
+sys.exit(run_child(sys.argv[1:]))
+"""
 
 
 @dataclass
@@ -153,15 +162,13 @@ def compile_in_background(module: str, *args: str) -> BackgroundCompile | None:
     *args : str
         Its arguments.
     """
-    use_user_cache()
-    env = dict(os.environ)
-    here = str(Path(__file__).resolve().parents[1])  # the folder holding this msens
-    env["PYTHONPATH"] = os.pathsep.join([here, *filter(None, [env.get("PYTHONPATH")])])
+    use_user_cache()  # the child inherits the environment: the same cache folder
+    here = os.path.realpath(Path(__file__).resolve().parents[1])  # the folder holding msens
     errors = tempfile.TemporaryFile()
     try:
-        process = subprocess.Popen([sys.executable, "-c", _CHILD, module, *args],
+        process = subprocess.Popen([sys.executable, "-c", _CHILD, here, module, *args],
                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                   stderr=errors, env=env)
+                                   stderr=errors)
     except OSError:
         errors.close()
         return None

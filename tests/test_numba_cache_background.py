@@ -174,3 +174,33 @@ def test_the_second_process_imports_the_same_msens(modules, tmp_path):
     done = subprocess.run([sys.executable, "-c", parent], capture_output=True, text=True,
                           timeout=300, check=True, env=dict(os.environ))
     assert done.stdout.strip() == str(copy / "msens" / "__init__.py")
+
+
+def test_the_readout_recursion_is_compiled_for_the_types_the_readout_passes():
+    """What a first run compiles while it waits is the variant the read-out then uses."""
+    import numba
+    import numpy as np
+
+    from msens.readout import daq, electronics
+
+    electronics.compile_recursion()
+    phi, g0, _ = daq._foh_matrices(-np.eye(2), np.ones((2, 1)), 1e-7)
+    drive = np.ascontiguousarray(np.outer(np.ones(3), g0[:, 0]))
+    sig = tuple(numba.typeof(a) for a in (phi, np.zeros(2), drive))
+    assert sig in electronics._linear_recursion.overloads
+
+
+def test_await_kernel_does_the_meanwhile_work_only_while_waiting(modules):
+    done = []
+    job = numba_cache.compile_in_background("bg_sleep")
+    assert job.wait_for("started") is None
+    try:
+        job.said.append(warmup.done_line(warmup.SIMULATE))  # as if already compiled
+        pipeline.await_kernel(job, warmup.SIMULATE, meanwhile=lambda: done.append(1))
+        assert done == []
+    finally:
+        job.stop()
+    job = numba_cache.compile_in_background("bg_ok", warmup.SIMULATE)
+    pipeline.await_kernel(job, warmup.SIMULATE, meanwhile=lambda: done.append(1))
+    job.stop()
+    assert done in ([1], [])  # [] only if the process had ended before the wait began

@@ -26,6 +26,7 @@ from msens.config.study import Study
 from msens.errors import InputError
 from msens.numba_cache import BackgroundCompile, compile_in_background
 from msens.progress import COMPILE_ESTIMATE_TEXT, heartbeat
+from msens.readout.electronics import compile_recursion
 from msens.readout.sensors import SensorKind, observe, time_derivative
 from msens.results import SensorResult, SetupResult, StudyResult
 from msens.signals.features import centre_distance, model_features, wave_speed
@@ -306,7 +307,9 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
         setups = []
         for setup in study.setups:
             transducers = setup_transducers(study, setup)
-            await_kernel(job, warmup.SIMULATE)
+            # the read-out compiles its recursion while this process would only wait
+            await_kernel(job, warmup.SIMULATE, meanwhile=compile_recursion if any(
+                s.model is MssModel.PHYSICS for s in setup.sensors) else None)
             chain, history = simulate_setup(study, setup, t, gamma_contact=gc, gamma_wall=gw,
                                             extra=(static_forces or {}).get(setup.name),
                                             transducers=transducers)
@@ -345,12 +348,16 @@ def kernel_in_background(variants: tuple[str, ...]) -> BackgroundCompile | None:
     return job
 
 
-def await_kernel(job: BackgroundCompile | None, variant: str) -> None:
-    """Wait (with a heartbeat) until ``job`` has compiled ``variant`` into numba's cache; if
-    it failed, say so: the variant is then compiled in this process on first use."""
+def await_kernel(job: BackgroundCompile | None, variant: str,
+                 meanwhile: Callable[[], object] | None = None) -> None:
+    """Wait (with a heartbeat) until ``job`` has compiled ``variant`` into numba's cache,
+    doing ``meanwhile`` first if there is a wait; if it failed, say so: the variant is then
+    compiled in this process on first use."""
     if job is None or warmup.done_line(variant) in job.said:
         return
     with heartbeat(_log, "waiting for the chain kernel's compilation in a second process"):
+        if meanwhile is not None and job.running():
+            meanwhile()
         problem = job.wait_for(warmup.done_line(variant))
     if problem is not None or warmup.cached(variant) is not True:
         _log.warning("compiling the chain kernel in a second process failed (%s); compiling "

@@ -303,6 +303,17 @@ def bandwidth(circuit: ReadoutCircuit) -> float:
                                  rtol=1e-14))
 
 
+def compile_recursion() -> None:
+    """Compile (or load from numba's cache) the read-out's state recursion for the argument
+    types its first-order-hold callers pass (a read-only view of the matrix exponential,
+    contiguous vectors: :func:`msens.readout.daq._foh_matrices`); ``msens run`` calls it while
+    it waits for the chain kernel's first compilation (2.5 s of compiling otherwise done
+    after it)."""
+    e = np.eye(3)
+    e.flags.writeable = False
+    _linear_recursion(e[:2, :2], np.zeros(2), np.zeros((1, 2)))
+
+
 @numba.njit(cache=True)
 def _linear_recursion(phi, x0, drive):  # pragma: no cover - compiled
     """x[0] = x0, x[k+1] = Φ x[k] + drive[k]; returns x, shape (K+1, n)."""

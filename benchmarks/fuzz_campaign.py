@@ -58,30 +58,15 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # tests.hostile: the tiny study and the TOML writer
 
+from benchmarks.calibrate_coverage import INPUTS as COVERAGE_INPUTS  # noqa: E402
 from tests.hostile.conftest import TWENTY  # noqa: E402
 from tests.hostile.tomltext import dumps  # noqa: E402
 
 import msens.cli  # noqa: E402
 
-#: Uncertain inputs of the tiny study (msens.uncertainty/1) for ``uq`` and ``calibrate``.
-INPUTS = """schema = "msens.uncertainty/1"
-study = "tiny"
-[[input]]
-name = "striker.drop_height_m"
-distribution = "uniform"
-lower = 6.7e-3
-upper = 7.7e-3
-reason = "drop height set by hand"
-source = "fuzz campaign"
-[[input]]
-name = "chain.gamma_contact_kg_per_s"
-distribution = "triangular"
-lower = 4.07
-mode = 4.71
-upper = 5.56
-reason = "Eq. 10 fit"
-source = "fuzz campaign"
-"""
+#: Uncertain inputs of the tiny study (msens.uncertainty/1) for ``uq`` and ``calibrate``:
+#: the calibration-coverage benchmark's.
+INPUTS = COVERAGE_INPUTS.replace('study = "coverage"', 'study = "tiny"')
 
 HOSTILE_VALUES: list[Any] = [
     0, -1, 1, 0.0, -0.0, 1e-300, -1e-300, 5e-324, 1e300, 1e308, -1e308, math.nan, math.inf,

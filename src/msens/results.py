@@ -12,6 +12,7 @@ produce and read these records; nothing here runs a model.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -23,6 +24,35 @@ from msens.config.schema import ReferenceRow, SensorSpec, SetupSpec
 from msens.config.study import Study
 from msens.signals.features import PulseFeatures
 
+
+class JsonReport:
+    """What the results of the workflows that write one JSON report and its figures share.
+
+    The subclass, a frozen dataclass, has ``report`` (dict: the JSON file's content) and
+    ``written`` (tuple of Path: the JSON file, then the figures) and defines ``table()``
+    (what its command prints).
+    """
+
+    report: dict
+    written: tuple[Path, ...]
+
+    @property
+    def files(self) -> tuple[Path, ...]:
+        """The files written: the JSON report, then the figures."""
+        return tuple(self.written)
+
+    @property
+    def figures(self) -> tuple[Path, ...]:
+        """The figures written."""
+        return tuple(p for p in self.written if Path(p).suffix != ".json")
+
+    def to_json(self) -> dict:
+        """The content of the JSON report (a copy, as JSON values)."""
+        import json
+
+        from msens.io.output import to_json
+
+        return json.loads(to_json(self.report))
 
 @dataclass(frozen=True)
 class SensorResult:

@@ -65,8 +65,8 @@ _log = logging.getLogger(__name__)
 #: the beads agrees with a reference (beads 20 µm, pole surfaces 10 µm) within 0.04 % and
 #: 0.01° at 10–30 kHz and 0.5 % and 0.04° at 100 kHz, R_eddy within 1.0 % and L within
 #: 0.2 %; at 40 µm everywhere the contact approach was 1.1 % off at 100 kHz, and with the bead
-#: surfaces only graded (the pole pieces at their part size) 6.3° off at 10 kHz, 27 % at 100 kHz and R_eddy
-#: +130 % at 10 kHz.
+#: surfaces only graded (the pole pieces at their part size) 6.3° off at 10 kHz, 27 % at
+#: 100 kHz and R_eddy +130 % at 10 kHz.
 SKIN_SIZE = 30e-6
 
 __all__ = ["SKIN_SIZE", "HarmonicOperator", "HarmonicSolution",

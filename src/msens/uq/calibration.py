@@ -27,6 +27,7 @@ from msens.config.study import Study
 from msens.errors import InputError
 from msens.io.output import DPI, OutputDir
 from msens.progress import heartbeat, refreshing
+from msens.results import JsonReport
 from msens.uq.inputs import InputSet, load_inputs
 from msens.uq.mcmc import (
     RHAT_LIMIT,
@@ -113,31 +114,13 @@ class Calibration:
 
 
 @dataclass(frozen=True)
-class CalibrateResult:
+class CalibrateResult(JsonReport):
     """What :func:`run_calibrate` returns: the calibration, ``calibration.json``'s content
     and the files written."""
 
     calibration: Calibration
     report: dict
     written: tuple[Path, ...]
-
-    @property
-    def files(self) -> tuple[Path, ...]:
-        """The files written (``calibration.json`` and the figures)."""
-        return self.written
-
-    @property
-    def figures(self) -> tuple[Path, ...]:
-        """The figures written."""
-        return tuple(p for p in self.written if p.suffix != ".json")
-
-    def to_json(self) -> dict:
-        """The content of ``calibration.json`` (a copy, as JSON values)."""
-        import json
-
-        from msens.io.output import to_json
-
-        return json.loads(to_json(self.report))
 
     def table(self) -> str:
         """What ``msens calibrate`` prints: the table

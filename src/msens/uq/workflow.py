@@ -24,6 +24,7 @@ import numpy as np
 from msens.config.study import Study
 from msens.io.output import DPI, OutputDir
 from msens.parallel import check_scheduler, check_workers, pools_allowed
+from msens.results import JsonReport
 from msens.uq.inputs import InputSet, load_inputs
 from msens.uq.propagate import Propagation, check_samples, propagate
 
@@ -37,7 +38,7 @@ DEFAULT_SAMPLES = 256
 
 
 @dataclass(frozen=True)
-class UqResult:
+class UqResult(JsonReport):
     """What :func:`run_uq` produced.
 
     Attributes
@@ -51,24 +52,6 @@ class UqResult:
     propagation: Propagation
     report: dict
     written: tuple[Path, ...]
-
-    @property
-    def files(self) -> tuple[Path, ...]:
-        """The files written (``uq.json`` and the figures)."""
-        return self.written
-
-    @property
-    def figures(self) -> tuple[Path, ...]:
-        """The figures written."""
-        return tuple(p for p in self.written if p.suffix != ".json")
-
-    def to_json(self) -> dict:
-        """The content of ``uq.json`` (a copy, as JSON values)."""
-        import json
-
-        from msens.io.output import to_json
-
-        return json.loads(to_json(self.report))
 
     def table(self) -> str:
         """What ``msens uq`` prints: the table

@@ -11,7 +11,6 @@ and returns them as a :class:`CompareResult` (its text table:
 
 from __future__ import annotations
 
-import copy
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +28,7 @@ from msens.config.study import Study
 from msens.io.output import DPI, OutputDir, to_json
 from msens.io.waveform import Waveform
 from msens.pipeline import run_study
-from msens.results import StudyResult
+from msens.results import JsonReport, StudyResult
 from msens.signals.signalcheck import check_amplitudes, check_pulses, check_shots
 from msens.tables import files_line
 from msens.tables import format_comparison as format_comparison
@@ -40,7 +39,7 @@ FILES = ("compare.json", "overlay.png")
 
 
 @dataclass(frozen=True)
-class CompareResult:
+class CompareResult(JsonReport):
     """What ``compare`` produced: the comparison and the files written.
 
     Attributes
@@ -49,21 +48,13 @@ class CompareResult:
         The content of ``compare.json`` as plain JSON values (per channel the measured
         features over the shots and the model's; TOF in µs; non-finite numbers are None);
         read it through :meth:`to_json`, which returns a copy.
-    files : tuple of Path
-        The files written: ``compare.json``, then the overlay figure.
+    written : tuple of Path
+        The files written: ``compare.json``, then the overlay figure (also :attr:`files`;
+        :attr:`figures` the figure alone).
     """
 
     report: dict
-    files: tuple[Path, ...]
-
-    @property
-    def figures(self) -> tuple[Path, ...]:
-        """The figures written (the overlay of measured and model records)."""
-        return tuple(p for p in self.files if p.suffix != ".json")
-
-    def to_json(self) -> dict:
-        """The content of ``compare.json`` (a copy)."""
-        return copy.deepcopy(self.report)
+    written: tuple[Path, ...]
 
     def table(self) -> str:
         """What ``msens compare`` prints: the table (:func:`format_comparison`) and the

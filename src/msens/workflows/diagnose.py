@@ -10,7 +10,6 @@ table: :func:`msens.tables.format_diagnosis`).
 
 from __future__ import annotations
 
-import copy
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,6 +19,7 @@ from msens import budget
 from msens.config.study import Study
 from msens.errors import InputError
 from msens.io.output import OutputDir
+from msens.results import JsonReport
 from msens.tables import files_line
 from msens.tables import format_diagnosis as format_diagnosis
 from msens.workflows.common import check_format, figure_names, provenance
@@ -33,7 +33,7 @@ MAX_PASSES = 7
 
 
 @dataclass(frozen=True)
-class DiagnoseResult:
+class DiagnoseResult(JsonReport):
     """What ``diagnose`` produced: the passes, the report and the files written.
 
     Attributes
@@ -43,22 +43,14 @@ class DiagnoseResult:
         verdict); read it through :meth:`to_json`, which returns a copy.
     passes : tuple of Diagnosis
         Each pass's diagnosis, in order (:class:`msens.diagnose.Diagnosis`).
-    files : tuple of Path
-        The files written: ``diagnosis.json``, then its figure.
+    written : tuple of Path
+        The files written: ``diagnosis.json``, then its figure (also :attr:`files`;
+        :attr:`figures` the figure alone).
     """
 
     report: dict
     passes: tuple[Diagnosis, ...]
-    files: tuple[Path, ...]
-
-    @property
-    def figures(self) -> tuple[Path, ...]:
-        """The figures written."""
-        return tuple(p for p in self.files if p.suffix != ".json")
-
-    def to_json(self) -> dict:
-        """The content of ``diagnosis.json`` (a copy)."""
-        return copy.deepcopy(self.report)
+    written: tuple[Path, ...]
 
     def table(self) -> str:
         """What ``msens diagnose`` prints: the table (:func:`format_diagnosis`) and the

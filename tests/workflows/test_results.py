@@ -77,6 +77,8 @@ def test_synth_result_is_the_file(data):
     assert tuple(js["channels"]) == tuple(c.name for c in waveform.channels)
     assert js["provenance"] == msens.summary(msens.run(api.load(TINY)))["provenance"]
     json.dumps(js)  # plain JSON values
+    # code written when synth returned the path: its Path methods still work
+    assert data.read_bytes() == data.path.read_bytes() and data.suffix == ".csv"
 
 
 def test_synth_prints_its_table(tmp_path, monkeypatch, capsys):

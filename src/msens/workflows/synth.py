@@ -29,7 +29,8 @@ class SynthResult(os.PathLike):
     """What ``synth`` produced: a waveform file of synthetic measurements.
 
     Path-like (``os.fspath``, ``str`` and :func:`msens.read_waveform` give the file), so it
-    passes wherever the file's path does, as a column-mapped file does.
+    passes wherever the file's path does, as a column-mapped file does; the file's
+    :class:`~pathlib.Path` methods (``read_bytes``, ``exists``...) work on it too.
 
     Attributes
     ----------
@@ -68,6 +69,13 @@ class SynthResult(os.PathLike):
 
     def __str__(self) -> str:
         return str(self.path)
+
+    def __getattr__(self, name: str):
+        """The file's :class:`~pathlib.Path` methods and attributes (``read_bytes``,
+        ``suffix``...): code written when ``synth`` returned the path keeps working."""
+        if name.startswith("__") or name == "path":  # not during copying or unpickling
+            raise AttributeError(name)
+        return getattr(self.path, name)
 
     @property
     def files(self) -> tuple[Path, ...]:

@@ -446,3 +446,20 @@ def test_setup_names_are_checked_the_same_way():
                     '[[setup.sensor]]\nkind = "bead"\nparticle = 4\n')
     assert parse_study(text.replace('name = "tiny-mss"', 'name = "my rig, run 2"')).name \
         == "my rig, run 2"
+
+
+def test_record_shifted_out_of_the_model_window(tmp_path, capsys):
+    """A record whose time axis starts 10 ms after the impact: diagnose took a mean over no
+    samples (numpy's 'Mean of empty slice' warning, then NaN); found by the fuzz campaign."""
+    from tests.hostile.conftest import TWENTY
+
+    from msens.io import Waveform, read_waveform, write_waveform
+
+    study = tmp_path / "s.toml"
+    study.write_text(TWENTY)
+    w = read_waveform(api.synth(api.load(study), tmp_path / "r.csv", shots=2, seed=5))
+    write_waveform(Waveform(w.time + 1e-2, w.data, w.channels, w.metadata),
+                   tmp_path / "late.csv")
+    code, err = run_cli(["diagnose", str(tmp_path / "late.csv"), "--study", str(study),
+                         "--out", str(tmp_path / "d")], capsys, seconds=60)
+    assert_input_error(code, err, "bead@10", "time window")

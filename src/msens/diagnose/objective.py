@@ -173,8 +173,13 @@ class WaveformObjective:
         for j, spec in enumerate(setup.sensors):
             for s in self.shots:
                 y = s.y[j]
+                if y.size == 0:  # a mean over nothing: NaN and a numpy warning
+                    raise InputError(
+                        f"channel {spec.kind.value}@{spec.particle}: no sample of the record "
+                        "falls inside the model's time window (from the striker's impact to "
+                        "the study's simulation.t_end_s); check the record's time axis")
                 noise = float(np.sqrt(np.mean(1.0 / s.w[j])))
-                peak = float(np.max(np.abs(y))) if y.size else 0.0
+                peak = float(np.max(np.abs(y)))
                 if not (np.isfinite(peak) and peak > 0.0 and peak > MIN_SNR * noise):
                     raise InputError(
                         f"channel {spec.kind.value}@{spec.particle} has no usable pulse "

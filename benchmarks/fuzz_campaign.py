@@ -12,8 +12,9 @@ classified as
 - ``timeout``: over the time limit and silent (a hang); ``crash``: the child died (signal,
   memory);
 - ``long-work``: over the time limit (or 60 s of CPU) while still reporting progress on
-  field-model work: a study whose changed sensor geometry needs a new field model and its
-  contact maps solves them (minutes, legitimately); counted apart, listed for review;
+  work whose size the input asks for: a study whose changed sensor geometry needs a new
+  field model and its contact maps (minutes), or a sampler asked for many steps
+  (``calibrate --steps 10001``); counted apart, listed for review;
 - ``py-warning``: a Python warning (numpy, matplotlib...) reached stderr;
 - ``unresolved-ok``: exit 0 from ``msens run`` whose summary reports a TOF or AR that its
   record cannot hold (a pulse narrower than two samples, a TOF that is not positive, or a
@@ -83,9 +84,11 @@ STALL_S = 20.0
 
 
 def _field_work(stderr: str) -> bool:
-    """Whether a case's progress lines show field-model work (solves, maps, meshes)."""
+    """Whether a case's progress shows work whose size the input asks for: a field model
+    (solves, maps, meshes) or a sampler's steps and runs (``calibrate --steps 10001``)."""
     return any(w in stderr for w in ("field model", "contact map", "mesh", "transducer",
-                                     "eddy-current", "bias"))
+                                     "eddy-current", "bias", "calibrate steps",
+                                     "uq model runs"))
 
 
 def _overdue(progress: Path, seconds: float) -> dict:
@@ -406,7 +409,7 @@ def cli_case(rng: random.Random, work: Path, i: int) -> tuple[str, list[str]]:
     inputs = str(work / "inputs.toml")
     if command == "uq":
         argv = ["uq", tiny, "--inputs", inputs, "--samples", "8", "--workers", "1",
-                "--out", out, "-q"]
+                "--out", out]
         extra = rng.choice([["--samples", rng.choice([*NUMBERS, "7", "3", "65536"])],
                             ["--seed", rng.choice(NUMBERS)], ["--workers", rng.choice(NUMBERS)],
                             ["--scheduler", rng.choice(ADDRESSES)], ["--out", rng.choice(OUTS)],
@@ -415,7 +418,7 @@ def cli_case(rng: random.Random, work: Path, i: int) -> tuple[str, list[str]]:
     elif command == "calibrate":
         argv = ["calibrate", record, "--study", tiny, "--inputs", inputs,
                 "--param", "striker.drop_height_m", "--param", "chain.gamma_contact_kg_per_s",
-                "--steps", "10", "--walkers", "4", "--out", out, "-q"]
+                "--steps", "10", "--walkers", "4", "--out", out]
         extra = rng.choice([["--steps", rng.choice(NUMBERS)], ["--walkers", rng.choice(NUMBERS)],
                             ["--seed", rng.choice(NUMBERS)], ["--out", rng.choice(OUTS)],
                             ["--param", rng.choice(["", "x", "chain.beads", "chain",

@@ -418,7 +418,7 @@ def cli_case(rng: random.Random, work: Path, i: int) -> tuple[str, list[str]]:
     elif command == "calibrate":
         argv = ["calibrate", record, "--study", tiny, "--inputs", inputs,
                 "--param", "striker.drop_height_m", "--param", "chain.gamma_contact_kg_per_s",
-                "--steps", "10", "--walkers", "4", "--out", out]
+                "--steps", "20", "--walkers", "4", "--out", out]
         extra = rng.choice([["--steps", rng.choice(NUMBERS)], ["--walkers", rng.choice(NUMBERS)],
                             ["--seed", rng.choice(NUMBERS)], ["--out", rng.choice(OUTS)],
                             ["--param", rng.choice(["", "x", "chain.beads", "chain",
@@ -585,7 +585,7 @@ def cases(args: argparse.Namespace, work: Path):
                         "--workers", "1", "--out", str(out), "-q"]
             else:
                 argv = ["calibrate", str(work / "record.csv"), "--study", str(tiny),
-                        "--inputs", str(path), "--steps", "10", "--walkers", "8",
+                        "--inputs", str(path), "--steps", "20", "--walkers", "8",
                         "--out", str(out), "-q"]
             yield f"inputs:{argv[0]}", "; ".join(notes), argv
             continue

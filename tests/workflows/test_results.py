@@ -11,6 +11,8 @@ import os
 from pathlib import Path
 
 import pytest
+from tests.design.test_design_cli import TINY_COIL
+from tests.uq.test_propagate import CHAIN_INPUTS
 
 import msens
 from msens import api
@@ -19,16 +21,6 @@ from msens.io.read import read_waveform
 
 ROOT = Path(__file__).resolve().parents[2]
 TINY = ROOT / "tests" / "data" / "tiny-mss.toml"
-
-TINY_COIL = """
-schema = "msens.sweep/1"
-name = "tiny-coil"
-[coil]
-turns = [600, 1100]
-axial_offset_m = [0.0, 1e-3]
-[model]
-bead_padding = 2
-"""
 
 
 def _spy(monkeypatch, name: str) -> list:
@@ -149,22 +141,6 @@ def test_diagnose_result_is_diagnosis_json_and_the_printed_table(tmp_path, monke
     assert len(result.passes) == 1 and result.passes[0].effect == result.to_json()["effect"]
 
 
-UQ_INPUTS = """schema = "msens.uncertainty/1"
-[[input]]
-name = "striker.drop_height_m"
-distribution = "uniform"
-lower = 6.7e-3
-upper = 7.7e-3
-reason = "test"
-[[input]]
-name = "electronics.cable_capacitance_F"
-distribution = "uniform"
-lower = 50e-12
-upper = 200e-12
-reason = "test"
-"""
-
-
 def test_uq_result_is_uq_json_and_the_printed_table(tmp_path, monkeypatch, capsys):
     import msens.uq
 
@@ -172,7 +148,7 @@ def test_uq_result_is_uq_json_and_the_printed_table(tmp_path, monkeypatch, capsy
     real = msens.uq.run_uq
     monkeypatch.setattr(msens.uq, "run_uq", lambda *a, **k: seen.append(real(*a, **k))
                         or seen[-1])
-    (tmp_path / "u.toml").write_text(UQ_INPUTS)
+    (tmp_path / "u.toml").write_text(CHAIN_INPUTS)
     out = tmp_path / "uq"
     assert main(["uq", "--inputs", str(tmp_path / "u.toml"), "--out", str(out), "--samples",
                  "4", "--workers", "1", "-q"]) == 0

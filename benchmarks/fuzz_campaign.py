@@ -240,6 +240,17 @@ def _unresolved(argv) -> str | None:
 
 # --------------------------------------------------------------------------- mutations
 
+def write_doc(path: Path, doc: dict, notes: list[str]) -> Path:
+    """Write ``doc`` as TOML to ``path``, or as its Python text when no TOML can hold it (a
+    mutation left a None or an odd type: also hostile, noted)."""
+    try:
+        path.write_text(dumps(doc))
+    except (TypeError, ValueError):
+        path.write_text(str(doc))
+        notes.append("not TOML")
+    return path
+
+
 def leaves(doc: Any, path: tuple = ()) -> list[tuple]:
     if isinstance(doc, dict):
         return [p for k, v in doc.items() for p in leaves(v, (*path, k))]
@@ -574,12 +585,7 @@ def cases(args: argparse.Namespace, work: Path):
             continue
         if what == "inputs":
             doc, notes = mutate(shipped["inputs"], rng)
-            path = work / f"in{i}.toml"
-            try:
-                path.write_text(dumps(doc))
-            except (TypeError, ValueError):
-                path.write_text(str(doc))
-                notes.append("not TOML")
+            path = write_doc(work / f"in{i}.toml", doc, notes)
             if rng.random() < 0.5:
                 argv = ["uq", str(tiny), "--inputs", str(path), "--samples", "8",
                         "--workers", "1", "--out", str(out), "-q"]
@@ -598,12 +604,7 @@ def cases(args: argparse.Namespace, work: Path):
         if what.startswith("study:"):
             name = what.split(":")[1]
             doc, notes = mutate(shipped[name], rng)
-            path = work / f"s{i}.toml"
-            try:
-                path.write_text(dumps(doc))
-            except (TypeError, ValueError):
-                path.write_text(str(doc))  # not TOML at all: also hostile
-                notes.append("not TOML")
+            path = write_doc(work / f"s{i}.toml", doc, notes)
             yield what, "; ".join(notes), ["run", str(path), "--out", str(out), "--no-figures"]
         elif what.startswith("wave:") and what != "wave:record":
             fmt = what.split(":")[1]
@@ -641,12 +642,7 @@ def cases(args: argparse.Namespace, work: Path):
                 # contact): legitimately long work, not a hang
                 model["contact_map"] = False
                 notes.append("contact_map kept false (minutes per design)")
-            path = work / f"sw{i}.toml"
-            try:
-                path.write_text(dumps(doc))
-            except (TypeError, ValueError):
-                path.write_text(str(doc))
-                notes.append("not TOML")
+            path = write_doc(work / f"sw{i}.toml", doc, notes)
             yield f"sweep:{name}", "; ".join(notes), [
                 "design", str(design_study), "--sweep", str(path),
                 "--out", str(out), "--workers", "1"]

@@ -24,13 +24,11 @@ from dataclasses import dataclass
 #: still keeps the silence near 5 s).
 HEARTBEAT_S = 4.0
 
-#: Wall time of the chain kernel's first compilation on an idle 2-core machine, s (numba,
-#: the variant ``msens run`` needs, in the second process of :mod:`msens.chain.warmup`: it
-#: took 22.9 + 1.9 s of CPU, a single-threaded compile, so about as many seconds of wall
-#: time on an idle core; 25.8 s wall at load 4.7; before the kernel's literal-free typing
-#: and loop padding 38.8 s of CPU and a 47.7 s chain stage at load 0.8). A loaded machine
-#: takes longer. It happens once per install: the compiled code is kept in the user cache
-#: folder (:mod:`msens.numba_cache`).
+#: Wall time of the chain kernel's first compilation on an idle 2-core machine, s: the
+#: variant ``msens run`` needs is a single-threaded numba compile of about 25 s of CPU, done in
+#: a second process (:mod:`msens.chain.warmup`); a loaded machine takes longer. It happens
+#: once per install (the compiled code is kept in the user cache folder,
+#: :mod:`msens.numba_cache`); measurements on docs/benchmarks.md.
 KERNEL_COMPILE_S = 30.0
 
 

@@ -30,8 +30,8 @@ from pathlib import Path
 if __package__ in (None, ""):  # run as a script: the repository root on the path
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.independent import cases as cs  # noqa: E402
-from benchmarks.independent import field, sim  # noqa: E402
+from benchmarks.independent import cases as cs
+from benchmarks.independent import field, sim
 
 #: The issue's acceptance numbers.
 ACCEPTANCE = {"right_effect": 0.90, "inside_interval": 0.80, "nulls_explained": 5 / 6,

@@ -29,7 +29,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-
 from benchmarks.independent.field import FieldTables
 from benchmarks.independent.sim import (
     Chain,

@@ -30,11 +30,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from benchmarks.independent.field import DELTA_GRID, CoilTables, FieldTables
 from scipy import optimize, signal
 from scipy.integrate import solve_ivp
 from scipy.interpolate import PchipInterpolator
-
-from benchmarks.independent.field import DELTA_GRID, CoilTables, FieldTables
 
 G = 9.80665
 

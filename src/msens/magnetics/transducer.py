@@ -52,6 +52,7 @@ from msens.field.sensor_model import (
 from msens.field.solve import FieldSolution, solve
 from msens.io.hashing import canonical as _canonical
 from msens.magnetics.approach import hertz_approach_rate, hertz_stiffness
+from msens.magnetics.coil_read import CoilTables, build_tables
 from msens.magnetics.contact_map import ApproachMap
 from msens.magnetics.magnetoelastic import JilesAthertonSablik
 from msens.magnetics.mechanisms import (
@@ -261,11 +262,19 @@ class TransducerReport:
     bias : FieldSolution or None
         The bias solution it was computed from (None when read from the cache): a start
         for the same geometry's bias on another mesh (:func:`bias_solution`).
+    coil_tables : CoilTables or None
+        When computed: what a changed coil reads from this field model
+        (:mod:`msens.magnetics.coil_read`).
+    read_from : SensorGeometry or None
+        When the coils were read from another coil's field model: that model's geometry
+        (its contact maps are the ones these coils read).
     """
 
     transducers: dict[int, Transducer]
     details: dict
     bias: FieldSolution | None = field(default=None, compare=False, repr=False)
+    coil_tables: CoilTables | None = field(default=None, compare=False, repr=False)
+    read_from: SensorGeometry | None = field(default=None, compare=False, repr=False)
 
 
 def bias_solution(geometry: SensorGeometry, *, options: MeshOptions | None = None,
@@ -353,8 +362,11 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
             "particles": model.particles.tolist(),
             "bead_sensitivity_Wb_per_N": link[:model.particles.size].tolist(),
             "reciprocity_adjoint_rel_error": err}
+    with timed(_log, "transducers: coil tables"):
+        tables = build_tables(sol, model, geometry,
+                              {p: tr.inductance_H for p, tr in out.items()})
     _log.info("transducers: computed in %.1f s", elapsed())
-    return TransducerReport(out, details, bias=sol)
+    return TransducerReport(out, details, bias=sol, coil_tables=tables)
 
 
 def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
@@ -365,11 +377,19 @@ def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
     The mesh key leaves out the materials (the steel's B–H curve, the magnets' grade,
     remanence and recoil permeability); they enter here.
     """
+    return content_key({"version": TRANSDUCER_VERSION, "mesh": geometry_key(geometry, options),
+                        **model_payload(geometry, stress_force=stress_force, law=law,
+                                        material=material, approach=approach)}, 16)
+
+
+def model_payload(geometry: SensorGeometry, *, stress_force: float,
+                  law: JilesAthertonSablik, material: ElasticMaterial, approach: bool) -> dict:
+    """What a transducer set depends on besides its mesh (:func:`cache_key`): the loads,
+    laws and materials, as canonical JSON values."""
     magnets = [None if u.magnet is None else
                [u.magnet.grade, repr(float(u.magnet.remanence)),
                 repr(float(u.magnet.recoil_permeability))] for u in geometry.sensors]
-    payload = {"version": TRANSDUCER_VERSION, "mesh": geometry_key(geometry, options),
-               "stress_force": repr(float(stress_force)), "law": _canonical(law),
+    payload = {"stress_force": repr(float(stress_force)), "law": _canonical(law),
                "material": _canonical(material), "approach": bool(approach),
                "magnets": magnets}
     if not geometry.default_steel:
@@ -377,7 +397,7 @@ def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
                                "h": _canonical(geometry.steel.h)}
     if geometry.reversibility != 1.0:
         payload["reversibility"] = repr(float(geometry.reversibility))
-    return content_key(payload, 16)
+    return payload
 
 
 __all__ = [
@@ -390,5 +410,6 @@ __all__ = [
     "cache_key",
     "compute_transducers",
     "magnetic_precompression",
+    "model_payload",
     "particle_forces",
 ]

@@ -15,17 +15,33 @@ from dataclasses import replace
 
 import numpy as np
 
-from msens.errors import internal
+from msens.errors import InputError, internal
 from msens.field.build import MeshOptions
+from msens.field.cache import BUILDER_VERSION, canonical
 from msens.field.geometry import SensorGeometry
 from msens.field.probes import P2Field
+from msens.magnetics.coil_read import (
+    CoilTables,
+    build_tables,
+    coil_free_key,
+    fits,
+    read_coil,
+    read_model,
+    read_tables,
+    solved_geometry,
+    table_name,
+    write_model,
+    write_tables,
+)
 from msens.magnetics.magnetoelastic import JilesAthertonSablik
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import (
+    TRANSDUCER_VERSION,
     Transducer,
     TransducerReport,
     cache_key,
     compute_transducers,
+    model_payload,
 )
 from msens.params.materials import BEAD_STEEL, ElasticMaterial
 from msens.store import Store
@@ -111,20 +127,31 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
                                    stress_force=force, law=law, material=material,
                                    approach=approach, refresh=refresh)
         # the maps are full nonlinear solves: the small-signal permeability (the
-        # reversibility) does not enter them, so every choice shares one table
-        map_key = cache_key(replace(geometry, reversibility=1.0), options, stress_force=force,
+        # reversibility) does not enter them, so every choice shares one table; coils read
+        # from another coil's field model read that coil's maps (Transducer.reading_maps_of)
+        solved = report.read_from or geometry
+        map_key = cache_key(replace(solved, reversibility=1.0), options, stress_force=force,
                             law=law, material=material, approach=approach)
-        maps = approach_maps(geometry, map_key, options=options, store=store,
+        maps = approach_maps(solved, map_key, options=options, store=store,
                              particles=map_particles,
                              start=None if report.bias is None else P2Field.of(report.bias),
                              refresh=refresh)
-        return TransducerReport({p: replace(tr, approach_map=maps.get(p))
-                                 for p, tr in report.transducers.items()}, report.details,
-                                bias=report.bias)
+        return replace(report, transducers={p: replace(tr, approach_map=maps.get(p))
+                                            for p, tr in report.transducers.items()})
+    free = coil_free_key(_free_payload(options, force, law, material, approach, geometry),
+                         geometry)
     data = None if refresh else store.read_json(name)
     if data is not None:
         _log.info("transducers %s (cached: yes)", key)
-        return _from_json(data)
+        report = _from_json(data)
+        write_model(store, free, {u.coil.particle: u.coil for u in geometry.sensors},
+                    {p: tr.inductance_H for p, tr in report.transducers.items()})
+        return report
+    if not refresh:
+        read = _read_coils(geometry, free, options=options, store=store, stress_force=force,
+                           law=law, material=material, approach=approach)
+        if read is not None:
+            return read
     _log.info("transducers %s (cached: no): computing them, usually under a minute", key)
     report = compute_transducers(geometry, options=options, store=store,
                                  stress_force=force, law=law, material=material,
@@ -132,7 +159,95 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
     path = store.write_json(name, _to_json(report), optional=True)
     if path is not None:
         _log.info("transducers %s cached in %s", key, path)
+        if report.coil_tables is not None:
+            _keep_tables(store, free, report.coil_tables)
     return report
+
+
+def _keep_tables(store: Store, free: str, tables: CoilTables) -> None:
+    try:
+        write_tables(store, free, tables)
+    except InputError as exc:  # kept only to serve later coil changes
+        _log.warning("%s; coil tables not kept", exc)
+
+
+def _free_payload(options: MeshOptions | None, force: float, law: JilesAthertonSablik,
+                  material: ElasticMaterial, approach: bool, geometry: SensorGeometry) -> dict:
+    """What a transducer set depends on besides its coils (:func:`coil_free_key`)."""
+    return {"transducer": TRANSDUCER_VERSION, "builder": BUILDER_VERSION,
+            "options": canonical(options or MeshOptions()),
+            **model_payload(geometry, stress_force=force, law=law, material=material,
+                            approach=approach)}
+
+
+def _read_coils(geometry: SensorGeometry, free: str, *, store: Store,
+                options: MeshOptions | None, **kwargs) -> TransducerReport | None:
+    """The transducers of ``geometry`` read from the stored field model of the same sensors
+    with other coils (:mod:`msens.magnetics.coil_read`), or None when there is none or a
+    coil lies outside its table."""
+    model = read_model(store, free)
+    if model is None:
+        return None
+    coils, inductance = model
+    solved = solved_geometry(geometry, coils)
+    misfits = [u.coil.particle for u in geometry.sensors
+               if not fits(u.coil, geometry, solved)]
+    if misfits:
+        _log.info("coils at particles %s lie outside the tables of the stored field model %s:"
+                  " a new field model", misfits, free)
+        return None
+    data = store.read_json(f"transducer-{cache_key(solved, options, **kwargs)}.json")
+    if data is None:  # the solved coils' transducers are gone: a new field model
+        return None
+    reference = _from_json(data)
+    tables = read_tables(store, free, coils, inductance)
+    if tables is None:
+        from msens.magnetics.mechanisms import mechanism_potentials
+        from msens.magnetics.transducer import bias_solution
+        from msens.progress import heartbeat
+
+        _log.info("coil tables of the field model %s: its bias solve and sources, seconds",
+                  free)
+        with heartbeat(_log, "coil tables: bias solve and sources"):
+            sol, _ = bias_solution(solved, options=options, store=store)
+            model = mechanism_potentials(sol, solved, **kwargs)
+            tables = build_tables(sol, model, solved, inductance)
+        _keep_tables(store, free, tables)
+    # an unchanged coil keeps its own transducer (exact mesh quadrature)
+    out = {u.coil.particle: reference.transducers[u.coil.particle] if u.coil == coils[
+        u.coil.particle] else read_coil(tables, reference.transducers[u.coil.particle],
+                                        u.coil, geometry)
+           for u in geometry.sensors}
+    _log.info("transducers of the coils at particles %s read from the field model of "
+              "their coil tables %s (no new mesh or solve)", sorted(out), free)
+    details = {**reference.details, "coil_read": {
+        "tables": table_name(free),
+        "inductance": "solved coil's incremental L x ratio of inductance-grid quadratures"}}
+    return TransducerReport(out, details, read_from=solved)
+
+
+def solved_for(geometry: SensorGeometry, *, options: MeshOptions | None = None,
+               store: Store | None = None, material: ElasticMaterial = BEAD_STEEL,
+               approach: bool = True) -> SensorGeometry:
+    """The geometry whose mesh and bias solve serve ``geometry`` in :func:`transducer_report`
+    (default load and law): ``geometry`` itself, or, when its coils are read from the stored
+    field model of other coils (:mod:`msens.magnetics.coil_read`), that model's geometry. The
+    bias field does not depend on the coils, so its maps and figures may come from either."""
+    store = Store.default() if store is None else store
+    force = geometry.beads.contact_load
+    law = law_for_steel(geometry.steel)
+    kwargs = {"stress_force": force, "law": law, "material": material, "approach": approach}
+    if store.read_json(f"transducer-{cache_key(geometry, options, **kwargs)}.json"):
+        return geometry
+    free = coil_free_key(_free_payload(options, force, law, material, approach, geometry),
+                         geometry)
+    model = read_model(store, free)
+    if model is None:
+        return geometry
+    solved = solved_geometry(geometry, model[0])
+    if not all(fits(u.coil, geometry, solved) for u in geometry.sensors):
+        return geometry
+    return solved
 
 
 def transducers_for(geometry: SensorGeometry, **kwargs) -> dict[int, Transducer]:
@@ -144,6 +259,7 @@ def transducers_for(geometry: SensorGeometry, **kwargs) -> dict[int, Transducer]
 
 
 __all__ = [
+    "solved_for",
     "transducer_report",
     "transducers_for",
 ]

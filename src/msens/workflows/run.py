@@ -10,6 +10,7 @@ content of ``summary.json`` and its ``table()`` the terminal's table
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from msens import results
@@ -90,7 +91,11 @@ def _field_map(result: StudyResult, d: OutputDir, fig_format: str = "png") -> Pa
     setup = next((s.setup for s in result.setups if s.transducers), None)
     if setup is None:
         return None
-    report = run_field_model(geometry_from_study(result.study, setup), inductance=False)
+    from msens.magnetics.transducer_cache import solved_for
+
+    geometry = geometry_from_study(result.study, setup)
+    # a coil read from another coil's field model: the same bias field, on that model's mesh
+    report = replace(run_field_model(solved_for(geometry), inductance=False), geometry=geometry)
     return d.write(f"field_B.{fig_format}", lambda p: plot_field_map(report, p, fig_format))
 
 

@@ -81,3 +81,26 @@ def test_diagnose_of_a_changed_coil_finds_nothing_missing(cache, tmp_path):
     record = msens.synth(changed, tmp_path / "turns900.csv", noise=0.01, seed=3)
     result = msens.diagnose(changed, record, tmp_path / "diagnosis")
     assert result.effect == "none"
+
+
+def test_a_designed_coil_equals_the_run_of_that_coil(cache, tmp_path):
+    """One implementation: design's row of a coil and msens run of the study with that coil
+    (read from the same field model) agree."""
+    del cache  # the default run before it
+    spec = tmp_path / "sweep.toml"
+    spec.write_text('schema = "msens.sweep/1"\nname = "one-coil"\nsensor = 13\n[coil]\n'
+                    'turns = [1000]\nlength_m = [8e-3]\ninner_radius_m = [7.95e-3]\n'
+                    'wire = ["AWG36"]\naxial_offset_m = [0.0]\n')
+    msens.design(msens.load_default(), spec, tmp_path / "design", progress=False)
+    import csv
+
+    with open(tmp_path / "design" / "designs.csv", newline="") as f:
+        row = next(csv.DictReader(f))
+    assert main(["run", "--set", "sensor.1.coil.turns=1000", "--set",
+                 "sensor.1.coil.length_m=8e-3", "--out", str(tmp_path / "run"), "-q",
+                 "--no-figures"]) == 0
+    coil = _coils(tmp_path / "run" / "summary.json")[13]
+    assert float(row["inductance_H"]) == pytest.approx(coil["inductance_H"], rel=1e-6)
+    assert float(row["resistance_ohm"]) == pytest.approx(coil["resistance_ohm"], rel=1e-9)
+    # the design's table spans its designs, the run's the coil window: both 0.1 mm grids
+    assert float(row["peak_emf_V"]) == pytest.approx(coil["peak_emf_V"], rel=2e-4)

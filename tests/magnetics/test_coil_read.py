@@ -115,3 +115,22 @@ def test_window_is_between_tube_magnet_and_poles():
     assert r1 == pytest.approx(2 * u.coil.outer_radius)
     assert z1 - z0 == pytest.approx(2 * u.coil.length)
     assert isinstance(u.coil, Coil)
+
+
+def test_inductance_quadratic_equals_the_full_form():
+    """The grouped contraction of InductanceGrid.quadratic is vᵀ K v."""
+    from msens.magnetics.coil_read import InductanceGrid
+
+    rng = np.random.default_rng(1)
+    r, z = np.linspace(6.5e-3, 12e-3, 7), np.linspace(0.07, 0.09, 9)
+    a = rng.normal(size=(r.size * z.size,) * 2)
+    grid = InductanceGrid(r, z, (a @ a.T).astype(np.float32))
+    r0, r1 = np.array([7e-3, 7e-3, 8e-3]), np.array([10e-3, 11.3e-3, 9.1e-3])
+    z0, z1 = np.array([0.072, 0.072, 0.075]), np.array([0.081, 0.081, 0.0888])
+    hr, hz = r[1] - r[0], z[1] - z[0]
+    for k in range(3):
+        cr = np.clip(np.minimum(r + hr / 2, r1[k]) - np.maximum(r - hr / 2, r0[k]), 0, None)
+        cz = np.clip(np.minimum(z + hz / 2, z1[k]) - np.maximum(z - hz / 2, z0[k]), 0, None)
+        v = np.outer(cr * r, cz).ravel()
+        want = v @ grid.kernel.astype(float) @ v
+        assert grid.quadratic(r0, r1, z0, z1)[k] == pytest.approx(want, rel=1e-12)

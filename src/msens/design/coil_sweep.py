@@ -11,22 +11,24 @@ the run's own (the study's whole geometry and chain), so a design equal to the s
 reproduces ``msens run``.
 
 Electrical data per design: R from the winding (:func:`msens.field.sensor_model.
-coil_resistance`); L = L_inc × L_W / L_W,0, the study coil's bias-point incremental
-inductance (field model) scaled by the designs' Wheeler air-core inductance ratio — exact for
-the study's own coil, an approximation of a few per cent for coils near it (magnet sweeps
-compute L_inc exactly).
+coil_resistance`); L from the study coil's bias-point incremental inductance (field model)
+carried to each design by the steel-aware cell kernel of the coil's window
+(:func:`msens.magnetics.coil_read.scaled_inductance`, the same L as ``msens run`` of a changed
+coil; magnet sweeps compute L_inc exactly).
 
 With eddy currents (``[field] eddy_currents = true``) the one field model is the run's
 eddy-current model (:func:`msens.config.fieldsetup.eddy_settings`: the mesh graded into the bead
 surfaces, the steel's conductivity) and the table holds every source's harmonic potential at
 each of the run's frequencies (:mod:`msens.magnetics.harmonic_tables`); a design's complex
-S_c(ω), D_c(ω) come from it, its impedance from the study coil's L(ω) scaled by the Wheeler
-ratio, and the EMF and DAQ voltage from :func:`msens.design.metrics.dynamic_design_rows`.
+S_c(ω), D_c(ω) come from it, its impedance from the study coil's L(ω) scaled by the same
+ratio as the static L, and the EMF and DAQ voltage from
+:func:`msens.design.metrics.dynamic_design_rows`.
 """
 
 from __future__ import annotations
 
 import io
+import json
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -43,8 +45,15 @@ from msens.design.runner import run_cached
 from msens.design.sweep import Design, design_unit
 from msens.errors import internal
 from msens.field.geometry import SensorGeometry
-from msens.field.parts import SensorUnit
+from msens.field.parts import Coil, SensorUnit
 from msens.field.sensor_model import coil_resistance
+from msens.magnetics.coil_read import (
+    InductanceGrid,
+    coil_from,
+    coil_record,
+    inductance_grid,
+    scaled_inductance,
+)
 from msens.magnetics.dynamic import dynamic_report, eddy_bias_solution
 from msens.magnetics.emf import ContactRates
 from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables
@@ -53,7 +62,6 @@ from msens.magnetics.potentials import LinkageTable, linkage_table, rect_integra
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import bias_solution
 from msens.magnetics.transducer_cache import transducers_for
-from msens.readout.coil import wheeler_inductance
 from msens.readout.electronics import ElectronicsSpec
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm
@@ -85,8 +93,10 @@ class CoilContext:
         Axial position of the sensor bead's centre, m.
     inductance : float
         Bias-point incremental inductance of the study's coil, H.
-    wheeler : float
-        Its Wheeler air-core inductance, H.
+    grid : InductanceGrid
+        The steel-aware cell kernel of the coil's window (designs' L from the study coil's).
+    coil : Coil
+        The study's coil.
     harmonic : HarmonicTables or None
         With eddy currents: the sources' harmonic tables (same grid as ``table``).
     inductance_w : ndarray of complex, shape (n_f,), or None
@@ -100,7 +110,8 @@ class CoilContext:
     wave: Wave
     z_center: float
     inductance: float
-    wheeler: float
+    grid: InductanceGrid
+    coil: Coil
     harmonic: HarmonicTables | None = None
     inductance_w: np.ndarray | None = None
 
@@ -125,14 +136,16 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
     r_rng, z_rng = _coil_box(unit, designs, geometry)
     common = {"wave": wave,
               "z_center": geometry.beads.center(particle), "inductance": tr.inductance_H,
-              "wheeler": wheeler_inductance(unit.coil)}
+              "coil": unit.coil}
     if not study.field.eddy_currents:
         sol, _ = bias_solution(geometry)
         model = mechanism_potentials(sol, geometry, stress_force=tr.reference_force,
                                      law=law_for_steel(geometry.steel))
         table = linkage_table(sol, model.potentials, r_rng, z_rng, TABLE_SPACING)
         return CoilContext(table=table, particles=model.particles,
-                           approach_contacts=model.contacts, count=model.count, **common)
+                           approach_contacts=model.contacts, count=model.count,
+                           grid=inductance_grid(sol, model.operator, geometry, unit),
+                           **common)
     # the run's eddy-current model (same mesh, sources and frequencies as dynamic_report)
     eddy = eddy_settings(study)
     response = dynamic_report(geometry, options=eddy.options,
@@ -144,7 +157,8 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
                                TABLE_SPACING, steel=eddy.steel)
     static = LinkageTable(harmonic.r, harmonic.z, harmonic.cumulative[0].real)
     return CoilContext(table=static, particles=model.particles,
-                       approach_contacts=model.contacts, count=model.count, **common,
+                       approach_contacts=model.contacts, count=model.count,
+                       grid=inductance_grid(sol, model.operator, geometry, unit), **common,
                        harmonic=harmonic, inductance_w=np.asarray(response.inductance))
 
 
@@ -159,9 +173,11 @@ def save_context(ctx: CoilContext, path: Path) -> None:
              particles=ctx.particles, approach_contacts=ctx.approach_contacts,
              contacts=w.contacts, t=w.rates.t, force_rate=w.rates.force,
              approach_rate=w.rates.approach,
-             scalars=np.array([ctx.count, ctx.z_center, ctx.inductance, ctx.wheeler,
+             scalars=np.array([ctx.count, ctx.z_center, ctx.inductance, 0.0,
                                w.precompression_N, w.precompression_max_N,
-                               w.wave_speed_change]), **extra)
+                               w.wave_speed_change]),
+             grid_r=ctx.grid.r, grid_z=ctx.grid.z, grid_kernel=ctx.grid.kernel,
+             coil=np.array(json.dumps(coil_record(ctx.coil))), **extra)
     atomic_write_bytes(path, buf.getvalue())
 
 
@@ -177,7 +193,8 @@ def load_context(path: Path) -> CoilContext:
                     if "harmonic" in f.files else None)
         return CoilContext(LinkageTable(f["r"], f["z"], f["cumulative"]), f["particles"],
                            f["approach_contacts"], int(s[0]), wave, float(s[1]), float(s[2]),
-                           float(s[3]), harmonic,
+                           InductanceGrid(f["grid_r"], f["grid_z"], f["grid_kernel"]),
+                           coil_from(json.loads(str(f["coil"]))), harmonic,
                            f["inductance_w"] if harmonic is not None else None)
 
 
@@ -191,8 +208,11 @@ def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
     r_out = np.array([c.outer_radius for c in coils])
     turns = np.array([c.turns for c in coils], dtype=float)
     resistance = np.array([coil_resistance(c) for c in coils])
-    scale = np.array([wheeler_inductance(c) / ctx.wheeler for c in coils])
-    inductance = ctx.inductance * scale
+    inductance = scaled_inductance(
+        ctx.grid, ctx.inductance, ctx.coil, (r_in, r_out, zc - half, zc + half), turns,
+        (r_out - r_in) * 2 * half,
+        geometry.coil_rect(unit))
+    scale = inductance / ctx.inductance
     if ctx.harmonic is None:
         area = (r_out - r_in) * 2 * half
         link = (turns / area)[:, None] * rect_integral(ctx.table, r_in, r_out, zc - half,
@@ -249,7 +269,7 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
     ``scheduler`` (the context travels inside each task, so workers need no shared files).
     """
     unit = next(u for u in geometry.sensors if u.coil.particle == particle)
-    ckey = content_key("coil-context/2", study, geometry, particle,
+    ckey = content_key("coil-context/3", study, geometry, particle,
                        _coil_box(unit, designs, geometry))
     cname = f"context-{ckey}.npz"
     cpath = cache.store.find_file(cname)

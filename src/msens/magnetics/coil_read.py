@@ -141,20 +141,58 @@ class InductanceGrid:
     z: np.ndarray
     kernel: np.ndarray
 
-    def weights(self, rects: tuple[np.ndarray, ...]) -> np.ndarray:
-        """v of windings [r0, r1] × [z0, z1] (arrays of shape (n,)), shape (n, nr * nz)."""
-        r0, r1, z0, z1 = (np.atleast_1d(np.asarray(x, dtype=float)) for x in rects)
-        hr, hz = self.r[1] - self.r[0], self.z[1] - self.z[0]
-        cr = np.clip(np.minimum(self.r + hr / 2, r1[:, None])
-                     - np.maximum(self.r - hr / 2, r0[:, None]), 0.0, None)
-        cz = np.clip(np.minimum(self.z + hz / 2, z1[:, None])
-                     - np.maximum(self.z - hz / 2, z0[:, None]), 0.0, None)
-        return ((cr * self.r)[:, :, None] * cz[:, None, :]).reshape(r0.size, -1)
+    def quadratic(self, r0, r1, z0, z1) -> np.ndarray:
+        """vᵀ K v of windings [r0, r1] × [z0, z1] (m; scalars or arrays of shape (n,)),
+        shape (n,), m⁴·(m/H)... per (A/m²)² of current density: times 2π (N/S)² it is L.
 
-    def quadratic(self, rect) -> float:
-        """vᵀ K v of a winding's rectangle (its turns density left out), m⁴/H-ish units."""
-        v = self.weights((rect.r0, rect.r1, rect.z0, rect.z1))[0]
-        return float(v @ (self.kernel.astype(float) @ v))
+        The weights are separable (v = a(r) ⊗ b(z)), so windings of one axial extent share
+        the contraction over z: cost nr²·nz² per distinct (z0, z1), nr² per winding.
+        """
+        r0, r1, z0, z1 = np.broadcast_arrays(*(np.atleast_1d(np.asarray(x, dtype=float))
+                                              for x in (r0, r1, z0, z1)))
+        nr, nz = self.r.size, self.z.size
+        k4 = self.kernel.reshape(nr, nz, nr, nz)
+        hr, hz = self.r[1] - self.r[0], self.z[1] - self.z[0]
+        a = np.clip(np.minimum(self.r + hr / 2, r1[:, None])
+                    - np.maximum(self.r - hr / 2, r0[:, None]), 0.0, None) * self.r
+        out = np.empty(r0.size)
+        spans, inverse = np.unique(np.stack([z0, z1], axis=1), axis=0, return_inverse=True)
+        for k, (lo, hi) in enumerate(spans):
+            b = np.clip(np.minimum(self.z + hz / 2, hi) - np.maximum(self.z - hz / 2, lo),
+                        0.0, None)
+            m = np.einsum("j,ijkl,l->ik", b, k4, b, optimize=True)
+            rows = np.flatnonzero(inverse.ravel() == k)
+            out[rows] = np.einsum("ni,ik,nk->n", a[rows], m, a[rows])
+        return out
+
+
+def scaled_inductance(grid: InductanceGrid, inductance_H: float, solved: Coil, rects,
+                      turns, area, solved_rect) -> np.ndarray:
+    """Incremental inductances of windings from a solved coil's, H, shape (n,).
+
+    L = L_solved × [q (N/S)²] / [q_solved (N_solved/S_solved)²] with q the windings'
+    :meth:`InductanceGrid.quadratic`: the field model's L of the solved coil (exact mesh
+    quadrature) carried to the others by the steel-aware cell kernel; the grid's own
+    quadrature error cancels to first order in the ratio.
+
+    Parameters
+    ----------
+    grid : InductanceGrid
+    inductance_H : float
+        The solved coil's incremental inductance, H.
+    solved : Coil
+        The solved coil.
+    rects : tuple of ndarray
+        (r0, r1, z0, z1) of the windings, m, each shape (n,).
+    turns, area : ndarray, shape (n,)
+        Their turns and cross-sections, m².
+    solved_rect : Rect
+        The solved coil's winding rectangle.
+    """
+    q = grid.quadratic(*rects) * (np.asarray(turns, dtype=float) / np.asarray(area)) ** 2
+    q0 = float(grid.quadratic(solved_rect.r0, solved_rect.r1, solved_rect.z0,
+                              solved_rect.z1)[0]) * (solved.turns / solved.area) ** 2
+    return inductance_H * q / q0
 
 
 def inductance_grid(sol: FieldSolution, operator, geometry: SensorGeometry,
@@ -219,16 +257,14 @@ class CoilTables:
     grids: dict[int, InductanceGrid]
 
     def inductance(self, coil: Coil, geometry: SensorGeometry) -> float:
-        """Incremental inductance of ``coil`` (in ``geometry``) at the bias point, H: the
-        solved coil's (field model) × the ratio of the two windings' :class:`InductanceGrid`
-        quadratures (the grid's own error cancels to first order)."""
+        """Incremental inductance of ``coil`` (in ``geometry``) at the bias point, H
+        (:func:`scaled_inductance` from the solved coil's)."""
         old = self.coils[coil.particle]
-        grid = self.grids[coil.particle]
-        new_q = grid.quadratic(geometry.coil_rect(SensorUnit(coil))) * (coil.turns
-                                                                         / coil.area) ** 2
-        old_q = grid.quadratic(geometry.coil_rect(SensorUnit(old))) * (old.turns
-                                                                       / old.area) ** 2
-        return self.inductance_H[coil.particle] * new_q / old_q
+        rect = geometry.coil_rect(SensorUnit(coil))
+        return float(scaled_inductance(
+            self.grids[coil.particle], self.inductance_H[coil.particle], old,
+            (rect.r0, rect.r1, rect.z0, rect.z1), coil.turns, coil.area,
+            geometry.coil_rect(SensorUnit(old)))[0])
 
     def linkage(self, coil: Coil, geometry: SensorGeometry,
                 offsets: np.ndarray | None = None) -> np.ndarray:
@@ -301,11 +337,13 @@ def fits(coil: Coil, geometry: SensorGeometry, solved: SensorGeometry) -> bool:
                 and z0 - tol <= rect.z0 - OFFSET_SPAN and rect.z1 + OFFSET_SPAN <= z1 + tol)
 
 
-def _coil_record(coil: Coil) -> dict:
+def coil_record(coil: Coil) -> dict:
+    """A coil as JSON values (:func:`coil_from` reads it back)."""
     return {**asdict(coil), "wire": asdict(coil.wire)}
 
 
-def _coil_from(record: dict) -> Coil:
+def coil_from(record: dict) -> Coil:
+    """The coil :func:`coil_record` wrote."""
     return Coil(**{**record, "wire": Wire(**record["wire"])})
 
 
@@ -322,7 +360,7 @@ def write_model(store: Store, key: str, coils: dict[int, Coil],
         return
     store.write_json(model_name(key), {
         "schema": COIL_TABLE_VERSION, "key": key,
-        "coils": {str(p): _coil_record(c) for p, c in sorted(coils.items())},
+        "coils": {str(p): coil_record(c) for p, c in sorted(coils.items())},
         "inductance_H": {str(p): float(v) for p, v in sorted(inductance_H.items())}},
         optional=True)
 
@@ -332,7 +370,7 @@ def read_model(store: Store, key: str) -> tuple[dict[int, Coil], dict[int, float
     data = store.read_json(model_name(key))
     if data is None or data.get("schema") != COIL_TABLE_VERSION:
         return None
-    return ({int(p): _coil_from(c) for p, c in data["coils"].items()},
+    return ({int(p): coil_from(c) for p, c in data["coils"].items()},
             {int(p): float(v) for p, v in data["inductance_H"].items()})
 
 
@@ -420,6 +458,8 @@ __all__ = [
     "InductanceGrid",
     "build_tables",
     "coil_free_key",
+    "coil_from",
+    "coil_record",
     "coil_window",
     "fits",
     "inductance_grid",
@@ -427,6 +467,7 @@ __all__ = [
     "read_coil",
     "read_model",
     "read_tables",
+    "scaled_inductance",
     "solved_geometry",
     "table_name",
     "table_ranges",

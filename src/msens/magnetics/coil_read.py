@@ -92,9 +92,9 @@ def coil_free_key(transducer_payload: dict, geometry: SensorGeometry) -> str:
                         "geometry": {**geo, "sensors": sensors}}, 16)
 
 
-def table_name(key: str) -> str:
-    """The artifact's file name."""
-    return f"coil-table-{key}.npz"
+def table_name(key: str, particle: int) -> str:
+    """The file name of the table artifact of the coil at ``particle``."""
+    return f"coil-table-{key}-{int(particle)}.npz"
 
 
 def coil_window(geometry: SensorGeometry, unit: SensorUnit) -> tuple[tuple[float, float],
@@ -227,7 +227,7 @@ def inductance_grid(sol: FieldSolution, operator, geometry: SensorGeometry,
 
 @dataclass(frozen=True)
 class CoilTables:
-    """What a changed coil needs from one computed transducer set.
+    """What changed coils need from one field model (some or all of its coils).
 
     Attributes
     ----------
@@ -298,8 +298,9 @@ def table_ranges(geometry: SensorGeometry, unit: SensorUnit
 
 
 def build_tables(sol: FieldSolution, model: MechanismPotentials, geometry: SensorGeometry,
-                 inductance_H: dict[int, float]) -> CoilTables:
-    """The coil tables of a transducer set's field model (its bias solution and sources).
+                 inductance_H: dict[int, float], particles) -> CoilTables:
+    """The coil tables of a field model (its bias solution and sources) for the coils at
+    ``particles``.
 
     Parameters
     ----------
@@ -310,8 +311,11 @@ def build_tables(sol: FieldSolution, model: MechanismPotentials, geometry: Senso
     geometry : SensorGeometry
     inductance_H : dict of int -> float
         The coils' incremental inductances, H (from the set's transducers).
+    particles : iterable of int
+        Which coils.
     """
-    units = list(geometry.iter_units())
+    wanted = {int(p) for p in particles}
+    units = [u for u in geometry.iter_units() if u.coil.particle in wanted]
     tables = {u.coil.particle: linkage_table(sol, model.potentials,
                                              *table_ranges(geometry, u), SPACING)
               for u in units}
@@ -320,7 +324,8 @@ def build_tables(sol: FieldSolution, model: MechanismPotentials, geometry: Senso
     return CoilTables(tables=tables, particles=np.asarray(model.particles),
                       approach_contacts=np.asarray(model.contacts), count=int(model.count),
                       coils={u.coil.particle: u.coil for u in units},
-                      inductance_H={int(p): float(v) for p, v in inductance_H.items()},
+                      inductance_H={u.coil.particle: float(inductance_H[u.coil.particle])
+                                    for u in units},
                       grids=grids)
 
 
@@ -375,39 +380,41 @@ def read_model(store: Store, key: str) -> tuple[dict[int, Coil], dict[int, float
 
 
 def write_tables(store: Store, key: str, tables: CoilTables) -> None:
-    """Store ``tables``: the coil record (:func:`write_model`) and the tables (artifact
-    :func:`table_name`, atomic .npz with its checksum)."""
-    write_model(store, key, tables.coils, tables.inductance_H)
-    arrays = {}
+    """Store each coil of ``tables`` as artifact :func:`table_name` (atomic .npz with its
+    checksum)."""
     for p, t in sorted(tables.tables.items()):
         g = tables.grids[p]
-        arrays |= {f"r_{p}": t.r, f"z_{p}": t.z, f"cumulative_{p}": t.cumulative,
-                   f"grid_r_{p}": g.r, f"grid_z_{p}": g.z, f"kernel_{p}": g.kernel}
+        arrays = {"particles": tables.particles, "approach_contacts": tables.approach_contacts,
+                  "count": np.array(tables.count), "r": t.r, "z": t.z,
+                  "cumulative": t.cumulative, "grid_r": g.r, "grid_z": g.z,
+                  "kernel": g.kernel}
 
-    def write(tmp):
-        buf = io.BytesIO()
-        np.savez(buf, particles=tables.particles, approach_contacts=tables.approach_contacts,
-                 count=np.array(tables.count), **arrays)
-        tmp.write_bytes(buf.getvalue())
+        def write(tmp, arrays=arrays):
+            buf = io.BytesIO()
+            np.savez(buf, **arrays)
+            tmp.write_bytes(buf.getvalue())
 
-    store.write_file(table_name(key), write, {"schema": COIL_TABLE_VERSION, "key": key})
+        store.write_file(table_name(key, p), write,
+                         {"schema": COIL_TABLE_VERSION, "key": key, "particle": p})
 
 
 def read_tables(store: Store, key: str, coils: dict[int, Coil],
-                inductance_H: dict[int, float]) -> CoilTables | None:
-    """The stored coil tables of ``key`` (verified; ``coils`` and ``inductance_H`` from
-    :func:`read_model`), or None."""
-    path = store.find_file(table_name(key))
-    if path is None:
-        return None
-    with np.load(path) as f:
-        tables = {p: LinkageTable(f[f"r_{p}"], f[f"z_{p}"], f[f"cumulative_{p}"])
-                  for p in coils}
-        grids = {p: InductanceGrid(f[f"grid_r_{p}"], f[f"grid_z_{p}"], f[f"kernel_{p}"])
-                 for p in coils}
-        return CoilTables(tables=tables, particles=f["particles"],
-                          approach_contacts=f["approach_contacts"], count=int(f["count"]),
-                          coils=coils, inductance_H=inductance_H, grids=grids)
+                inductance_H: dict[int, float], particles) -> CoilTables:
+    """The stored tables of the coils at ``particles`` that the store has (verified; maybe
+    none), with ``coils`` and ``inductance_H`` from :func:`read_model`."""
+    tables, grids, common = {}, {}, None
+    for p in sorted({int(q) for q in particles}):
+        path = store.find_file(table_name(key, p))
+        if path is None:
+            continue
+        with np.load(path) as f:
+            tables[p] = LinkageTable(f["r"], f["z"], f["cumulative"])
+            grids[p] = InductanceGrid(f["grid_r"], f["grid_z"], f["kernel"])
+            common = (f["particles"], f["approach_contacts"], int(f["count"]))
+    if common is None:
+        common = (np.zeros(0, dtype=int), np.zeros(0, dtype=int), 0)
+    return CoilTables(tables=tables, particles=common[0], approach_contacts=common[1],
+                      count=common[2], coils=coils, inductance_H=inductance_H, grids=grids)
 
 
 def solved_geometry(geometry: SensorGeometry, coils: dict[int, Coil]) -> SensorGeometry:

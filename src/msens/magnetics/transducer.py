@@ -52,7 +52,6 @@ from msens.field.sensor_model import (
 from msens.field.solve import FieldSolution, solve
 from msens.io.hashing import canonical as _canonical
 from msens.magnetics.approach import hertz_approach_rate, hertz_stiffness
-from msens.magnetics.coil_read import CoilTables, build_tables
 from msens.magnetics.contact_map import ApproachMap
 from msens.magnetics.magnetoelastic import JilesAthertonSablik
 from msens.magnetics.mechanisms import (
@@ -262,9 +261,6 @@ class TransducerReport:
     bias : FieldSolution or None
         The bias solution it was computed from (None when read from the cache): a start
         for the same geometry's bias on another mesh (:func:`bias_solution`).
-    coil_tables : CoilTables or None
-        When computed: what a changed coil reads from this field model
-        (:mod:`msens.magnetics.coil_read`).
     read_from : SensorGeometry or None
         When the coils were read from another coil's field model: that model's geometry
         (its contact maps are the ones these coils read).
@@ -273,7 +269,6 @@ class TransducerReport:
     transducers: dict[int, Transducer]
     details: dict
     bias: FieldSolution | None = field(default=None, compare=False, repr=False)
-    coil_tables: CoilTables | None = field(default=None, compare=False, repr=False)
     read_from: SensorGeometry | None = field(default=None, compare=False, repr=False)
 
 
@@ -362,11 +357,8 @@ def compute_transducers(geometry: SensorGeometry, *, options: MeshOptions | None
             "particles": model.particles.tolist(),
             "bead_sensitivity_Wb_per_N": link[:model.particles.size].tolist(),
             "reciprocity_adjoint_rel_error": err}
-    with timed(_log, "transducers: coil tables"):
-        tables = build_tables(sol, model, geometry,
-                              {p: tr.inductance_H for p, tr in out.items()})
     _log.info("transducers: computed in %.1f s", elapsed())
-    return TransducerReport(out, details, bias=sol, coil_tables=tables)
+    return TransducerReport(out, details, bias=sol)
 
 
 def cache_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,

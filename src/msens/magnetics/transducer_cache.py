@@ -159,8 +159,8 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
     path = store.write_json(name, _to_json(report), optional=True)
     if path is not None:
         _log.info("transducers %s cached in %s", key, path)
-        if report.coil_tables is not None:
-            _keep_tables(store, free, report.coil_tables)
+        write_model(store, free, {u.coil.particle: u.coil for u in geometry.sensors},
+                    {p: tr.inductance_H for p, tr in report.transducers.items()})
     return report
 
 
@@ -200,19 +200,24 @@ def _read_coils(geometry: SensorGeometry, free: str, *, store: Store,
     if data is None:  # the solved coils' transducers are gone: a new field model
         return None
     reference = _from_json(data)
-    tables = read_tables(store, free, coils, inductance)
-    if tables is None:
+    changed = [u.coil.particle for u in geometry.sensors if u.coil != coils[u.coil.particle]]
+    tables = read_tables(store, free, coils, inductance, changed)
+    missing = [p for p in changed if p not in tables.tables]
+    if missing:
         from msens.magnetics.mechanisms import mechanism_potentials
         from msens.magnetics.transducer import bias_solution
         from msens.progress import heartbeat
 
-        _log.info("coil tables of the field model %s: its bias solve and sources, seconds",
-                  free)
-        with heartbeat(_log, "coil tables: bias solve and sources"):
+        _log.info("coil tables of the field model %s for the coils at particles %s: its bias "
+                  "solve, sources and window kernels, seconds", free, missing)
+        with heartbeat(_log, "coil tables"):
             sol, _ = bias_solution(solved, options=options, store=store)
             model = mechanism_potentials(sol, solved, **kwargs)
-            tables = build_tables(sol, model, solved, inductance)
-        _keep_tables(store, free, tables)
+            built = build_tables(sol, model, solved, inductance, missing)
+        _keep_tables(store, free, built)
+        tables = replace(built, tables={**tables.tables, **built.tables},
+                         grids={**tables.grids, **built.grids}, coils=coils,
+                         inductance_H=inductance)
     # an unchanged coil keeps its own transducer (exact mesh quadrature)
     out = {u.coil.particle: reference.transducers[u.coil.particle] if u.coil == coils[
         u.coil.particle] else read_coil(tables, reference.transducers[u.coil.particle],
@@ -221,7 +226,7 @@ def _read_coils(geometry: SensorGeometry, free: str, *, store: Store,
     _log.info("transducers of the coils at particles %s read from the field model of "
               "their coil tables %s (no new mesh or solve)", sorted(out), free)
     details = {**reference.details, "coil_read": {
-        "tables": table_name(free),
+        "tables": [table_name(free, p) for p in changed],
         "inductance": "solved coil's incremental L x ratio of inductance-grid quadratures"}}
     return TransducerReport(out, details, read_from=solved)
 

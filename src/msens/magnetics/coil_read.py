@@ -9,13 +9,12 @@ the store serve a changed coil:
 - ``coil-model-<key>.json`` (:func:`write_model`): which coils the field model of that key
   was solved with, and their incremental inductances; written whenever a transducer set is
   computed or read, so a default run leaves it behind;
-- ``coil-table-<key>.npz`` (:func:`write_tables`, :class:`CoilTables`): per coil a
-  summed-area table (:mod:`msens.magnetics.potentials`) of every source's flux per unit area
-  over the coil's window (:func:`coil_window`: the air between the tube and the magnet's
-  ring, between its pole pieces, plus the offset span) and the window's
-  :class:`InductanceGrid`; written with a computed transducer set, or built on the first
-  changed coil from the solved coils' mesh (a bias solve, the sources and about 1,600
-  tangent solves: seconds).
+- ``coil-table-<key>-<particle>.npz`` (:func:`write_tables`, :class:`CoilTables`): for one
+  coil, a summed-area table (:mod:`msens.magnetics.potentials`) of every source's flux per
+  unit area over the coil's window (:func:`coil_window`: the air between the tube and the
+  magnet's ring, between its pole pieces, plus the offset span) and the window's
+  :class:`InductanceGrid`; built the first time that coil changes, from the solved coils'
+  mesh (a bias solve, the sources and about 1,600 tangent solves: seconds).
 
 A geometry that differs from a stored one only in its coils is then read
 (:func:`read_coil`), the way a coil sweep reads its designs (:mod:`msens.design.coil_sweep`):

@@ -10,7 +10,8 @@
 - :mod:`.mechanisms` — incremental potentials of both mechanisms' sources, coil linkage.
 - :mod:`.transducer` — per-coil sensitivities of both mechanisms, the magnets' pull on the
   beads, coil R and L; :mod:`.transducer_cache` — their stored artifacts;
-  :mod:`.variants` — transducers as a function of the magnets' remanence.
+  :mod:`.coil_read` — a changed coil read from another coil's field model (tables of the
+  coil's window); :mod:`.variants` — transducers as a function of the magnets' remanence.
 - :mod:`.dynamic`, :mod:`.frequency_response`, :mod:`.eddy_readout` — eddy currents:
   sensitivities and impedance per frequency, and the EMF spectra through them.
 - :mod:`.emf` — a transducer's EMF from the chain's contact states and its parts (rigid
@@ -27,7 +28,8 @@ from msens._lazy import attribute, names
 _HOMES = {
     "transducer": ("Transducer", "TransducerReport", "bias_solution", "compute_transducers",
                    "magnetic_precompression", "particle_forces"),
-    "transducer_cache": ("transducer_report", "transducers_for"),
+    "transducer_cache": ("solved_for", "transducer_report", "transducers_for"),
+    "coil_read": ("CoilTables", "InductanceGrid", "coil_window", "scaled_inductance"),
     "variants": ("RemanenceFamily", "remanence_family"),
     "emf": ("open_contact_emf", "rigid_translation_emf"),
     "dynamic": ("DynamicReport", "dynamic_report", "frequency_responses"),

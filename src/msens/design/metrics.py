@@ -18,21 +18,25 @@ DAQ input capacitances, DAQ input resistance). From them:
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.fft
+from scipy.interpolate import PchipInterpolator
+from threadpoolctl import ThreadpoolController
 
 from msens.field.parts import Coil
 from msens.magnetics.eddy_readout import PAD, emf_spectra
 from msens.magnetics.emf import ContactRates, emf_from_rates
-from msens.magnetics.frequency_response import coil_impedance
+from msens.magnetics.frequency_response import interp
+from msens.params.units import TWO_PI
 from msens.readout.electronics import (
     ElectronicsSpec,
     bandwidth,
-    coil_transfer_function,
+    coil_transfer_functions,
     poles,
     resonance,
     transfer_function,
@@ -69,27 +73,31 @@ class Wave:
 
 
 def _circuit_figures(coil: Coil, resistance: float, inductance: float,
-                     electronics: ElectronicsSpec) -> dict:
+                     electronics: ElectronicsSpec, decay: bool) -> dict:
     circuit = readout(coil, resistance, inductance, electronics)
     f0, q = resonance(circuit)
-    return {"circuit": circuit, "resonance_Hz": f0, "quality_factor": q,
-            "bandwidth_Hz": bandwidth(circuit), "noise_rms_V": figure_noise_rms(circuit,
-                                                                              electronics),
-            "winding_capacitance_F": circuit.winding_capacitance,
-            "decay_s": 1.0 / float(np.min(-poles(circuit).real))}
+    out = {"circuit": circuit, "resonance_Hz": f0, "quality_factor": q,
+           "bandwidth_Hz": bandwidth(circuit), "noise_rms_V": figure_noise_rms(circuit,
+                                                                             electronics),
+           "winding_capacitance_F": circuit.winding_capacitance}
+    if decay:
+        out["decay_s"] = 1.0 / float(np.min(-poles(circuit).real))
+    return out
 
 
 def _circuits(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndarray,
-              electronics: ElectronicsSpec) -> tuple[list[tuple], dict]:
+              electronics: ElectronicsSpec, *, decay: bool = True
+              ) -> tuple[list[tuple], dict]:
     """Each design's circuit key, and the circuit figures once per distinct circuit (designs
-    that differ only in their axial offset share one)."""
+    that differ only in their axial offset share one); ``decay``: with the slowest pole's
+    decay time, s (``"decay_s"``)."""
     keys = [(round(float(r), 12), round(float(ind), 15), c.turns, c.length, c.inner_radius,
              c.wire.name, c.packing_factor) for c, r, ind in zip(coils, resistance, inductance,
                                                                  strict=True)]
     circuits: dict = {}
     for k, c, r, ind in zip(keys, coils, resistance, inductance, strict=True):
         if k not in circuits:
-            circuits[k] = _circuit_figures(c, float(r), float(ind), electronics)
+            circuits[k] = _circuit_figures(c, float(r), float(ind), electronics, decay)
     return keys, circuits
 
 
@@ -129,13 +137,13 @@ def design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.nd
             cf = circuits[keys[k]]
             v = scipy.fft.irfft(spectrum[k - lo] * cf["transfer"], n_fft)[:nt]
             rows.append(_row(coils[k], float(resistance[k]), float(inductance[k]), cf,
-                             sensitivity_villari[k], dlambda_dapproach[k], e[k - lo], v, wave))
+                             sensitivity_villari[k], dlambda_dapproach[k],
+                             float(np.max(np.abs(e[k - lo]))), float(np.max(np.abs(v))), wave))
     return rows
 
 
 def _row(coil: Coil, resistance: float, inductance: float, cf: dict, villari: np.ndarray,
-         approach: np.ndarray, emf: np.ndarray, voltage: np.ndarray, wave: Wave) -> dict:
-    peak_v = float(np.max(np.abs(voltage)))
+         approach: np.ndarray, peak_emf: float, peak_v: float, wave: Wave) -> dict:
     return {
         "outer_radius_m": coil.outer_radius,
         "resistance_ohm": resistance, "inductance_H": inductance,
@@ -144,7 +152,7 @@ def _row(coil: Coil, resistance: float, inductance: float, cf: dict, villari: np
         "bandwidth_Hz": cf["bandwidth_Hz"], "noise_rms_V": cf["noise_rms_V"],
         "sensitivity_villari_Wb_per_N": float(np.sum(villari)),
         "dLambda_dapproach_Wb_per_m": float(np.sum(approach)),
-        "peak_emf_V": float(np.max(np.abs(emf))),
+        "peak_emf_V": peak_emf,
         "peak_voltage_V": peak_v, "snr": peak_v / cf["noise_rms_V"],
         "precompression_N": wave.precompression_N,
         "precompression_max_N": wave.precompression_max_N,
@@ -152,8 +160,145 @@ def _row(coil: Coil, resistance: float, inductance: float, cf: dict, villari: np
     }
 
 
-#: Designs whose eddy-current spectra are formed at once (bounds memory: chunk × bins × n_c).
-SPECTRUM_CHUNK = 16
+#: Designs whose eddy-current spectra are formed at once (bounds memory: about 1 MB a design
+#: on the main study's 20,250-point FFT).
+SPECTRUM_CHUNK = 64
+
+
+@dataclass(frozen=True)
+class _ChainSpectra:
+    """What every design's eddy-current EMF spectrum shares: the contact rates' spectra and
+    the bins' places in :func:`msens.magnetics.frequency_response.interp`.
+
+    ``interp`` reads a solved response in three ways, by bin: below the first nonzero solved
+    frequency f1 its low-frequency form; from f1 to the last solved frequency f_n a PCHIP in
+    log f; from f_n up the value at f_n. A design's EMF(ω) = −Σ_m S_m(ω) R_m(ω) (m over both
+    mechanisms' contacts, R the rates' spectra) is therefore, bin by bin,
+
+    - above f_n (most bins: the read-out's FFT reaches 5 MHz, the solves 200 kHz): the
+      product of the design's S_m(f_n) with the shared spectra, one matrix product for all
+      designs;
+    - on the PCHIP interval k: S_m(u) = Σ_p c_pkm (u − u_k)^(3−p), u = log f, so the EMF is
+      the design's coefficients c_pkm times the shared table (u − u_k)^(3−p) R_m(u): again
+      one matrix product per interval;
+    - below f1 (the DC bin): :func:`msens.magnetics.eddy_readout.emf_spectra` itself.
+
+    Attributes
+    ----------
+    n : int
+        FFT length.
+    f : ndarray, shape (n // 2 + 1,)
+        Bin frequencies, Hz.
+    low, top : int
+        Bins [0, low) are below f1, bins [top, n // 2 + 1) at or above f_n.
+    rates : ndarray of complex, shape (n // 2 + 1, 2 n_c)
+        Spectra of dF_c/dt then dδ_c/dt.
+    pieces : tuple of (slice, int, ndarray)
+        Per PCHIP interval holding bins: their slice, the interval and the table
+        −(u − u_k)^(3−p) R_m, shape (4 · 2 n_c, bins).
+    top_rates : ndarray of complex, shape (2 n_c, bins above f_n)
+        ``-rates[top:].T``.
+    """
+
+    n: int
+    f: np.ndarray
+    low: int
+    top: int
+    rates: np.ndarray
+    pieces: tuple
+    top_rates: np.ndarray
+
+
+def _chain_spectra(wave: Wave, frequencies: np.ndarray) -> _ChainSpectra:
+    t = wave.rates.t
+    nt = t.size
+    dt = float(t[1] - t[0])
+    n = scipy.fft.next_fast_len(math.ceil(PAD * nt), real=True)
+    f = np.fft.rfftfreq(n, dt)
+    rates = np.concatenate([scipy.fft.rfft(wave.rates.force, n, axis=0),
+                            scipy.fft.rfft(wave.rates.approach, n, axis=0)], axis=1)
+    freqs = np.asarray(frequencies, float)
+    low = int(np.searchsorted(f, freqs[1], side="left"))  # f < f1
+    top = max(low, int(np.searchsorted(f, freqs[-1], side="left")))  # f >= f_n
+    pieces = []
+    if top > low:
+        nodes = np.log(freqs[1:])
+        u = np.log(f[low:top])
+        interval = np.clip(np.searchsorted(nodes, u, side="right") - 1, 0, nodes.size - 2)
+        for k in np.unique(interval):
+            idx = np.nonzero(interval == k)[0]
+            sl = slice(low + int(idx[0]), low + int(idx[-1]) + 1)
+            dx = u[idx] - nodes[k]
+            power = np.stack([dx**3, dx**2, dx, np.ones_like(dx)])  # (4, bins)
+            table = power[:, None, :] * -rates[sl].T[None]  # (4, 2 n_c, bins)
+            pieces.append((sl, int(k), table.reshape(-1, idx.size)))
+    return _ChainSpectra(n=n, f=f, low=low, top=top, rates=rates, pieces=tuple(pieces),
+                         top_rates=np.ascontiguousarray(-rates[top:].T))
+
+
+def _emf_spectra(spectra: _ChainSpectra, frequencies: np.ndarray, villari: np.ndarray,
+                 approach: np.ndarray) -> np.ndarray:
+    """EMF(ω) of many designs, shape (n_d, bins): :func:`msens.magnetics.eddy_readout.
+    emf_spectra` of their S_c(ω), D_c(ω) (shape (n_d, n_f, n_c) each), by the matrix
+    products of :class:`_ChainSpectra` (equal to it to rounding, tests)."""
+    freqs = np.asarray(frequencies, float)
+    sp = spectra
+    n_d = villari.shape[0]
+    out = np.empty((n_d, sp.f.size), dtype=complex)
+    if sp.low:
+        n_c = villari.shape[2]
+        out[:, :sp.low] = emf_spectra(
+            freqs[:2], np.moveaxis(villari[:, :2], 1, 0), np.moveaxis(approach[:, :2], 1, 0),
+            sp.f[:sp.low], sp.rates[:sp.low, :n_c], sp.rates[:sp.low, n_c:]).T
+    both = np.moveaxis(np.concatenate([villari, approach], axis=2), 1, 0)  # (n_f, n_d, 2n_c)
+    if freqs.size > 2:
+        # the PCHIP of interp on the same values, real and imaginary parts side by side (it
+        # acts on each column alone: the same coefficients)
+        pchip = PchipInterpolator(np.log(freqs[1:]),
+                                  np.stack([both[1:].real, both[1:].imag], axis=-1), axis=0)
+        top = pchip(np.log(np.minimum(freqs[-1:], freqs[-1])))[0]  # interp's, from f_n up
+        at_top = top[..., 0] + 1j * top[..., 1]  # (n_d, 2n_c)
+        coef = np.moveaxis(pchip.c[..., 0] + 1j * pchip.c[..., 1], 2, 0)  # (n_d, 4, ., 2n_c)
+        for sl, k, table in sp.pieces:
+            np.matmul(coef[:, :, k].reshape(n_d, -1), table, out=out[:, sl])
+    else:
+        at_top = both[1]
+    np.matmul(at_top, sp.top_rates, out=out[:, sp.top:])
+    return out
+
+
+def _coil_impedances(spectra: _ChainSpectra, frequencies: np.ndarray,
+                     inductance_w: np.ndarray, resistance: np.ndarray) -> np.ndarray:
+    """Z = R + jωL(ω) of many designs, shape (n_d, bins): :func:`msens.magnetics.
+    frequency_response.coil_impedance` below f_n, its constant-L form from f_n up."""
+    sp = spectra
+    freqs = np.asarray(frequencies, float)
+    # L(ω) as coil_impedance interpolates it: at the bins below f_n, then from f_n up
+    ind = interp(freqs, np.asarray(inductance_w).T, np.append(sp.f[:sp.top], freqs[-1])).T
+    z = np.empty((ind.shape[0], sp.f.size), dtype=complex)
+    w = TWO_PI * sp.f
+    np.multiply(1j * w[:sp.top], ind[:, :-1], out=z[:, :sp.top])
+    np.multiply(1j * w[sp.top:], ind[:, -1:], out=z[:, sp.top:])
+    z += resistance[:, None]
+    return z
+
+
+@functools.cache
+def _blas() -> ThreadpoolController:
+    """The process's BLAS libraries, found once."""
+    return ThreadpoolController()
+
+
+def _one_blas_thread():
+    """One BLAS thread for the batched spectra: their products are small, and OpenBLAS's
+    threads on a loaded machine wait for a time slice on each (measured: 0.2 s instead of
+    0.02 s a chunk at load 5 on 2 cores; cf. :mod:`msens.field.linsolve`)."""
+    return _blas().limit(limits=1, user_api="blas")
+
+
+def _peaks(x: np.ndarray) -> np.ndarray:
+    """max |x| along the last axis."""
+    return np.maximum(np.max(x, axis=-1), -np.min(x, axis=-1))
 
 
 def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndarray,
@@ -170,6 +315,11 @@ def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductanc
     (:data:`msens.readout.mss.PAD`). Resonance, Q, bandwidth and noise are the static
     circuit's (R, bias-point L), as ``summary.json`` reports them.
 
+    Vectorised over designs: the chain's spectra are formed once and every chunk of designs'
+    EMF spectra is a few matrix products with them (:class:`_ChainSpectra`); the inverse FFTs
+    run on the whole chunk. The results equal the design-by-design evaluation to rounding
+    (``tests/design/test_metrics.py``).
+
     Parameters
     ----------
     coils : sequence of Coil, length n_d
@@ -184,28 +334,36 @@ def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductanc
     wave : Wave
     electronics : ElectronicsSpec
     """
-    t = wave.rates.t
-    nt = t.size
-    dt = float(t[1] - t[0])
-    n = scipy.fft.next_fast_len(math.ceil(PAD * nt), real=True)
-    f = np.fft.rfftfreq(n, dt)
-    force = scipy.fft.rfft(wave.rates.force, n, axis=0)
-    app = scipy.fft.rfft(wave.rates.approach, n, axis=0)
-    keys, circuits = _circuits(coils, resistance, inductance, electronics)
+    sp = _chain_spectra(wave, frequencies)
+    villari, approach = np.asarray(villari), np.asarray(approach)
+    resistance = np.asarray(resistance, float)
+    keys, circuits = _circuits(coils, resistance, inductance, electronics, decay=False)
     rows: list[dict] = []
-    for lo in range(0, len(coils), SPECTRUM_CHUNK):
-        sl = slice(lo, min(lo + SPECTRUM_CHUNK, len(coils)))
-        e_hat = emf_spectra(frequencies, np.moveaxis(villari[sl], 1, 0),
-                            np.moveaxis(approach[sl], 1, 0), f, force, app)
-        z = coil_impedance(frequencies, np.asarray(inductance_w[sl]).T, resistance[sl], f)
-        for j, k in enumerate(range(sl.start, sl.stop)):
-            cf = circuits[keys[k]]
-            h = coil_transfer_function(cf["circuit"], f, z[:, j])
-            e = scipy.fft.irfft(e_hat[:, j], n)[:nt]
-            v = scipy.fft.irfft(h * e_hat[:, j], n)[:nt]
-            rows.append(_row(coils[k], float(resistance[k]), float(inductance[k]), cf,
-                             villari[k, 0].real, approach[k, 0].real, e, v, wave))
+    with _one_blas_thread():
+        for lo in range(0, len(coils), SPECTRUM_CHUNK):
+            rows.extend(_dynamic_chunk(slice(lo, min(lo + SPECTRUM_CHUNK, len(coils))), sp,
+                                       coils, resistance, inductance, frequencies, villari,
+                                       approach, np.asarray(inductance_w), keys, circuits,
+                                       wave))
     return rows
+
+
+def _dynamic_chunk(sl: slice, sp: _ChainSpectra, coils: Sequence[Coil],
+                   resistance: np.ndarray, inductance: np.ndarray, frequencies: np.ndarray,
+                   villari: np.ndarray, approach: np.ndarray, inductance_w: np.ndarray,
+                   keys: list, circuits: dict, wave: Wave) -> list[dict]:
+    """The rows of designs ``sl`` of :func:`dynamic_design_rows`."""
+    nt = wave.rates.t.size
+    e_hat = _emf_spectra(sp, frequencies, villari[sl], approach[sl])
+    z = _coil_impedances(sp, frequencies, inductance_w[sl], resistance[sl])
+    h = coil_transfer_functions([circuits[keys[k]]["circuit"]
+                                 for k in range(sl.start, sl.stop)], sp.f, z)
+    h *= e_hat
+    peak_e = _peaks(scipy.fft.irfft(e_hat, sp.n, axis=1)[:, :nt])
+    peak_v = _peaks(scipy.fft.irfft(h, sp.n, axis=1)[:, :nt])
+    return [_row(coils[k], float(resistance[k]), float(inductance[k]), circuits[keys[k]],
+                 villari[k, 0].real, approach[k, 0].real, float(peak_e[j]), float(peak_v[j]),
+                 wave) for j, k in enumerate(range(sl.start, sl.stop))]
 
 
 __all__ = ["DECAY_TIMES", "EMF_CHUNK", "SPECTRUM_CHUNK", "Wave", "design_rows",

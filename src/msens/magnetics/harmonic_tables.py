@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -23,8 +24,12 @@ from msens.field.eddy import HarmonicOperator
 from msens.field.geometry import SensorGeometry
 from msens.magnetics.dynamic import sensor_conductivity
 from msens.magnetics.mechanisms import MechanismPotentials
-from msens.magnetics.potentials import LinkageTable, rect_integral, table_grid, tabulate
+from msens.magnetics.potentials import _interp_weights, table_grid, tabulate
 from msens.params.materials import SIGMA_1018
+
+#: Coils whose linkages are formed at once (the temporaries, 1 MB on the main study, stay in
+#: the processor's cache).
+_BLOCK = 64
 
 
 @dataclass(frozen=True)
@@ -38,8 +43,9 @@ class HarmonicTables:
     r, z : ndarray, shapes (nr,), (nz,)
         Grid lines, m.
     cumulative : ndarray of complex, shape (n_f, n_sources, nr, nz)
-        As :attr:`LinkageTable.cumulative`, per frequency (Villari sources first, then
-        approach sources, the order of :class:`MechanismPotentials`).
+        As :attr:`msens.magnetics.potentials.LinkageTable.cumulative`, per frequency
+        (Villari sources first, then approach sources, the order of
+        :class:`MechanismPotentials`).
     """
 
     frequencies: np.ndarray
@@ -50,6 +56,10 @@ class HarmonicTables:
     def linkage(self, turns: np.ndarray, r0: np.ndarray, r1: np.ndarray, z0: np.ndarray,
                 z1: np.ndarray) -> np.ndarray:
         """Each coil's complex flux linkage of every source at every frequency.
+
+        :func:`msens.magnetics.potentials.rect_integral` of each frequency's table (the same
+        bilinear corners, the same arithmetic), read at once for all frequencies and sources
+        from the table's per-node layout (:attr:`by_node`).
 
         Parameters
         ----------
@@ -63,9 +73,32 @@ class HarmonicTables:
             Wb per unit source.
         """
         per_area = np.asarray(turns, float) / ((r1 - r0) * (z1 - z0))
-        out = np.stack([rect_integral(LinkageTable(self.r, self.z, c), r0, r1, z0, z1)
-                        for c in self.cumulative], axis=1)
-        return per_area[:, None, None] * out
+        nodes = self.by_node
+        out = np.empty((per_area.size, nodes.shape[2]), dtype=nodes.dtype)
+
+        def corner(rv, zv):
+            i, u = _interp_weights(self.r, rv)
+            j, v = _interp_weights(self.z, zv)
+            u, v = u[:, None], v[:, None]
+            return ((1 - u) * (1 - v) * nodes[i, j] + u * (1 - v) * nodes[i + 1, j]
+                    + (1 - u) * v * nodes[i, j + 1] + u * v * nodes[i + 1, j + 1])
+
+        for lo in range(0, per_area.size, _BLOCK):  # temporaries stay in cache
+            b = slice(lo, lo + _BLOCK)
+            out[b] = (per_area[b, None] * (corner(r1[b], z1[b]) - corner(r0[b], z1[b])
+                                           - corner(r1[b], z0[b]) + corner(r0[b], z0[b])))
+        return out.reshape(per_area.size, *self.cumulative.shape[:2])
+
+    @cached_property
+    def by_node(self) -> np.ndarray:
+        """:attr:`cumulative` laid out per grid node, shape (nr, nz, n_f × n_sources)
+        (computed once, not pickled)."""
+        c = self.cumulative
+        return np.ascontiguousarray(np.moveaxis(c, (0, 1), (2, 3))).reshape(
+            c.shape[2], c.shape[3], -1)
+
+    def __getstate__(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k != "by_node"}
 
 
 def harmonic_tables(model: MechanismPotentials, geometry: SensorGeometry,

@@ -20,6 +20,7 @@ the sampled DAQ record is in :mod:`msens.readout.daq`, the circuit's noise in
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numba
@@ -218,6 +219,50 @@ def coil_transfer_function(circuit: ReadoutCircuit, f: ArrayLike,
             f"{z.shape}")
     s, _, y_b = _admittances(circuit, f)
     return _transfer(circuit, s, z, y_b)
+
+
+def coil_transfer_functions(circuits: Sequence[ReadoutCircuit], f: ArrayLike,
+                            coil_impedance: ArrayLike) -> np.ndarray:
+    """:func:`coil_transfer_function` of many circuits on one cable and DAQ input at once.
+
+    The circuits may differ in their coil (impedance and winding capacitance); their cable
+    and DAQ input (``cable_capacitance``, ``input_resistance``, ``input_capacitance``,
+    ``cable_resistance``) must be the same, as for the designs of one coil sweep.
+
+    Parameters
+    ----------
+    circuits : sequence of ReadoutCircuit, length m
+    f : array_like, shape (n,)
+        Frequencies, Hz (>= 0).
+    coil_impedance : array_like of complex, shape (m, n)
+        Each circuit's Z_s at ``f``, Ω.
+
+    Returns
+    -------
+    ndarray of complex, shape (m, n)
+        Row k equals ``coil_transfer_function(circuits[k], f, coil_impedance[k])``.
+    """
+    f = np.asarray(f, dtype=float)
+    z = np.asarray(coil_impedance, dtype=complex)
+    require(len(circuits) > 0 and z.shape == (len(circuits), *f.shape),
+            f"coil_impedance must have shape (circuits, frequencies) = "
+            f"{(len(circuits), *f.shape)}, got {z.shape}")
+    first = circuits[0]
+    load = (first.cable_capacitance, first.input_resistance, first.input_capacitance,
+            first.cable_resistance)
+    require(all((c.cable_capacitance, c.input_resistance, c.input_capacitance,
+                 c.cable_resistance) == load for c in circuits),
+            "coil_transfer_functions needs circuits on one cable and DAQ input")
+    s, _, y_b = _admittances(first, f)
+    div = 1.0 + first.cable_resistance * y_b
+    c_w = np.array([c.winding_capacitance for c in circuits])[:, None]
+    # _transfer's formula, its temporaries (circuits × frequencies) formed once, in place
+    h = s * c_w
+    h += y_b / div
+    h *= z
+    h += 1.0
+    h *= div
+    return np.divide(1.0, h, out=h)
 
 
 def state_space(circuit: ReadoutCircuit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -1,0 +1,129 @@
+"""The batched eddy-current design rows equal the design-by-design read-out."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+import scipy.fft
+
+from msens.design.metrics import SPECTRUM_CHUNK, Wave, dynamic_design_rows
+from msens.errors import InputError
+from msens.field.parts import Coil
+from msens.magnetics.eddy_readout import PAD, emf_spectra
+from msens.magnetics.emf import contact_rates
+from msens.magnetics.frequency_response import coil_impedance
+from msens.magnetics.harmonic_tables import HarmonicTables
+from msens.magnetics.potentials import LinkageTable, rect_integral
+from msens.readout.electronics import (
+    ElectronicsSpec,
+    coil_transfer_function,
+    coil_transfer_functions,
+)
+from msens.readout.mss import readout
+
+
+def _wave() -> Wave:
+    t = np.arange(3001) * 1e-7
+    centres = np.array([80e-6, 110e-6, 140e-6])
+    force = 2.0 + 8.0 / np.cosh((t[:, None] - centres) / 8e-6) ** 2
+    contacts = np.array([12, 13, 14])
+    full = np.zeros((t.size, 20))
+    full[:, contacts - 1] = force
+    return Wave(contacts=contacts, rates=contact_rates(t, full, contacts, 1.2e10),
+                precompression_N=2.0, precompression_max_N=2.5, wave_speed_change=0.1)
+
+
+def _responses(freqs: np.ndarray, n_d: int, rng: np.random.Generator):
+    """Smooth, lagging responses of n_d designs (shape (n_d, n_f, 3)) and L(ω) (n_d, n_f)."""
+    lag = 1.0 / (1.0 + 1j * freqs / rng.uniform(2e4, 8e4, (n_d, 1)))  # (n_d, n_f)
+    s0 = rng.uniform(-2e-8, 2e-8, (n_d, 1, 3))
+    d0 = rng.uniform(-3e-2, 1e-2, (n_d, 1, 3))
+    villari = s0 * lag[..., None] ** rng.uniform(0.5, 1.5, (1, 1, 3))
+    approach = d0 * lag[..., None] ** rng.uniform(0.5, 1.5, (1, 1, 3))
+    villari[:, 0] = villari[:, 0].real  # static values are real
+    approach[:, 0] = approach[:, 0].real
+    ind = rng.uniform(5e-3, 3e-2, (n_d, 1)) * (0.8 + 0.2 * lag)
+    ind[:, 0] = ind[:, 0].real
+    return villari, approach, ind
+
+
+def _reference(coil, res, ind_static, freqs, villari, approach, ind_w, wave, elec):
+    """One design the way dynamic_design_rows read it before batching: interp on every bin."""
+    t = wave.rates.t
+    n = scipy.fft.next_fast_len(int(np.ceil(PAD * t.size)), real=True)
+    f = np.fft.rfftfreq(n, float(t[1] - t[0]))
+    force = scipy.fft.rfft(wave.rates.force, n, axis=0)
+    app = scipy.fft.rfft(wave.rates.approach, n, axis=0)
+    e_hat = emf_spectra(freqs, villari, approach, f, force, app)
+    z = coil_impedance(freqs, ind_w, res, f)
+    h = coil_transfer_function(readout(coil, res, ind_static, elec), f, z)
+    e = scipy.fft.irfft(e_hat, n)[:t.size]
+    v = scipy.fft.irfft(h * e_hat, n)[:t.size]
+    return float(np.max(np.abs(e))), float(np.max(np.abs(v)))
+
+
+@pytest.mark.parametrize("freqs", [np.array([0.0, 10.0, 300.0, 3e3, 1e4, 3e4, 1e5, 2e5]),
+                                   np.array([0.0, 5e4])])
+def test_batched_rows_equal_the_design_by_design_readout(freqs):
+    rng = np.random.default_rng(7)
+    wave, elec = _wave(), ElectronicsSpec()
+    n_d = SPECTRUM_CHUNK + 6  # two chunks
+    coils = [Coil(particle=13, turns=400 + 100 * (k % 5), length=(7 + k % 3) * 1e-3)
+             for k in range(n_d)]
+    res = rng.uniform(30.0, 120.0, n_d)
+    villari, approach, ind_w = _responses(freqs, n_d, rng)
+    ind = ind_w[:, 0].real
+    rows = dynamic_design_rows(coils, res, ind, freqs, villari, approach, ind_w, wave, elec)
+    assert len(rows) == n_d
+    for k in range(0, n_d, 7):
+        peak_e, peak_v = _reference(coils[k], res[k], ind[k], freqs, villari[k],
+                                    approach[k], ind_w[k], wave, elec)
+        assert rows[k]["peak_emf_V"] == pytest.approx(peak_e, rel=1e-12)
+        assert rows[k]["peak_voltage_V"] == pytest.approx(peak_v, rel=1e-12)
+        assert rows[k]["snr"] == rows[k]["peak_voltage_V"] / rows[k]["noise_rms_V"]
+        assert rows[k]["sensitivity_villari_Wb_per_N"] == float(np.sum(villari[k, 0].real))
+    # a design's row does not depend on the designs evaluated with it
+    alone = dynamic_design_rows(coils[3:4], res[3:4], ind[3:4], freqs, villari[3:4],
+                                approach[3:4], ind_w[3:4], wave, elec)[0]
+    assert alone["peak_voltage_V"] == pytest.approx(rows[3]["peak_voltage_V"], rel=1e-13)
+
+
+def test_coil_transfer_functions_are_the_circuits_own():
+    elec = ElectronicsSpec()
+    f = np.geomspace(1.0, 1e7, 50)
+    circuits = [readout(Coil(particle=13, turns=n), 50.0 + n / 10, 1e-2, elec)
+                for n in (300, 700, 1100)]
+    z = np.array([c.resistance + 2j * np.pi * f * c.inductance * (1 - 0.1j) for c in circuits])
+    h = coil_transfer_functions(circuits, f, z)
+    for k, c in enumerate(circuits):
+        np.testing.assert_allclose(h[k], coil_transfer_function(c, f, z[k]), rtol=1e-14)
+    other = readout(Coil(particle=13), 50.0, 1e-2, ElectronicsSpec(cable_capacitance_f=3e-10))
+    with pytest.raises(InputError, match="one cable"):
+        coil_transfer_functions([circuits[0], other], f, z[:2])
+    with pytest.raises(InputError, match="shape"):
+        coil_transfer_functions(circuits, f, z[:2])
+
+
+def test_harmonic_linkage_is_each_frequency_table_read_alone():
+    rng = np.random.default_rng(3)
+    r, z = np.linspace(8e-3, 12e-3, 41), np.linspace(-6e-3, 6e-3, 121)
+    cum = rng.standard_normal((3, 4, r.size, z.size)) + 1j * rng.standard_normal(
+        (3, 4, r.size, z.size))
+    tables = HarmonicTables(np.array([0.0, 1e3, 1e4]), r, z, cum)
+    n = 150  # more than one block
+    r0 = rng.uniform(8e-3, 10e-3, n)
+    r1 = r0 + rng.uniform(1e-4, 1.9e-3, n)
+    z0 = rng.uniform(-6e-3, 0.0, n)
+    z1 = z0 + rng.uniform(1e-3, 5.9e-3, n)
+    turns = rng.integers(100, 1200, n).astype(float)
+    link = tables.linkage(turns, r0, r1, z0, z1)
+    per_area = turns / ((r1 - r0) * (z1 - z0))
+    for k, c in enumerate(cum):
+        expected = per_area[:, None] * rect_integral(LinkageTable(r, z, c), r0, r1, z0, z1)
+        assert np.array_equal(link[:, k], expected)
+    # the per-node layout is rebuilt after pickling, not shipped
+    copy = pickle.loads(pickle.dumps(tables))
+    assert "by_node" not in copy.__dict__
+    assert np.array_equal(copy.linkage(turns, r0, r1, z0, z1), link)

@@ -83,6 +83,7 @@ def test_diagnose_of_a_changed_coil_finds_nothing_missing(cache, tmp_path):
     assert result.effect == "none"
 
 
+@pytest.mark.slow
 def test_a_designed_coil_equals_the_run_of_that_coil(cache, tmp_path):
     """One implementation: design's row of a coil and msens run of the study with that coil
     (read from the same field model) agree."""

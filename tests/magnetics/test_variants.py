@@ -75,3 +75,28 @@ def test_remanence_family_between_nodes_matches_a_direct_solve(dirs):
     assert f[0] < f[1] < f[2]
     assert dataclasses.replace(_geometry()).sensors[0].magnet.remanence == \
         scaled_geometry(_geometry(), 1.0).sensors[0].magnet.remanence
+
+
+@pytest.mark.slow
+def test_remanence_responses_between_nodes_match_a_direct_eddy_solve(dirs):
+    """The eddy-current responses over the remanence factors (what a diagnosis of an eddy
+    study reads for magnet_remanence) against a direct eddy-current model between nodes."""
+    from msens.magnetics.dynamic import dynamic_report
+    from msens.magnetics.variants import remanence_responses
+
+    kw = {**dirs, "frequencies": (0.0, 1e4, 3e4, 1e5)}
+    family = remanence_responses(_geometry(), **kw)
+    for factor in (0.875, 1.3):
+        direct = dynamic_report(scaled_geometry(_geometry(), factor), **kw).responses[13]
+        spline = family.response(13, factor)
+        _close(spline.approach, direct.approach, 1e-2)
+        _close(spline.villari, direct.villari, 5e-2)
+        _close(spline.impedance, direct.impedance, 1e-3)
+        assert spline.static_inductance_H == pytest.approx(direct.static_inductance_H,
+                                                           rel=1e-3)
+        assert spline.offsets is None
+    # at a node the family is the solve itself
+    node = family.members[2][13]
+    assert np.array_equal(family.response(13, 1.0).approach, node.approach)
+    with pytest.raises(Exception, match="outside the solved range"):
+        family.response(13, 1.6)

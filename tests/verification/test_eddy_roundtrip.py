@@ -1,5 +1,5 @@
 """The main study with eddy currents end to end: synth -> compare -> diagnose, and a hidden
-cable and a moved coil found, through the command line (slow: the eddy-current model of
+cable, a moved coil and magnets of another strength found, through the command line (slow: the eddy-current model of
 ``paper-mss`` is committed in ``meshes/``, the diagnosis runs the chain a few hundred times).
 """
 
@@ -49,3 +49,10 @@ def test_diagnose_names_a_moved_coil_with_eddy_currents(study_file, tmp_path):
     """A coil 0.5–2 mm off its place, read with eddy currents: named, its offset within
     10 % (the frequency responses' offset profiles)."""
     diagnose_hidden(study_file, tmp_path, "coil_position")
+
+
+def test_diagnose_names_weaker_or_stronger_magnets_with_eddy_currents(study_file, tmp_path):
+    """Magnets 10-40 % off their nominal remanence, read with eddy currents: named, the
+    factor within 10 % (the eddy-current models solved over the remanence factors,
+    RemanenceResponses)."""
+    diagnose_hidden(study_file, tmp_path, "magnet_remanence")

@@ -2,7 +2,8 @@
 
 A diagnosis varies physics MsS sensors through their field model: the study's transducers,
 with eddy currents their coils' frequency responses, and on demand the
-:class:`~msens.magnetics.variants.RemanenceFamily` of the geometry. A :class:`ModelBank`
+:class:`~msens.magnetics.variants.RemanenceFamily` of the geometry (with eddy currents also
+its :class:`~msens.magnetics.variants.RemanenceResponses`). A :class:`ModelBank`
 belongs to one diagnosis run (its :class:`~msens.diagnose.effects.base.Context`): it solves or
 reads each geometry's :class:`FieldModel` once, and each model keeps the sensors and
 responses made from it. Nothing is kept at module level: two runs share nothing but the
@@ -23,7 +24,12 @@ from msens.magnetics.frequency_response import FrequencyResponse
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import Transducer, cache_key
 from msens.magnetics.transducer_cache import transducers_for
-from msens.magnetics.variants import RemanenceFamily, remanence_family
+from msens.magnetics.variants import (
+    RemanenceFamily,
+    RemanenceResponses,
+    remanence_family,
+    remanence_responses,
+)
 from msens.params.materials import BEAD_STEEL
 from msens.readout.electronics import ElectronicsSpec
 from msens.readout.mss import MssSensor, readout
@@ -48,18 +54,23 @@ class FieldModel:
         With eddy currents: each coil's frequency response (with offset profiles).
     store : Store, optional
         Where the remanence family's transducers are found or written.
+    eddy : EddySettings, optional
+        With eddy currents: the model's mesh options and steel conductivity (those of the
+        remanence family's responses).
     """
 
     def __init__(self, key: str, geometry: SensorGeometry,
                  transducers: dict[int, Transducer],
                  responses: dict[int, FrequencyResponse] | None = None,
-                 store: Store | None = None):
+                 store: Store | None = None, eddy: EddySettings | None = None):
         self.key = key
         self.geometry = geometry
         self.transducers = transducers
         self.responses = responses
         self.store = store
+        self.eddy = eddy
         self._family: RemanenceFamily | None = None
+        self._response_family: RemanenceResponses | None = None
         # per model, not per process: they go when the run's bank goes
         self.sensor = lru_cache(maxsize=KEPT)(self._sensor)
         self.response = lru_cache(maxsize=KEPT)(self._response)
@@ -78,6 +89,17 @@ class FieldModel:
             self._family = remanence_family(self.geometry, store=self.store)
         return self._family
 
+    def response_family(self) -> RemanenceResponses:
+        """The eddy-current responses of the geometry over the remanence factors (solved or
+        read on first use, then kept)."""
+        internal(self.eddy is not None, "internal: the model was registered without eddy "
+                 "currents")
+        if self._response_family is None:
+            self._response_family = remanence_responses(
+                self.geometry, options=self.eddy.options, steel=self.eddy.steel,
+                store=self.store)
+        return self._response_family
+
     def _sensor(self, spec: PhysicsMss) -> MssSensor:
         """The transducer and read-out circuit of a physics MsS as ``spec`` says."""
         tr = self.transducers[spec.particle]
@@ -95,8 +117,10 @@ class FieldModel:
         moved by ``offset_m``)."""
         internal(self.responses is not None,
                  "internal: the model was registered without eddy currents")
-        internal(spec.remanence_factor == 1.0,
-                 "internal: no eddy-current variants for magnet remanence")
+        if spec.remanence_factor != 1.0:
+            internal(spec.offset_m == 0.0,
+                     "internal: no eddy-current offset profiles at another remanence")
+            return self.response_family().response(spec.particle, spec.remanence_factor)
         nominal = self.responses[spec.particle]
         return nominal if spec.offset_m == 0.0 else nominal.shifted(spec.offset_m)
 
@@ -172,7 +196,7 @@ class ModelBank:
             self._models[key] = FieldModel(
                 key, geometry, transducers_for(geometry, contact_maps=contact_maps,
                                                store=self.store),
-                responses, self.store)
+                responses, self.store, eddy)
         return self._models[key]
 
 

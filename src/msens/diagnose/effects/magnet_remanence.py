@@ -5,7 +5,9 @@ batch or grade, ageing, temperature: ceramic grades lose ~0.2 %/K). It changes t
 state, hence both the magnets' pull on the beads (the chain's precompression: the pulse
 speeds up under the coils) and every contact's sensitivity (the signal's size and shape).
 Both come from field models solved at a few factors and interpolated
-(:class:`msens.magnetics.variants.RemanenceFamily`), solved once per geometry and cached.
+(:class:`msens.magnetics.variants.RemanenceFamily`; with eddy currents also the coils'
+frequency responses, :class:`~msens.magnetics.variants.RemanenceResponses`), solved once per
+geometry and cached.
 """
 
 from __future__ import annotations
@@ -22,10 +24,10 @@ PARAM = "remanence_factor"
 
 
 def _applies(ctx: Context) -> bool:
-    # other remanences have field models of their own: no eddy-current responses of them yet
-    # (contact maps carry over: Transducer.reading_maps_of)
-    return (any(s.model is MssModel.PHYSICS for s in ctx.setup.sensors)
-            and not ctx.study.field.eddy_currents)
+    # other remanences have field models of their own (with eddy currents their frequency
+    # responses too, RemanenceResponses); contact maps carry over
+    # (Transducer.reading_maps_of)
+    return any(s.model is MssModel.PHYSICS for s in ctx.setup.sensors)
 
 
 def _space(ctx: Context, state: ModelState) -> tuple[Parameter, ...]:

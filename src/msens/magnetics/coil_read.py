@@ -362,11 +362,15 @@ def write_model(store: Store, key: str, coils: dict[int, Coil],
     inductances (JSON artifact :func:`model_name`; tiny, written once)."""
     if store.read_json(model_name(key)) is not None:
         return
-    store.write_json(model_name(key), {
-        "schema": COIL_TABLE_VERSION, "key": key,
-        "coils": {str(p): coil_record(c) for p, c in sorted(coils.items())},
-        "inductance_H": {str(p): float(v) for p, v in sorted(inductance_H.items())}},
-        optional=True)
+    from msens.errors import InputError
+
+    try:
+        store.write_json(model_name(key), {
+            "schema": COIL_TABLE_VERSION, "key": key,
+            "coils": {str(p): coil_record(c) for p, c in sorted(coils.items())},
+            "inductance_H": {str(p): float(v) for p, v in sorted(inductance_H.items())}})
+    except InputError as exc:  # only a later coil change would have read it: say nothing
+        _log.debug("%s; coil record not kept", exc)
 
 
 def read_model(store: Store, key: str) -> tuple[dict[int, Coil], dict[int, float]] | None:

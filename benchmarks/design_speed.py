@@ -8,8 +8,9 @@ paper's coil is measured in the same run and the ratio reported.
 
 With ``--eddy`` the same on the main study with ``[field] eddy_currents = true``: the one
 field model is then the eddy-current model (every source's harmonic potential tabulated at
-the run's 17 frequencies), each design's EMF and DAQ voltage the frequency-domain read-out,
-and the alternative is the run's eddy-current model built per design (``dynamic_report``,
+the run's 17 frequencies), each design's EMF and DAQ voltage the frequency-domain read-out
+(batched over designs: :func:`msens.design.metrics.dynamic_design_rows`), and the alternative
+is the run's eddy-current model built per design (``dynamic_report``,
 from an empty cache), timed once for the paper's coil.
 Run: python benchmarks/design_speed.py [--eddy]
 """
@@ -17,6 +18,7 @@ Run: python benchmarks/design_speed.py [--eddy]
 from __future__ import annotations
 
 import json
+import os
 import tempfile
 import time
 from pathlib import Path
@@ -86,6 +88,7 @@ def main(eddy: bool = False) -> dict:
                                  float(np.max([r["peak_emf_V"] for r in rows]))],
             "snr_range": [float(np.min([r["snr"] for r in rows])),
                           float(np.max([r["snr"] for r in rows]))],
+            "load_average_1min": round(os.getloadavg()[0], 2),
             "note": "the table quadrature is checked against exact mesh quadrature in "
                     "tests/magnetics/test_potentials.py"}
 

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import csv
 import pickle
+from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.fft
 
+from msens.cli import main
 from msens.design.metrics import SPECTRUM_CHUNK, Wave, dynamic_design_rows
 from msens.errors import InputError
 from msens.field.parts import Coil
@@ -22,6 +25,8 @@ from msens.readout.electronics import (
     coil_transfer_functions,
 )
 from msens.readout.mss import readout
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _wave() -> Wave:
@@ -127,3 +132,53 @@ def test_harmonic_linkage_is_each_frequency_table_read_alone():
     copy = pickle.loads(pickle.dumps(tables))
     assert "by_node" not in copy.__dict__
     assert np.array_equal(copy.linkage(turns, r0, r1, z0, z1), link)
+
+
+TINY = (ROOT / "tests" / "data" / "tiny-mss.toml").read_text().replace(
+    "[[sensor]]", "[electronics]\nsample_rate_hz = 5e6\n[[sensor]]")
+#: Coarse skin mesh (as tests/magnetics/test_eddy_study.py): the path, not the numbers.
+EDDY = "[field]\neddy_currents = true\nskin_size_m = 3e-4\n"
+TINY_COIL = """
+schema = "msens.sweep/1"
+name = "tiny-coil"
+[coil]
+turns = [600, 1100]
+axial_offset_m = [0.0, 1e-3]
+[model]
+bead_padding = 2
+"""
+
+
+def _design_rows(tmp_path: Path, study_text: str, sweep_text: str, name: str) -> list[dict]:
+    study, sweep, out = tmp_path / f"{name}.toml", tmp_path / f"{name}-sweep.toml", \
+        tmp_path / name
+    study.write_text(study_text)
+    sweep.write_text(sweep_text)
+    assert main(["design", str(study), "--sweep", str(sweep), "--out", str(out), "-q"]) == 0
+    with (out / "designs.csv").open() as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_design_cli_with_eddy_currents_on_the_tiny_study(tmp_path, monkeypatch):
+    monkeypatch.setenv("MSENS_MESH_DIR", str(tmp_path / "cache"))
+    eddy = _design_rows(tmp_path, TINY + EDDY, TINY_COIL, "eddy")
+    static = _design_rows(tmp_path, TINY, TINY_COIL, "static")
+    assert [r["status"] for r in eddy] == ["ok"] * 4
+    for e, s in zip(eddy, static, strict=True):
+        # the eddy currents in the beads screen the coil: a smaller EMF than magnetostatic
+        assert 0.0 < float(e["peak_emf_V"]) < float(s["peak_emf_V"])
+        assert 0.0 < float(e["peak_voltage_V"])
+        assert e["resistance_ohm"] == s["resistance_ohm"]
+
+
+@pytest.mark.slow
+def test_design_cli_sweep_coil_on_the_main_study_with_eddy_currents(tmp_path):
+    """studies/sweep-coil.toml (400 designs) on the main study with eddy currents."""
+    text = (ROOT / "studies" / "paper-mss.toml").read_text()
+    assert "[field]" in text
+    study = text.replace("[field]", "[field]\neddy_currents = true", 1)
+    rows = _design_rows(tmp_path, study, (ROOT / "studies" / "sweep-coil.toml").read_text(),
+                        "paper-eddy")
+    ok = [r for r in rows if r["status"] == "ok"]
+    assert len(rows) == 400 and len(ok) > 0
+    assert all(float(r["peak_voltage_V"]) > 0 and float(r["snr"]) > 0 for r in ok)

@@ -319,7 +319,7 @@ def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductanc
     Vectorised over designs: the chain's spectra are formed once and every chunk of designs'
     EMF spectra is a few matrix products with them (:class:`_ChainSpectra`); the inverse FFTs
     run on the whole chunk. The results equal the design-by-design evaluation to rounding
-    (``tests/design/test_metrics.py``).
+    (``tests/design/test_eddy_batch.py``).
 
     Parameters
     ----------

@@ -223,8 +223,8 @@ def _read_coils(geometry: SensorGeometry, free: str, *, store: Store,
         u.coil.particle] else read_coil(tables, reference.transducers[u.coil.particle],
                                         u.coil, geometry)
            for u in geometry.sensors}
-    _log.info("transducers of the coils at particles %s read from the field model of "
-              "their coil tables %s (no new mesh or solve)", sorted(out), free)
+    _log.info("transducers of the coils at particles %s read from the field model of the "
+              "solved coils %s (no new mesh or contact maps)", sorted(out), free)
     details = {**reference.details, "coil_read": {
         "tables": [table_name(free, p) for p in changed],
         "inductance": "solved coil's incremental L x ratio of inductance-grid quadratures"}}

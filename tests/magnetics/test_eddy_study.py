@@ -154,8 +154,8 @@ def test_eddy_current_records_carry_the_coils_thermal_noise(eddy_runs, monkeypat
 
 def test_diagnose_baseline_with_eddy_currents_is_the_run(eddy_runs, monkeypatch):
     """diagnose on an eddy-current study: its baseline record is the run's DAQ voltage (the
-    same frequency-domain read-out); the coil offset is searched (the responses' offset
-    profiles), the magnet remanence, which needs eddy-current models of other magnets, not.
+    same frequency-domain read-out); the coil offset (the responses' offset profiles) and the
+    magnet remanence (eddy-current models over the remanence factors) are searched.
     End to end on the main study: tests/verification/test_eddy_roundtrip.py (slow)."""
     from msens.diagnose.effects import Context, registry
     from msens.diagnose.predict import Predictor, baseline_state, setup_result
@@ -172,8 +172,8 @@ def test_diagnose_baseline_with_eddy_currents_is_the_run(eddy_runs, monkeypatch)
                                atol=1e-9 * np.max(np.abs(run.voltage)))
     assert np.max(np.abs(run.voltage - static.setups[0].sensors[0].mss.voltage)) > 0.01
     searched = {name for name, e in registry().items() if e.applies(ctx)}
-    assert {"cable_capacitance", "striker_velocity", "coil_position"} <= searched
-    assert "magnet_remanence" not in searched
+    assert {"cable_capacitance", "striker_velocity", "coil_position",
+            "magnet_remanence"} <= searched
     static_ctx = Context(static.study, static.study.setups[0])
     assert {"coil_position", "magnet_remanence"} <= {
         name for name, e in registry().items() if e.applies(static_ctx)}

@@ -80,7 +80,7 @@ def test_diagnose_of_a_changed_coil_finds_nothing_missing(cache, tmp_path):
     changed = msens.replace(msens.load_default(), {"sensor[1].coil.turns": 900})
     record = msens.synth(changed, tmp_path / "turns900.csv", noise=0.01, seed=3)
     result = msens.diagnose(changed, record, tmp_path / "diagnosis")
-    assert result.effect == "none"
+    assert result.passes[0].effect == "none", result.passes[0]
 
 
 @pytest.mark.slow

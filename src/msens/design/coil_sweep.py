@@ -58,7 +58,12 @@ from msens.magnetics.dynamic import dynamic_report, eddy_bias_solution
 from msens.magnetics.emf import ContactRates
 from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables
 from msens.magnetics.mechanisms import contact_profiles, mechanism_potentials
-from msens.magnetics.potentials import LinkageTable, linkage_table, rect_integral
+from msens.magnetics.potentials import (
+    LinkageTable,
+    TangentOperator,
+    linkage_table,
+    rect_integral,
+)
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import bias_solution
 from msens.magnetics.transducer_cache import transducers_for
@@ -156,9 +161,13 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
     harmonic = harmonic_tables(model, geometry, response.frequencies, r_rng, z_rng,
                                TABLE_SPACING, steel=eddy.steel)
     static = LinkageTable(harmonic.r, harmonic.z, harmonic.cumulative[0].real)
+    # the designs' L ratio is a static quantity: the coil window's kernel on the plain mesh,
+    # as msens run's coil read has it (the eddy mesh would take ten times the solves' time)
+    plain, _ = bias_solution(geometry)
     return CoilContext(table=static, particles=model.particles,
                        approach_contacts=model.contacts, count=model.count,
-                       grid=inductance_grid(sol, model.operator, geometry, unit), **common,
+                       grid=inductance_grid(plain, TangentOperator(plain), geometry, unit),
+                       **common,
                        harmonic=harmonic, inductance_w=np.asarray(response.inductance))
 
 
@@ -269,7 +278,7 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
     ``scheduler`` (the context travels inside each task, so workers need no shared files).
     """
     unit = next(u for u in geometry.sensors if u.coil.particle == particle)
-    ckey = content_key("coil-context/3", study, geometry, particle,
+    ckey = content_key("coil-context/4", study, geometry, particle,
                        _coil_box(unit, designs, geometry))
     cname = f"context-{ckey}.npz"
     cpath = cache.store.find_file(cname)

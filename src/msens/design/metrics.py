@@ -39,7 +39,6 @@ from msens.readout.electronics import (
     coil_transfer_functions,
     poles,
     resonance,
-    transfer_function,
 )
 from msens.readout.mss import figure_noise_rms, readout
 
@@ -125,17 +124,23 @@ def design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.nd
     decay = max(cf["decay_s"] for cf in circuits.values())
     n_fft = scipy.fft.next_fast_len(nt + math.ceil(DECAY_TIMES * decay / dt), real=True)
     freq = np.fft.rfftfreq(n_fft, dt)
-    for cf in circuits.values():
-        cf["transfer"] = transfer_function(cf["circuit"], freq)
+    s = 2j * np.pi * freq
     s_app = dlambda_dapproach  # Wb/m
     rows: list[dict] = []
     for lo in range(0, len(coils), EMF_CHUNK):
         hi = min(lo + EMF_CHUNK, len(coils))
         e = emf_from_rates(wave.rates, sensitivity_villari[lo:hi], s_app[lo:hi])
         spectrum = scipy.fft.rfft(e, n_fft, axis=1)
+        # the chunk's transfer functions at once (bit-identical to transfer_function per
+        # circuit; a sweep may have as many distinct circuits as designs, so none is kept)
+        chunk = [circuits[keys[k]]["circuit"] for k in range(lo, hi)]
+        z_s = (np.array([c.resistance for c in chunk])[:, None]
+               + s * np.array([c.inductance for c in chunk])[:, None])
+        spectrum *= coil_transfer_functions(chunk, freq, z_s)
+        voltages = scipy.fft.irfft(spectrum, n_fft, axis=1)[:, :nt]
         for k in range(lo, hi):
             cf = circuits[keys[k]]
-            v = scipy.fft.irfft(spectrum[k - lo] * cf["transfer"], n_fft)[:nt]
+            v = voltages[k - lo]
             rows.append(_row(coils[k], float(resistance[k]), float(inductance[k]), cf,
                              sensitivity_villari[k], dlambda_dapproach[k],
                              float(np.max(np.abs(e[k - lo]))), float(np.max(np.abs(v))), wave))

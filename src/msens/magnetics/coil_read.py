@@ -216,11 +216,8 @@ def inductance_grid(sol: FieldSolution, operator, geometry: SensorGeometry,
     r = r0 + (np.arange(nr) + 0.5) * (r1 - r0) / nr
     z = z0 + (np.arange(nz) + 0.5) * (z1 - z0) / nz
     rr, zz = np.meshgrid(r, z, indexing="ij")
-    probe = p2_probes(sol.basis, rr.ravel(), zz.ravel())
-    kernel = np.empty((probe.shape[0],) * 2, dtype=np.float32)
-    for k in range(0, probe.shape[0], L_BLOCK):
-        block = probe[k:k + L_BLOCK].toarray()
-        kernel[:, k:k + L_BLOCK] = probe @ operator.solve(block).T
+    kernel = operator.probe_kernel(p2_probes(sol.basis, rr.ravel(), zz.ravel()),
+                                   block=L_BLOCK, dtype=np.float32)
     return InductanceGrid(r=r, z=z, kernel=kernel)
 
 

@@ -91,6 +91,32 @@ class TangentOperator:
             out[:, free] = self._lu.solve(np.ascontiguousarray(rhs[:, free].T)).T
         return out
 
+    def probe_kernel(self, probe: sp.csr_matrix, block: int = 200,
+                     dtype: type = np.float64) -> np.ndarray:
+        """P K_t⁻¹ Pᵀ of a probe matrix: the potential at probe point k of a unit load at
+        probe point l (A = 0 on the Dirichlet boundary), shape (n, n).
+
+        Solved in blocks of ``block`` right-hand sides on the free dofs only (no full-size
+        temporaries).
+
+        Parameters
+        ----------
+        probe : scipy.sparse.csr_matrix, shape (n, n_dofs)
+            Values at the points from the dofs (:func:`msens.field.probes.p2_probes`).
+        block : int
+            Right-hand sides per solve.
+        dtype : type
+            Of the result (float32 halves its size).
+        """
+        free = self.sol.disc.pattern.free
+        pf = sp.csr_matrix(probe[:, free])
+        n = pf.shape[0]
+        out = np.empty((n, n), dtype=dtype)
+        for k in range(0, n, block):
+            x = self._lu.solve(np.ascontiguousarray(pf[k:k + block].toarray().T))
+            out[:, k:k + block] = pf @ x
+        return out
+
     def solve_magnetisation(self, elements: np.ndarray, mu0_dm: np.ndarray) -> np.ndarray:
         """Dofs of the linearised field of one magnetisation source, shape (n_dofs,)."""
         return self.solve(self.magnetisation_rhs(elements, mu0_dm))[0]

@@ -1,6 +1,7 @@
 """The main study with eddy currents end to end: synth -> compare -> diagnose, and a hidden
-cable, a moved coil and magnets of another strength found, through the command line (slow: the eddy-current model of
-``paper-mss`` is committed in ``meshes/``, the diagnosis runs the chain a few hundred times).
+cable, a moved coil and magnets of another strength found, through the command line (slow:
+the eddy-current models of ``paper-mss`` are committed in ``meshes/``, the diagnosis runs the
+chain a few hundred times).
 """
 
 from __future__ import annotations

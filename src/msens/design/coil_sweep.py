@@ -31,7 +31,7 @@ import io
 import json
 import logging
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -98,8 +98,10 @@ class CoilContext:
         Axial position of the sensor bead's centre, m.
     inductance : float
         Bias-point incremental inductance of the study's coil, H.
-    grid : InductanceGrid
-        The steel-aware cell kernel of the coil's window (designs' L from the study coil's).
+    grid : InductanceGrid or None
+        The steel-aware cell kernel of the coil's window (designs' L from the study coil's);
+        None in a sweep's tasks, which carry their designs' L instead (the kernel, ~10 MB,
+        stays in the process that made it).
     coil : Coil
         The study's coil.
     harmonic : HarmonicTables or None
@@ -115,7 +117,7 @@ class CoilContext:
     wave: Wave
     z_center: float
     inductance: float
-    grid: InductanceGrid
+    grid: InductanceGrid | None
     coil: Coil
     harmonic: HarmonicTables | None = None
     inductance_w: np.ndarray | None = None
@@ -207,9 +209,29 @@ def load_context(path: Path) -> CoilContext:
                            f["inductance_w"] if harmonic is not None else None)
 
 
+def design_inductances(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
+                       geometry: SensorGeometry) -> np.ndarray:
+    """Bias-point incremental inductance of each design's coil, H, shape (n_d,): the study
+    coil's carried by the window kernel (:func:`msens.magnetics.coil_read.scaled_inductance`,
+    as ``msens run`` reads a changed coil)."""
+    internal(ctx.grid is not None, "internal: a coil context without its inductance kernel")
+    coils = [design_unit(unit, d.values, geometry.tube).coil for d in designs]
+    zc = np.array([ctx.z_center + c.axial_offset for c in coils])
+    half = np.array([c.length / 2 for c in coils])
+    r_in = np.array([c.inner_radius for c in coils])
+    r_out = np.array([c.outer_radius for c in coils])
+    return scaled_inductance(ctx.grid, ctx.inductance, ctx.coil,
+                             (r_in, r_out, zc - half, zc + half),
+                             np.array([c.turns for c in coils], dtype=float),
+                             (r_out - r_in) * 2 * half, geometry.coil_rect(unit))
+
+
 def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
-             geometry: SensorGeometry, electronics: ElectronicsSpec) -> list[dict]:
-    """Metrics of coil designs (no validation: :func:`msens.design.sweep.validate_designs`)."""
+             geometry: SensorGeometry, electronics: ElectronicsSpec,
+             inductance: np.ndarray | None = None) -> list[dict]:
+    """Metrics of coil designs (no validation: :func:`msens.design.sweep.validate_designs`);
+    ``inductance``: the designs' L (H, shape (n_d,)) if known, else
+    :func:`design_inductances`."""
     coils = [design_unit(unit, d.values, geometry.tube).coil for d in designs]
     zc = np.array([ctx.z_center + c.axial_offset for c in coils])
     half = np.array([c.length / 2 for c in coils])
@@ -217,10 +239,9 @@ def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
     r_out = np.array([c.outer_radius for c in coils])
     turns = np.array([c.turns for c in coils], dtype=float)
     resistance = np.array([coil_resistance(c) for c in coils])
-    inductance = scaled_inductance(
-        ctx.grid, ctx.inductance, ctx.coil, (r_in, r_out, zc - half, zc + half), turns,
-        (r_out - r_in) * 2 * half,
-        geometry.coil_rect(unit))
+    if inductance is None:
+        inductance = design_inductances(ctx, unit, designs, geometry)
+    inductance = np.asarray(inductance, dtype=float)
     scale = inductance / ctx.inductance
     if ctx.harmonic is None:
         area = (r_out - r_in) * 2 * half
@@ -259,12 +280,13 @@ class CoilChunk:
     designs: tuple[Design, ...]
     geometry: SensorGeometry
     electronics: ElectronicsSpec
+    inductance: tuple[float, ...]
 
 
 def evaluate_chunk(task: CoilChunk) -> dict:
     """``{"rows": [...]}`` of one chunk (a module-level task function)."""
     return {"rows": evaluate(task.context, task.unit, task.designs, task.geometry,
-                             task.electronics)}
+                             task.electronics, np.array(task.inductance))}
 
 
 def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
@@ -293,8 +315,13 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
         cache.store.write_file(cname, lambda tmp: save_context(ctx, tmp))
     size = max(1, min(CHUNK, -(-len(designs) // MIN_CHUNKS)))
     chunks = [tuple(designs[k:k + size]) for k in range(0, len(designs), size)]
+    # the designs' L here, once: the tasks travel without the ~10 MB window kernel
+    inductance = design_inductances(ctx, unit, designs, geometry)
+    lean = replace(ctx, grid=None)
     tasks = [(content_key("coil-chunk/2", ckey, [d.values for d in c]),
-              CoilChunk(ctx, unit, c, geometry, study.electronics)) for c in chunks]
+              CoilChunk(lean, unit, c, geometry, study.electronics,
+                        tuple(float(x) for x in inductance[k:k + size])))
+             for k, c in zip(range(0, len(designs), size), chunks, strict=True)]
     fresh = sum(len(c) for c, (key, _) in zip(chunks, tasks, strict=True)
                 if cache.get(key) is None)
     results, _ = run_cached(evaluate_chunk, tasks, cache, scheduler=scheduler, workers=1,
@@ -310,4 +337,5 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
 
 
 __all__ = ["CHUNK", "TABLE_SPACING", "CoilChunk", "CoilContext", "build_context",
+           "design_inductances",
            "evaluate", "evaluate_chunk", "load_context", "run_coil_sweep", "save_context"]

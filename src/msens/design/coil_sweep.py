@@ -151,7 +151,8 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
         table = linkage_table(sol, model.potentials, r_rng, z_rng, TABLE_SPACING)
         return CoilContext(table=table, particles=model.particles,
                            approach_contacts=model.contacts, count=model.count,
-                           grid=inductance_grid(sol, model.operator, geometry, unit),
+                           grid=inductance_grid(sol, model.operator, geometry, unit,
+                                                (r_rng, z_rng)),
                            **common)
     # the run's eddy-current model (same mesh, sources and frequencies as dynamic_report)
     eddy = eddy_settings(study)
@@ -168,7 +169,8 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
     plain, _ = bias_solution(geometry)
     return CoilContext(table=static, particles=model.particles,
                        approach_contacts=model.contacts, count=model.count,
-                       grid=inductance_grid(plain, TangentOperator(plain), geometry, unit),
+                       grid=inductance_grid(plain, TangentOperator(plain), geometry, unit,
+                                            (r_rng, z_rng)),
                        **common,
                        harmonic=harmonic, inductance_w=np.asarray(response.inductance))
 
@@ -300,7 +302,7 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
     ``scheduler`` (the context travels inside each task, so workers need no shared files).
     """
     unit = next(u for u in geometry.sensors if u.coil.particle == particle)
-    ckey = content_key("coil-context/4", study, geometry, particle,
+    ckey = content_key("coil-context/5", study, geometry, particle,
                        _coil_box(unit, designs, geometry))
     cname = f"context-{ckey}.npz"
     cpath = cache.store.find_file(cname)

@@ -142,7 +142,8 @@ class InductanceGrid:
 
     def quadratic(self, r0, r1, z0, z1) -> np.ndarray:
         """vᵀ K v of windings [r0, r1] × [z0, z1] (m; scalars or arrays of shape (n,)),
-        shape (n,), m⁴·(m/H)... per (A/m²)² of current density: times 2π (N/S)² it is L.
+        shape (n,): times 2π (N/S)² it is the winding's L in H. Every winding must lie in
+        the grid's cells (a part outside would be left out silently).
 
         The weights are separable (v = a(r) ⊗ b(z)), so windings of one axial extent share
         the contraction over z: cost nr²·nz² per distinct (z0, z1), nr² per winding.
@@ -152,6 +153,11 @@ class InductanceGrid:
         nr, nz = self.r.size, self.z.size
         k4 = self.kernel.reshape(nr, nz, nr, nz)
         hr, hz = self.r[1] - self.r[0], self.z[1] - self.z[0]
+        tol = 1e-9
+        internal(bool(np.all(r0 >= self.r[0] - hr / 2 - tol) and np.all(r1 <= self.r[-1]
+                 + hr / 2 + tol) and np.all(z0 >= self.z[0] - hz / 2 - tol)
+                      and np.all(z1 <= self.z[-1] + hz / 2 + tol)),
+                 "internal: a winding outside its inductance grid")
         a = np.clip(np.minimum(self.r + hr / 2, r1[:, None])
                     - np.maximum(self.r - hr / 2, r0[:, None]), 0.0, None) * self.r
         out = np.empty(r0.size)
@@ -195,7 +201,7 @@ def scaled_inductance(grid: InductanceGrid, inductance_H: float, solved: Coil, r
 
 
 def inductance_grid(sol: FieldSolution, operator, geometry: SensorGeometry,
-                    unit: SensorUnit) -> InductanceGrid:
+                    unit: SensorUnit, extent=None) -> InductanceGrid:
     """The :class:`InductanceGrid` of a unit's coil window on a field model.
 
     Parameters
@@ -206,12 +212,18 @@ def inductance_grid(sol: FieldSolution, operator, geometry: SensorGeometry,
         Its factorised tangent stiffness (:class:`msens.magnetics.potentials.TangentOperator`).
     geometry : SensorGeometry
     unit : SensorUnit
+    extent : ((float, float), (float, float)), optional
+        (r, z) ranges, m, that the grid must cover besides the window and the unit's coil
+        (a sweep's designs).
     """
     from msens.field.probes import p2_probes
 
     (r0, r1), (z0, z1) = coil_window(geometry, unit)
     rect = geometry.coil_rect(unit)
     r1, z0, z1 = max(r1, rect.r1), min(z0, rect.z0), max(z1, rect.z1)
+    if extent is not None:
+        (er0, er1), (ez0, ez1) = extent
+        r0, r1, z0, z1 = min(r0, er0), max(r1, er1), min(z0, ez0), max(z1, ez1)
     nr, nz = (max(2, int(np.ceil((b - a) / L_CELL))) for a, b in ((r0, r1), (z0, z1)))
     r = r0 + (np.arange(nr) + 0.5) * (r1 - r0) / nr
     z = z0 + (np.arange(nz) + 0.5) * (z1 - z0) / nz

@@ -11,11 +11,10 @@ import pytest
 import scipy.fft
 
 from msens.cli import main
-from msens.design.metrics import SPECTRUM_CHUNK, Wave, dynamic_design_rows
+from msens.design.metrics import SPECTRUM_CHUNK, dynamic_design_rows
 from msens.errors import InputError
 from msens.field.parts import Coil
 from msens.magnetics.eddy_readout import PAD, emf_spectra
-from msens.magnetics.emf import contact_rates
 from msens.magnetics.frequency_response import coil_impedance
 from msens.magnetics.harmonic_tables import HarmonicTables
 from msens.magnetics.potentials import LinkageTable, rect_integral
@@ -26,18 +25,10 @@ from msens.readout.electronics import (
 )
 from msens.readout.mss import readout
 
+from .test_design_cli import TINY_COIL
+from .test_metrics import _wave
+
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def _wave() -> Wave:
-    t = np.arange(3001) * 1e-7
-    centres = np.array([80e-6, 110e-6, 140e-6])
-    force = 2.0 + 8.0 / np.cosh((t[:, None] - centres) / 8e-6) ** 2
-    contacts = np.array([12, 13, 14])
-    full = np.zeros((t.size, 20))
-    full[:, contacts - 1] = force
-    return Wave(contacts=contacts, rates=contact_rates(t, full, contacts, 1.2e10),
-                precompression_N=2.0, precompression_max_N=2.5, wave_speed_change=0.1)
 
 
 def _responses(freqs: np.ndarray, n_d: int, rng: np.random.Generator):
@@ -138,17 +129,6 @@ TINY = (ROOT / "tests" / "data" / "tiny-mss.toml").read_text().replace(
     "[[sensor]]", "[electronics]\nsample_rate_hz = 5e6\n[[sensor]]")
 #: Coarse skin mesh (as tests/magnetics/test_eddy_study.py): the path, not the numbers.
 EDDY = "[field]\neddy_currents = true\nskin_size_m = 3e-4\n"
-TINY_COIL = """
-schema = "msens.sweep/1"
-name = "tiny-coil"
-[coil]
-turns = [600, 1100]
-axial_offset_m = [0.0, 1e-3]
-[model]
-bead_padding = 2
-"""
-
-
 def _design_rows(tmp_path: Path, study_text: str, sweep_text: str, name: str) -> list[dict]:
     study, sweep, out = tmp_path / f"{name}.toml", tmp_path / f"{name}-sweep.toml", \
         tmp_path / name

@@ -211,20 +211,27 @@ def load_context(path: Path) -> CoilContext:
                            f["inductance_w"] if harmonic is not None else None)
 
 
+def _windings(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
+              geometry: SensorGeometry):
+    """The designs' coils and their windings' arrays: coils, zc, half length, r_in, r_out,
+    turns (m; shape (n_d,))."""
+    coils = [design_unit(unit, d.values, geometry.tube).coil for d in designs]
+    return (coils, np.array([ctx.z_center + c.axial_offset for c in coils]),
+            np.array([c.length / 2 for c in coils]),
+            np.array([c.inner_radius for c in coils]),
+            np.array([c.outer_radius for c in coils]),
+            np.array([c.turns for c in coils], dtype=float))
+
+
 def design_inductances(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
                        geometry: SensorGeometry) -> np.ndarray:
     """Bias-point incremental inductance of each design's coil, H, shape (n_d,): the study
     coil's carried by the window kernel (:func:`msens.magnetics.coil_read.scaled_inductance`,
     as ``msens run`` reads a changed coil)."""
     internal(ctx.grid is not None, "internal: a coil context without its inductance kernel")
-    coils = [design_unit(unit, d.values, geometry.tube).coil for d in designs]
-    zc = np.array([ctx.z_center + c.axial_offset for c in coils])
-    half = np.array([c.length / 2 for c in coils])
-    r_in = np.array([c.inner_radius for c in coils])
-    r_out = np.array([c.outer_radius for c in coils])
+    _, zc, half, r_in, r_out, turns = _windings(ctx, unit, designs, geometry)
     return scaled_inductance(ctx.grid, ctx.inductance, ctx.coil,
-                             (r_in, r_out, zc - half, zc + half),
-                             np.array([c.turns for c in coils], dtype=float),
+                             (r_in, r_out, zc - half, zc + half), turns,
                              (r_out - r_in) * 2 * half, geometry.coil_rect(unit))
 
 
@@ -234,12 +241,7 @@ def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
     """Metrics of coil designs (no validation: :func:`msens.design.sweep.validate_designs`);
     ``inductance``: the designs' L (H, shape (n_d,)) if known, else
     :func:`design_inductances`."""
-    coils = [design_unit(unit, d.values, geometry.tube).coil for d in designs]
-    zc = np.array([ctx.z_center + c.axial_offset for c in coils])
-    half = np.array([c.length / 2 for c in coils])
-    r_in = np.array([c.inner_radius for c in coils])
-    r_out = np.array([c.outer_radius for c in coils])
-    turns = np.array([c.turns for c in coils], dtype=float)
+    coils, zc, half, r_in, r_out, turns = _windings(ctx, unit, designs, geometry)
     resistance = np.array([coil_resistance(c) for c in coils])
     if inductance is None:
         inductance = design_inductances(ctx, unit, designs, geometry)

@@ -13,6 +13,13 @@ time offset) plus two independent Gaussian errors:
   ``model_var = (a m)^2 + (r t dm/dt)^2``.
 
 so ``-2 ln L = sum_i r_i^2 / v_i + ln(2 pi v_i)`` with ``v_i = noise_var_i + model_var_i``.
+
+A physics MsS's field-model error is also correlated over the record: a 1 % error of one
+contact's sensitivity or one bead's pull moves whole lobes of the pulse. That part is a
+low-rank covariance ``sum_k u_k u_k^T`` of record modes (:mod:`msens.diagnose.field_modes`),
+whose amplitudes the objective profiles with their unit Gaussian prior
+(:class:`msens.diagnose.objective.WaveformObjective`): by Woodbury's identity the same chi^2
+as ``r^T (diag(v) + sum_k u_k u_k^T)^{-1} r``.
 With the model variance fixed (computed once from the baseline model, as diagnose does) the
 second term is a constant and ``chi^2 = sum r^2 / v`` is all a fit needs.
 

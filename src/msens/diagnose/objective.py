@@ -47,6 +47,9 @@ from msens.results import SetupResult
 MAX_SHIFT_S = 80e-6
 #: A channel is usable when its largest excursion exceeds this many noise stds.
 MIN_SNR = 8.0
+#: Field-model mode directions whose variance over the whole record is below this many
+#: noise variances are dropped (:meth:`ModeBasis.of`): they cannot change chi^2 by more.
+MODE_TOL = 1e-2
 
 
 @dataclass(frozen=True)
@@ -72,6 +75,11 @@ class Shot:
         The noise's part of that variance, V^2 (None: all of it).
     model_var : ndarray, shape (sensors, n), optional
         The model uncertainty's part, V^2 (None: none).
+    modes : tuple of (ModeBasis or None), optional
+        Per sensor, the directions in which its (scaled) model record may move within the
+        field model's accuracy, one standard deviation each
+        (:mod:`msens.diagnose.field_modes`); their amplitudes are profiled with a unit
+        Gaussian prior. None: no such modes.
     """
 
     tau: np.ndarray
@@ -81,6 +89,7 @@ class Shot:
     w: np.ndarray
     noise_var: np.ndarray | None = None
     model_var: np.ndarray | None = None
+    modes: tuple | None = None
 
 
 @dataclass(frozen=True)
@@ -91,6 +100,10 @@ class Alignment:
     gains: np.ndarray
     offsets: np.ndarray
     rss: np.ndarray
+    #: Per sensor, the profiled field-model mode amplitudes (in standard deviations), and
+    #: their sum in the record (n,) (None without modes).
+    amplitudes: tuple | None = None
+    shifts: tuple | None = None
 
 
 def check_channels(waveform: Waveform) -> None:
@@ -168,6 +181,8 @@ class WaveformObjective:
         self._weights = self.shots[0].w.mean(axis=1)
         #: Each sensor's model uncertainty, once added (:meth:`add_model_uncertainty`).
         self.model_uncertainty: tuple = ()
+        #: Each sensor's field-model modes, once added (None: not a physics MsS).
+        self.field_modes: tuple = ()
 
     def _check_usable(self, waveform: Waveform, setup: SetupSpec) -> None:
         for j, spec in enumerate(setup.sensors):
@@ -186,31 +201,46 @@ class WaveformObjective:
                         f"(peak {peak:.3g} V against noise {noise:.3g} V; needs > {MIN_SNR:g}x "
                         f"the noise of the shots' mean)")
 
-    def add_model_uncertainty(self, records: np.ndarray) -> None:
-        """Add the model's own uncertainty to the variance of every sample.
+    def add_model_uncertainty(self, records: np.ndarray, modes: tuple | None = None) -> None:
+        """Add the model's own uncertainty to the likelihood.
 
         The model variance (:func:`msens.diagnose.likelihood.model_uncertainty` of each
         sensor) is computed once, from ``records`` (the baseline model's) aligned on the
         data, and held fixed for every candidate: the likelihood's variance is then the
-        same for all of them, and chi^2 stays comparable between them.
+        same for all of them, and chi^2 stays comparable between them. The field model's
+        modes (:func:`msens.diagnose.field_modes.record_modes`), aligned and scaled as the
+        baseline is, are fixed the same way; every later chi^2 profiles their amplitudes.
 
         Parameters
         ----------
         records : ndarray, shape (sensors, nt)
             The baseline model's records.
+        modes : tuple of (RecordModes or None), optional
+            Per sensor, the field model's modes of its record (None: none).
         """
         unc = [model_uncertainty(k, ph) for k, ph in zip(self.kinds, self.physics, strict=True)]
         #: Each sensor's model uncertainty.
         self.model_uncertainty = tuple(unc)
-        if all(u.relative_amplitude == 0.0 and u.relative_timing == 0.0 for u in unc):
+        self.field_modes = tuple(modes) if modes is not None else ()
+        diagonal = not all(u.relative_amplitude == 0.0 and u.relative_timing == 0.0
+                           for u in unc)
+        if not diagonal and not any(m is not None for m in self.field_modes):
             return
         out = []
         for shot, (a, tm, m) in zip(self.shots, self.aligned(records), strict=True):
             noise_var = 1.0 / shot.w if shot.noise_var is None else shot.noise_var
             scaled = m - a.offsets[:, None]  # gain applied, offset removed
             model_var = np.array([u.variance(x, tm) for u, x in zip(unc, scaled, strict=True)])
-            out.append(dataclasses.replace(shot, w=1.0 / (noise_var + model_var),
-                                           noise_var=noise_var, model_var=model_var))
+            shot = dataclasses.replace(shot, w=1.0 / (noise_var + model_var),
+                                       noise_var=noise_var, model_var=model_var)
+            if any(md is not None for md in self.field_modes):
+                shot = dataclasses.replace(shot, modes=tuple(
+                    None if md is None or not len(md.names) else ModeBasis.of(
+                        g * np.array([np.interp(tm, self.t, u, left=0.0, right=0.0)
+                                      for u in md.records]), shot.w[j], shot.y[j])
+                    for j, (md, g) in enumerate(zip(self.field_modes, a.gains,
+                                                    strict=True))))
+            out.append(shot)
         self.shots = out
         self._weights = self.shots[0].w.mean(axis=1)
 
@@ -246,7 +276,19 @@ class WaveformObjective:
         g = np.maximum(g, 0.0)
         b = (sy - g * sm) / s0
         chi2 = yy + g**2 * mm + s0 * b**2 - 2 * g * ym - 2 * b * sy + 2 * g * b * sm
-        return Alignment(delay=delay, gains=g, offsets=b, rss=np.maximum(chi2, 0.0))
+        if shot.modes is None:
+            return Alignment(delay=delay, gains=g, offsets=b, rss=np.maximum(chi2, 0.0))
+        amps, shifts = [], []
+        for j, u in enumerate(shot.modes):
+            if u is None:
+                amps.append(None)
+                shifts.append(None)
+                continue
+            g[j], b[j], chi2[j], a = _profiled(w[j], y[j], m[j], u)
+            amps.append(a)
+            shifts.append(a @ u.u)
+        return Alignment(delay=delay, gains=g, offsets=b, rss=np.maximum(chi2, 0.0),
+                         amplitudes=tuple(amps), shifts=tuple(shifts))
 
     def align(self, shot: Shot, sig: np.ndarray) -> Alignment:
         """Best time offset and gains of ``shot`` for model signals ``sig`` (sensors, nt)."""
@@ -294,8 +336,93 @@ class WaveformObjective:
             tm = s.tau + a.delay
             m = np.array([g * np.interp(tm, self.t, x, left=0.0, right=0.0) + b
                           for g, b, x in zip(a.gains, a.offsets, sig, strict=True)])
+            if a.shifts is not None:  # the profiled field-model modes
+                m = m + np.array([np.zeros(m.shape[1]) if d is None else d
+                                  for d in a.shifts])
             out.append((a, tm, m))
         return out
+
+
+@dataclass(frozen=True)
+class ModeBasis:
+    """One channel's field-model modes on the data's samples, with the products the
+    profiled chi^2 needs precomputed (the inverse variances, data and modes are fixed for a
+    diagnosis; only the model's record changes between candidates).
+
+    Attributes
+    ----------
+    u : ndarray, shape (k, n)
+        The modes' principal directions, scaled so that each amplitude has a unit prior
+        (their covariance ``u^T u`` is that of the field model's modes), V.
+    uw : ndarray, shape (k, n)
+        ``u * w``, 1/V.
+    gram : ndarray, shape (k, k)
+        ``u w u^T + I`` (the modes' unit Gaussian prior on the diagonal).
+    u1, uy : ndarray, shape (k,)
+        ``u w 1`` and ``u w y``.
+    """
+
+    u: np.ndarray
+    uw: np.ndarray
+    gram: np.ndarray
+    u1: np.ndarray
+    uy: np.ndarray
+
+    @classmethod
+    def of(cls, u: np.ndarray, w: np.ndarray, y: np.ndarray, tol: float = MODE_TOL
+           ) -> ModeBasis:
+        """The basis of modes ``u`` (k, n) for inverse variances ``w`` and data ``y`` (n,).
+
+        The modes are first compressed to the principal directions of their covariance
+        ``u^T u`` in the noise-whitened record: directions whose variance is below ``tol``
+        times the noise's (per whole record) are dropped, since no amplitude along them can
+        change chi^2 by more than ``tol``. The covariance is otherwise kept exactly, and
+        the many collinear modes (e.g. the pulls of neighbouring beads, which mostly shift
+        the pulse's timing) shrink to a few tens of directions.
+        """
+        root = np.sqrt(w)
+        _, sv, vt = np.linalg.svd(u * root, full_matrices=False)
+        keep = sv**2 > tol
+        u = (sv[keep, None] * vt[keep]) / root
+        uw = u * w
+        return cls(u=u, uw=uw, gram=uw @ u.T + np.eye(u.shape[0]), u1=uw.sum(axis=1),
+                   uy=uw @ y)
+
+
+def _profiled(w: np.ndarray, y: np.ndarray, m: np.ndarray, basis: ModeBasis
+              ) -> tuple[float, float, float, np.ndarray]:
+    """One channel's gain g >= 0, offset b and mode amplitudes a minimising
+    ``sum w (y - g m - b - a @ u)^2 + |a|^2`` (the modes' unit Gaussian prior), and that
+    minimum: the chi^2 of the residual against the covariance ``diag(1/w) + u^T u``
+    (Woodbury), with gain and offset profiled.
+
+    Parameters
+    ----------
+    w, y, m : ndarray, shape (n,)
+        Inverse variances (1/V^2), data (V) and model signal on the data's samples.
+    basis : ModeBasis
+        The channel's modes and their products with ``w`` and ``y``.
+
+    Returns
+    -------
+    (g, b, chi2, a) with a of shape (k,)
+    """
+    k = basis.u.shape[0]
+    h = np.empty((k + 2, k + 2))
+    um = basis.uw @ m
+    wm = w * m
+    h[0, 0], h[0, 1], h[1, 1] = wm @ m, wm.sum(), w.sum()
+    h[1, 0] = h[0, 1]
+    h[0, 2:] = h[2:, 0] = um
+    h[1, 2:] = h[2:, 1] = basis.u1
+    h[2:, 2:] = basis.gram
+    rhs = np.concatenate([[wm @ y, w @ y], basis.uy])
+    yy = float(w @ (y * y))
+    theta = np.linalg.solve(h, rhs)
+    if theta[0] < 0.0:  # the gain kept >= 0: refit without the model column
+        theta = np.concatenate([[0.0], np.linalg.solve(h[1:, 1:], rhs[1:])])
+    chi2 = yy - float(theta @ rhs)
+    return float(theta[0]), float(theta[1]), max(chi2, 0.0), theta[2:]
 
 
 class FeatureObjective:

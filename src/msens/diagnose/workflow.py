@@ -75,6 +75,7 @@ from msens.diagnose.diagnosis import Candidate, Diagnosis
 from msens.diagnose.effects import Context
 from msens.diagnose.effects import get as get_effect
 from msens.diagnose.effects.base import ModelState
+from msens.diagnose.field_modes import record_modes
 from msens.diagnose.fit import recentred, refit_jointly
 from msens.diagnose.likelihood import variance_split
 from msens.diagnose.noise import shot_matrix
@@ -220,7 +221,7 @@ def waveform_baseline(waveform: Waveform, study: Study, *, fit: DissipationFit |
     objective = WaveformObjective(waveform, base_result, shifts)
     records0 = predictor.records([base])[0]
     # the likelihood's variance: the noise and the model's own uncertainty (physics MsS)
-    objective.add_model_uncertainty(records0)
+    objective.add_model_uncertainty(records0, record_modes(base, predictor))
     return WaveformBaseline(ctx=ctx, gamma_contact=gc, gamma_wall=gw, predictor=predictor,
                             plain=plain, base=base, result=base_result, per_shot=per_shot,
                             objective=objective, records=records0)
@@ -313,11 +314,16 @@ def _model_uncertainty_json(objective: WaveformObjective, names: list[str]) -> d
     for j, (n, u) in enumerate(zip(names, objective.model_uncertainty, strict=True)):
         split = (variance_split(shot.noise_var[j], shot.model_var[j])
                  if shot.model_var is not None else variance_split(1.0 / shot.w[j], 0.0))
-        per.append({"channel": n, **u.to_json(), **split})
+        modes = (objective.field_modes[j] if j < len(objective.field_modes) else None)
+        per.append({"channel": n, **u.to_json(), **split,
+                    "field_model_modes": modes.to_json() if modes is not None else None})
     return {"definition": "variance per sample added to the noise's: (a m)^2 + (r t dm/dt)^2 "
                           "of the baseline model's record m (a: relative_amplitude, r: "
                           "relative_timing, t: time since impact); shares: of the summed "
-                          "variance over the record",
+                          "variance over the record. Field-model modes (physics MsS): the "
+                          "record's change for a 1-std error of each field-model quantity "
+                          "(contact sensitivities, R, L, winding C, magnets' pull), whose "
+                          "amplitudes every fit profiles with a unit Gaussian prior",
             **objective.variance_split(), "channels": per}
 
 

@@ -108,3 +108,23 @@ def test_a_model_off_by_field_model_errors_is_explained(mss):
     # one standard deviation), plus what collinear modes do not recover: a few per mode
     k = sum(len(md.names) for md in modes)
     assert chis[True][1] - chis[True][0] < 3 * k / n
+
+
+@pytest.mark.slow
+def test_modes_with_eddy_currents(tmp_path):
+    """With eddy currents the contact modes go through the frequency-domain read-out (the
+    coil's S_c(ω), D_c(ω) scaled per contact): they still add up to the record exactly; the
+    coil's impedance replaces R and L as a mode (slow: 101 modes by FFT, ~15 s)."""
+    path = tmp_path / "eddy.toml"
+    path.write_text(default_study_path().read_text().replace(
+        "[field]", "[field]\neddy_currents = true", 1))
+    study = load_study(path)
+    ctx = Context(study, study.setups[0])
+    base = baseline_state(ctx, *baseline_dissipation(study))
+    predictor = Predictor(output_times(study))
+    records = predictor.records([base])[0]
+    for j, md in enumerate(record_modes(base, predictor)):
+        assert "Z" in md.names and "R" not in md.names and "L" not in md.names
+        contact = [i for i, n in enumerate(md.names) if n.startswith(("villari@", "approach@"))]
+        total = md.records[contact].sum(axis=0) / FIELD_ACCURACY
+        assert np.max(np.abs(total - records[j])) < 1e-9 * np.max(np.abs(records[j]))

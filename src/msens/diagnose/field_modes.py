@@ -62,7 +62,8 @@ class RecordModes:
     names : tuple of str
         What each mode varies (``"villari@c"``, ``"approach@c"`` of contact c, ``"map@c"``:
         the nonlinear part of contact c's map Λ_c(δ), ``"R"``,
-        ``"L"``, ``"C_winding"``, ``"pull@p"``: the magnets' pull on particle p).
+        ``"L"``, ``"C_winding"``, ``"Z"``: with eddy currents, the coil's impedance less its
+        copper resistance, ``"pull@p"``: the magnets' pull on particle p).
     records : ndarray, shape (k, nt)
         The record's change for a one-standard-deviation change of each quantity, in the
         record's unit (V), on the model's output times.
@@ -195,6 +196,13 @@ def record_modes(state: ModelState, predictor: Predictor,
                                                     * (1.0 + accuracy)})
             v = _voltage(MssSensor(tr, moved), spec, t, force, approach, cols, resp)
             names.append(name)
+            recs.append(v - raw[j])
+        if resp is not None:  # the coil's impedance beyond its copper: jωL(ω), eddy losses
+            z = np.asarray(resp.impedance)
+            moved = dataclasses.replace(
+                resp, impedance=resp.resistance_ohm + (1.0 + accuracy) * (z - resp.resistance_ohm))
+            v = _voltage(MssSensor(tr, circuit), spec, t, force, approach, cols, moved)
+            names.append("Z")
             recs.append(v - raw[j])
         recs = [after_post(j, v) for v in recs]
         for p, change in zip(pulled, pull, strict=True):

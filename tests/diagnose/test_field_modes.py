@@ -9,7 +9,7 @@ from msens.config.study import default_study_path, load_study
 from msens.diagnose.effects import Context
 from msens.diagnose.field_modes import FIELD_ACCURACY, record_modes
 from msens.diagnose.objective import ModeBasis, WaveformObjective, _profiled
-from msens.diagnose.predict import Predictor, baseline_state, setup_result
+from msens.diagnose.predict import Predictor, baseline_state
 from msens.diagnose.verdict import verdict
 from msens.diagnose.where import window_residuals
 from msens.diagnose.workflow import baseline_dissipation
@@ -43,16 +43,6 @@ def test_profiled_modes_are_the_low_rank_covariance():
     # a negative gain is refused: the model column is dropped
     g2, _, chi2, _ = _profiled(w, -y, m, ModeBasis.of(u, w, -y))
     assert g2 == 0.0 and chi2 > chi
-
-
-@pytest.fixture(scope="module")
-def mss():
-    study = load_study(default_study_path())
-    ctx = Context(study, study.setups[0])
-    base = baseline_state(ctx, *baseline_dissipation(study))
-    predictor = Predictor(output_times(study))
-    return ctx, base, predictor, setup_result(ctx, base, predictor), \
-        predictor.records([base])[0]
 
 
 def md_particle(state, j):

@@ -6,9 +6,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from msens.config.study import default_study_path, load_study
 from msens.diagnose.candidates import THRESHOLD
-from msens.diagnose.effects import Context, get
+from msens.diagnose.effects import get
 from msens.diagnose.likelihood import (
     NO_FIELD_MODEL,
     PHYSICS_MSS,
@@ -19,11 +18,9 @@ from msens.diagnose.likelihood import (
     variance_split,
 )
 from msens.diagnose.objective import WaveformObjective
-from msens.diagnose.predict import Predictor, baseline_state, setup_result
+from msens.diagnose.predict import setup_result
 from msens.diagnose.verdict import verdict
 from msens.diagnose.where import window_residuals
-from msens.diagnose.workflow import baseline_dissipation
-from msens.pipeline import output_times
 from msens.readout.sensors import SensorKind
 from msens.synth import RigEffects, synthesize
 
@@ -57,16 +54,6 @@ def test_log_likelihood_is_gaussian_with_the_summed_variance():
     split = variance_split(noise, model)
     assert split["model_uncertainty_share"] == pytest.approx(12.5 / 52.5)
     assert split["noise_share"] + split["model_uncertainty_share"] == pytest.approx(1.0)
-
-
-@pytest.fixture(scope="module")
-def mss():
-    study = load_study(default_study_path())
-    ctx = Context(study, study.setups[0])
-    base = baseline_state(ctx, *baseline_dissipation(study))
-    predictor = Predictor(output_times(study))
-    return ctx, base, predictor, setup_result(ctx, base, predictor), \
-        predictor.records([base])[0]
 
 
 def _objective(ctx, base, predictor, result, records0, effect, params, uncertain):

@@ -123,10 +123,11 @@ def record_modes(state: ModelState, predictor: Predictor,
         magnets = np.asarray(magnets, dtype=float)
         chain = plain.chain
         for p in np.flatnonzero(np.abs(magnets) > MIN_MODE * np.abs(magnets).max()):
-            extra = np.zeros_like(magnets)
-            extra[p] = accuracy * magnets[p]
-            runs.append(dataclasses.replace(plain, chain=dataclasses.replace(
-                chain, static_force=chain.static_force + extra)))
+            for sign in (1.0, -1.0):  # central difference: the pull's ±1 %
+                extra = np.zeros_like(magnets)
+                extra[p] = sign * accuracy * magnets[p]
+                runs.append(dataclasses.replace(plain, chain=dataclasses.replace(
+                    chain, static_force=chain.static_force + extra)))
             pulled.append(int(p) + 1)
     sims = predictor._simulate(runs)
     force, contacts, approach = sims[0]
@@ -135,8 +136,9 @@ def record_modes(state: ModelState, predictor: Predictor,
     # the records before the state's record operations (e.g. a DAQ filter effect), and after
     raw = observe_state(dataclasses.replace(plain, post=()), force, contacts, dt, approach)
     base = _post(plain, raw, dt)
-    pull = [observe_state(run, f1, c1, dt, a1) - base
-            for run, (f1, c1, a1) in zip(runs[1:], sims[1:], strict=True)]
+    moved = [observe_state(run, f1, c1, dt, a1)
+             for run, (f1, c1, a1) in zip(runs[1:], sims[1:], strict=True)]
+    pull = [0.5 * (up - down) for up, down in zip(moved[::2], moved[1::2], strict=True)]
     cols = None if contacts is None else np.asarray(contacts) + 1
 
     def after_post(j: int, v: np.ndarray) -> np.ndarray:

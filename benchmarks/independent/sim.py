@@ -445,7 +445,13 @@ def record(world: World, tables: FieldTables, s: StudyNumbers, rig: Rig, seed: i
         vel = np.array(world.chain.velocity)
         vel[:world.shift + 1] = speeds[k]  # the striker (and anything falling with it)
         shot = replace(world, chain=replace(world.chain, velocity=vel))
-        v, _ = coil_voltages(shot, tables, tau + shot_delay)
+        # the circuit starts from rest at the impact: simulate from t = 0 and read the
+        # record's instants (before the impact: 0). Starting the read-out at the first
+        # recorded instant instead (after the impact, with the flux already changing)
+        # rang the coil's resonance through the whole record.
+        t_sim = np.arange(int(np.ceil((tau[-1] + shot_delay) / dt)) + 2) * dt
+        v_sim, _ = coil_voltages(shot, tables, t_sim)
+        v = np.array([np.interp(tau + shot_delay, t_sim, x, left=0.0) for x in v_sim])
         for j, c in enumerate(tables.coils):
             sig = gains[j] * v[j]
             peak = float(np.max(np.abs(sig)))

@@ -89,6 +89,26 @@ def test_coil_voltage_perturbed_tables(runs):
         assert 0.005 * peak < dev < 0.08 * peak, (j, dev / peak)
 
 
+def test_rig_record_is_the_run_read_at_the_trigger(runs):
+    """The rig's record (what the campaign diagnoses) is the same voltage read from the
+    trigger on: with no noise, offset, jitter or speed spread, unit gains and exact tables
+    it equals msens's run at the record's instants (impact = trigger - delay) to 0.2 % of
+    the peak at every sample. (The read-out once
+    started at the first recorded instant, after the impact: the coil's resonance then
+    rang through the whole record at 5-10 % of the peak.)"""
+    t, msens_v, _, _, s = runs
+    from msens.config.study import default_study_path, load_study
+
+    tables = field.read_tables(load_study(default_study_path()))
+    rig = sim.Rig(noise=0.0, gain=(1.0, 1.0), offset=0.0, jitter=0.0, speed_spread=0.0)
+    tau, data, names, truth = sim.record(sim.nominal(s, tables), tables, s, rig, seed=5)
+    delay = truth["trigger_delays_s"][0]
+    for j in range(2):
+        peak = np.max(np.abs(msens_v[j]))
+        expected = np.interp(tau + delay, t, msens_v[j], left=0.0)
+        assert np.max(np.abs(data[:, j] - expected)) < 2e-3 * peak, names[j]
+
+
 @pytest.mark.campaign
 def test_independent_campaign(tmp_path):
     """The issue's acceptance on the independent simulator's set (36 files: 24 effect

@@ -100,8 +100,8 @@ class Alignment:
     gains: np.ndarray
     offsets: np.ndarray
     rss: np.ndarray
-    #: Per sensor, the profiled field-model mode amplitudes (in standard deviations), and
-    #: their sum in the record (n,) (None without modes).
+    #: Per sensor, the profiled amplitudes along the field-model modes' principal
+    #: directions (unit prior), and their sum in the record (n,) (None without modes).
     amplitudes: tuple | None = None
     shifts: tuple | None = None
 

@@ -26,7 +26,10 @@ variance of :mod:`msens.diagnose.likelihood` is), by the run's own read-out
 (:func:`msens.readout.mss.mss_signals`): it is linear in the sensitivities, so a contact's
 mode is its own contribution to the record times the accuracy (exact); the circuit's modes
 and each particle's pull mode are one-sided differences of a 1 % change (a pull mode by one
-more chain run: about 30 runs for the main study, in one batch). The pull modes move every
+more chain run: about 30 runs for the main study, in one batch). The pull's effect is not
+linear near lightly loaded contacts, so :data:`PULL_DRAWS` joint draws of every bead's pull
+error add the second moment of what the linear modes miss (a Monte Carlo covariance). The
+pull modes move every
 sensor of the chain; they are profiled per channel, like the others (a simplification that
 ignores their correlation between channels, on the side of calling data explained).
 """
@@ -48,6 +51,13 @@ from msens.readout.mss import MssSensor, mss_signals, voltage_on
 #: field solvers (issue 35: about 1 % in the pull and the contact sensitivities; msens's
 #: field model agrees with an independent solver to about 1 %, docs/validation).
 FIELD_ACCURACY = 0.01
+#: Joint draws of every bead's pull error (each N(0, accuracy)) whose records, less the
+#: linear pull modes' prediction, give the modes of the pull's nonlinear effect: near the
+#: main study's lightly loaded contacts 10 and 20 (0.08 and 0.13 N static) the joint 1 %
+#: errors move coil 13's record by ~5.6 % of its peak, ~5 % of it not linear.
+PULL_DRAWS = 16
+#: Seed of those draws (the modes are the same for every diagnosis of a study).
+PULL_SEED = 7
 #: Modes whose peak is below this fraction of the sensor's largest mode peak are dropped
 #: (contacts the chain does not reach, far from the coil): they cannot move the record.
 MIN_MODE = 1e-6
@@ -63,7 +73,8 @@ class RecordModes:
         What each mode varies (``"villari@c"``, ``"approach@c"`` of contact c, ``"map@c"``:
         the nonlinear part of contact c's map Λ_c(δ), ``"R"``,
         ``"L"``, ``"C_winding"``, ``"Z"``: with eddy currents, the coil's impedance less its
-        copper resistance, ``"pull@p"``: the magnets' pull on particle p).
+        copper resistance, ``"pull@p"``: the magnets' pull on particle p,
+        ``"pull-nonlinear#d"``: draw d of the pull's nonlinear remainder).
     records : ndarray, shape (k, nt)
         The record's change for a one-standard-deviation change of each quantity, in the
         record's unit (V), on the model's output times.
@@ -129,6 +140,14 @@ def record_modes(state: ModelState, predictor: Predictor,
                 runs.append(dataclasses.replace(plain, chain=dataclasses.replace(
                     chain, static_force=chain.static_force + extra)))
             pulled.append(int(p) + 1)
+        # joint draws of every bead's pull error, for what the linear modes miss
+        draws = np.random.default_rng(PULL_SEED).standard_normal((PULL_DRAWS, len(pulled)))
+        index = np.array(pulled) - 1
+        for e in draws:
+            extra = np.zeros_like(magnets)
+            extra[index] = accuracy * e * magnets[index]
+            runs.append(dataclasses.replace(plain, chain=dataclasses.replace(
+                chain, static_force=chain.static_force + extra)))
     sims = predictor._simulate(runs)
     force, contacts, approach = sims[0]
     t = predictor.t
@@ -138,7 +157,16 @@ def record_modes(state: ModelState, predictor: Predictor,
     base = _post(plain, raw, dt)
     moved = [observe_state(run, f1, c1, dt, a1)
              for run, (f1, c1, a1) in zip(runs[1:], sims[1:], strict=True)]
-    pull = [0.5 * (up - down) for up, down in zip(moved[::2], moved[1::2], strict=True)]
+    n_pull = 2 * len(pulled)
+    pull = [0.5 * (up - down)
+            for up, down in zip(moved[:n_pull:2], moved[1:n_pull:2], strict=True)]
+    # each draw's record less the linear modes' prediction: the nonlinear remainder, whose
+    # second moment (over the draws) the modes r_d / sqrt(D) carry
+    nonlinear = []
+    if pulled:
+        for e, rec in zip(draws, moved[n_pull:], strict=True):
+            lin = np.tensordot(e, np.array(pull), axes=1)
+            nonlinear.append((rec - base - lin) / np.sqrt(PULL_DRAWS))
     cols = None if contacts is None else np.asarray(contacts) + 1
 
     def after_post(j: int, v: np.ndarray) -> np.ndarray:
@@ -210,6 +238,9 @@ def record_modes(state: ModelState, predictor: Predictor,
         for p, change in zip(pulled, pull, strict=True):
             names.append(f"pull@{p}")
             recs.append(change[j])
+        for d, rest in enumerate(nonlinear):
+            names.append(f"pull-nonlinear#{d + 1}")
+            recs.append(rest[j])
         arr = np.array(recs)
         peak = np.max(np.abs(arr), axis=1)
         keep = peak > MIN_MODE * float(peak.max()) if peak.size else peak > 0

@@ -221,6 +221,8 @@ def waveform_baseline(waveform: Waveform, study: Study, *, fit: DissipationFit |
     objective = WaveformObjective(waveform, base_result, shifts)
     records0 = predictor.records([base])[0]
     # the likelihood's variance: the noise and the model's own uncertainty (physics MsS)
+    _log.info("field-model modes of the records (each contact, the circuit, each bead's "
+              "pull; ~60 chain runs)")
     objective.add_model_uncertainty(records0, record_modes(base, predictor))
     return WaveformBaseline(ctx=ctx, gamma_contact=gc, gamma_wall=gw, predictor=predictor,
                             plain=plain, base=base, result=base_result, per_shot=per_shot,

@@ -58,6 +58,10 @@ FIELD_ACCURACY = 0.01
 PULL_DRAWS = 16
 #: Seed of those draws (the modes are the same for every diagnosis of a study).
 PULL_SEED = 7
+#: Joint draws of the field model's errors by which a named parameter's interval is widened
+#: (:func:`field_draws`), and their seed (not the modes' own: the draws test the modes).
+BOOTSTRAP_DRAWS = 16
+BOOTSTRAP_SEED = 11
 #: Modes whose peak is below this fraction of the sensor's largest mode peak are dropped
 #: (contacts the chain does not reach, far from the coil): they cannot move the record.
 MIN_MODE = 1e-6
@@ -107,6 +111,102 @@ def _post(state: ModelState, records: np.ndarray, dt: float) -> np.ndarray:
     return records
 
 
+def _pulled(state: ModelState, magnets: np.ndarray, index: np.ndarray,
+            errors: np.ndarray) -> list[ModelState]:
+    # the state with the magnets' pull on particles ``index`` (0-based) off by the relative
+    # ``errors`` (draws, len(index)): one state per draw
+    chain = state.chain
+    out = []
+    for e in errors:
+        extra = np.zeros_like(magnets)
+        extra[index] = e * magnets[index]
+        out.append(dataclasses.replace(state, chain=dataclasses.replace(
+            chain, static_force=chain.static_force + extra)))
+    return out
+
+
+def field_draws(state: ModelState, predictor: Predictor, draws: int = BOOTSTRAP_DRAWS,
+                seed: int = BOOTSTRAP_SEED, accuracy: float = FIELD_ACCURACY
+                ) -> np.ndarray | None:
+    """Records of ``state`` under joint draws of the field model's errors, less its own
+    record: what another field solver would change, cross terms and the pull's nonlinear
+    effect included.
+
+    Each draw multiplies, each by its own (1 + accuracy e) with e standard normal, the
+    magnets' pull on every pulled particle (one chain run per draw, in one batch) and, per
+    physics MsS, every contact's Villari and approach sensitivity and the coil's R, L and
+    winding capacitance (with eddy currents: the impedance beyond the copper instead of R
+    and L), as the modes do one at a time. The nonlinear part of the contact maps is not
+    drawn (it is a mode of its own and small). The draws are independent of the modes'
+    own (:data:`PULL_SEED`), so they test what the modes span rather than repeat it.
+
+    Parameters
+    ----------
+    state : ModelState
+        The model (its speed spread is ignored: the changes are shapes).
+    predictor : Predictor
+    draws : int
+    seed : int
+    accuracy : float
+        Relative standard deviation of every field-model quantity.
+
+    Returns
+    -------
+    ndarray, shape (draws, sensors, nt), or None
+        Record changes (the records' units: V for a physics MsS, N otherwise); None when the
+        state has no physics MsS.
+    """
+    phys = state.physics or (None,) * len(state.particles)
+    if all(p is None for p in phys):
+        return None
+    rng = np.random.default_rng(seed)
+    plain = dataclasses.replace(state, velocity_spread=0.0)
+    magnets = physics.magnetic_force(phys)
+    if magnets is None:
+        runs = [plain]
+    else:
+        magnets = np.asarray(magnets, dtype=float)
+        index = np.flatnonzero(np.abs(magnets) > MIN_MODE * np.abs(magnets).max())
+        runs = [plain, *_pulled(plain, magnets, index,
+                                accuracy * rng.standard_normal((draws, index.size)))]
+    sims = predictor._simulate(runs)
+    if magnets is None:  # no pull to draw: the sensitivities and circuits only
+        runs, sims = runs * (draws + 1), sims * (draws + 1)
+    t = predictor.t
+    dt = float(t[1] - t[0])
+    base = observe_state(plain, *sims[0][:2], dt, sims[0][2])
+    out = []
+    for run, (force, contacts, approach) in zip(runs[1:], sims[1:], strict=True):
+        raw = observe_state(dataclasses.replace(run, post=()), force, contacts, dt, approach)
+        cols = None if contacts is None else np.asarray(contacts) + 1
+        for j, spec in enumerate(phys):
+            if spec is None:
+                continue
+            sensor = physics.sensor(spec)
+            tr, circuit = sensor.transducer, sensor.circuit
+            n_c = np.asarray(tr.contacts).size
+            fv = 1.0 + accuracy * rng.standard_normal(n_c)
+            fa = 1.0 + accuracy * rng.standard_normal(n_c)
+            fr, fl, fc, fz = 1.0 + accuracy * rng.standard_normal(4)
+            tr1 = dataclasses.replace(
+                tr, sensitivity_villari=np.asarray(tr.sensitivity_villari) * fv,
+                dlambda_dapproach=np.asarray(tr.dlambda_dapproach) * fa)
+            resp = physics.response(spec) if spec.model.eddy_currents else None
+            if resp is None:
+                circuit = dataclasses.replace(circuit, resistance=circuit.resistance * fr,
+                                              inductance=circuit.inductance * fl)
+            else:
+                z = np.asarray(resp.impedance)
+                resp = dataclasses.replace(
+                    resp, villari=resp.villari * fv[None, :], approach=resp.approach * fa[None, :],
+                    impedance=resp.resistance_ohm + fz * (z - resp.resistance_ohm))
+            circuit = dataclasses.replace(
+                circuit, winding_capacitance=circuit.winding_capacitance * fc)
+            raw[j] = _voltage(MssSensor(tr1, circuit), spec, t, force, approach, cols, resp)
+        out.append(_post(plain, raw, dt) - base)
+    return np.array(out)
+
+
 def record_modes(state: ModelState, predictor: Predictor,
                  accuracy: float = FIELD_ACCURACY) -> tuple[RecordModes | None, ...]:
     """Per sensor of ``state``, the modes of its record within the field model's accuracy
@@ -132,22 +232,13 @@ def record_modes(state: ModelState, predictor: Predictor,
     runs, pulled = [plain], []
     if magnets is not None:
         magnets = np.asarray(magnets, dtype=float)
-        chain = plain.chain
         for p in np.flatnonzero(np.abs(magnets) > MIN_MODE * np.abs(magnets).max()):
-            for sign in (1.0, -1.0):  # central difference: the pull's ±1 %
-                extra = np.zeros_like(magnets)
-                extra[p] = sign * accuracy * magnets[p]
-                runs.append(dataclasses.replace(plain, chain=dataclasses.replace(
-                    chain, static_force=chain.static_force + extra)))
+            # central difference: the pull's ±1 %
+            runs += _pulled(plain, magnets, np.array([p]), accuracy * np.array([[1.0], [-1.0]]))
             pulled.append(int(p) + 1)
         # joint draws of every bead's pull error, for what the linear modes miss
         draws = np.random.default_rng(PULL_SEED).standard_normal((PULL_DRAWS, len(pulled)))
-        index = np.array(pulled) - 1
-        for e in draws:
-            extra = np.zeros_like(magnets)
-            extra[index] = accuracy * e * magnets[index]
-            runs.append(dataclasses.replace(plain, chain=dataclasses.replace(
-                chain, static_force=chain.static_force + extra)))
+        runs += _pulled(plain, magnets, np.array(pulled) - 1, accuracy * draws)
     sims = predictor._simulate(runs)
     force, contacts, approach = sims[0]
     t = predictor.t
@@ -249,4 +340,4 @@ def record_modes(state: ModelState, predictor: Predictor,
     return tuple(out)
 
 
-__all__ = ["FIELD_ACCURACY", "RecordModes", "record_modes"]
+__all__ = ["FIELD_ACCURACY", "RecordModes", "field_draws", "record_modes"]

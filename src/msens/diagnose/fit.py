@@ -29,6 +29,7 @@ from scipy.optimize import minimize, minimize_scalar
 
 from msens.diagnose.effects.base import Context, Effect, ModelState, Parameter
 from msens.diagnose.predict import Predictor
+from msens.errors import internal
 
 #: Refinement tolerance in the search variable (log10 of the parameter for log parameters):
 #: 1e-3 decades is 0.23 % of the value; for linear parameters, 1e-3 of the searched span
@@ -44,6 +45,11 @@ REFINED_COMBINATIONS = 4
 LEVEL = 0.95
 #: Normal quantile of ``LEVEL``.
 Z_LEVEL = 1.959963984540054
+#: Steps of the curvature's second round, in standard deviations of its first estimate:
+#: on the profile of a physics MsS's chi^2 the roughness is ~1 per step of 0.05 % in a
+#: parameter, so one-sigma second differences (~2) can be dominated by it; two-sigma ones
+#: (~8) are not.
+CURVATURE_STEP = 2.0
 
 
 @dataclass(frozen=True)
@@ -68,6 +74,12 @@ class EffectFit:
         none.
     at_bound : tuple of str
         Parameters whose optimum is at an end of their searched range.
+    curvature : ndarray, shape (k, k), optional
+        ``2 H^-1`` of the continuous parameters (their order in the effect's space), in
+        search variables (log10 for log parameters): the covariance before the widening by
+        the reduced chi^2.
+    widening : float
+        That widening factor (>= 1); the intervals hold ``widening * curvature``.
     """
 
     effect: str
@@ -78,6 +90,8 @@ class EffectFit:
     evaluations: int
     intervals: dict = field(default_factory=dict)
     at_bound: tuple[str, ...] = ()
+    curvature: np.ndarray | None = None
+    widening: float = 1.0
 
 
 def _to_x(p: Parameter, value: float) -> float:
@@ -215,6 +229,7 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
     params = params_of(best)
     intervals: dict[str, tuple[float, float]] = {}
     at_bound: list[str] = []
+    curvature, widening = None, 1.0
     if continuous:
         xc = best[continuous]
         lower = np.array([_to_x(space[i], space[i].lower) for i in continuous])
@@ -225,18 +240,31 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
                              for r in evaluate([full(np.asarray(x)) for x in xs])])
 
         n_obs = float(np.sum(getattr(objective, "n_obs", np.inf)))
-        cov = curvature_covariance(crit_batch, xc, lower, upper, n_obs=n_obs)
-        for i, (lo_x, hi_x) in zip(continuous, parameter_intervals(xc, cov, lower, upper),
-                                   strict=True):
-            p = space[i]
-            intervals[p.name] = (_from_x(p, lo_x), _from_x(p, hi_x))
+        curvature = curvature_covariance(crit_batch, xc, lower, upper)
+        dof = n_obs - len(continuous)
+        chi2 = float(weights @ evaluate([best])[0])
+        if np.isfinite(n_obs) and dof > 0:
+            widening = max(1.0, chi2 / dof)
+        intervals = interval_map([space[i] for i in continuous], xc, widening * curvature)
         at_bound = [space[i].name for i, flag
                     in zip(continuous, at_bounds(xc, lower, upper), strict=True)
                     if flag or _at_physical_edge(space[i], float(best[i]))]
     return EffectFit(effect=effect.name, parameters=params,
                      state=effect.apply(ctx, base, params),
                      rss=evaluate([best])[0], n_parameters=len(space), evaluations=count[0],
-                     intervals=intervals, at_bound=tuple(at_bound))
+                     intervals=intervals, at_bound=tuple(at_bound), curvature=curvature,
+                     widening=widening)
+
+
+def interval_map(space: list[Parameter], x: np.ndarray, cov: np.ndarray) -> dict:
+    """``{name: (lower, upper)}``, SI: the ``LEVEL`` interval of each parameter of ``space``
+    at search variables ``x`` (k,) with covariance ``cov`` (k, k), clipped to its searched
+    range."""
+    lower = np.array([_to_x(p, p.lower) for p in space])
+    upper = np.array([_to_x(p, p.upper) for p in space])
+    return {p.name: (_from_x(p, lo), _from_x(p, hi))
+            for p, (lo, hi) in zip(space, parameter_intervals(x, cov, lower, upper),
+                                   strict=True)}
 
 
 def _at_physical_edge(p: Parameter, x: float) -> bool:
@@ -266,9 +294,11 @@ def curvature_covariance(crit: Callable[[list[np.ndarray]], np.ndarray], x0: np.
     chi^2 = -2 ln L + const, so near its minimum chi^2(x) ~ chi^2_0 + (x - x0)^T H (x - x0)
     / 2 and the covariance is 2 H^-1. H is a finite-difference Hessian in two rounds of
     batched evaluations: steps of 2 % of the searched span give a first curvature per
-    variable; the second round steps by about one standard deviation of that first
-    estimate (a chi^2 change of ~1, where the quadratic holds; between 1e-4 and 10 % of the
-    span), with the mixed terms from one extra point per pair. Stencils stay inside
+    variable; the second round steps by ``CURVATURE_STEP`` standard deviations of that
+    first estimate (a chi^2 change of ~4: the scale of a 95 % interval, and large against
+    the criterion's roughness of order 1 from the alignment's and the chain's tolerances,
+    which makes the second differences of one-sigma steps unreliable; between 1e-4 and 10 %
+    of the span), with the mixed terms from one extra point per pair. Stencils stay inside
     [lower, upper]: at an end the three points lie on its inner side. Directions the data
     do not constrain (curvature <= 0 or a standard deviation beyond the span) get the span
     as their standard deviation. When chi^2_0 per degree of freedom (n_obs - k) exceeds 1,
@@ -326,7 +356,7 @@ def curvature_covariance(crit: Callable[[list[np.ndarray]], np.ndarray], x0: np.
     f = np.asarray(crit(pts), dtype=float)
     c = curvatures(h, f)
     sd = np.where(c > 0, np.sqrt(2.0 / np.where(c > 0, c, 1.0)), 0.1 * span)
-    h = np.clip(sd, 1e-4 * span, 0.1 * span)
+    h = np.clip(CURVATURE_STEP * sd, 1e-4 * span, 0.1 * span)
     signs, pts = stencils(h)
     pairs = [(i, j) for i in range(k) for j in range(i + 1, k)]
     for i, j in pairs:
@@ -361,6 +391,79 @@ def parameter_intervals(x0: np.ndarray, cov: np.ndarray, lower: np.ndarray,
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     return [(float(max(lo, x - z * s)), float(min(hi, x + z * s)))
             for x, s, lo, hi in zip(x0, sd, lower, upper, strict=True)]
+
+
+def field_spread(effect: Effect, ctx: Context, base: ModelState, predictor: Predictor,
+                 objective, weights: np.ndarray, fit: EffectFit, changes: np.ndarray
+                 ) -> np.ndarray:
+    """Covariance of a fit's continuous parameters over changes of the model's records:
+    how far the optimum moves when the model is off by each of ``changes``.
+
+    With the criterion quadratic about the optimum x0 (Hessian H = 2 ``fit.curvature``^-1),
+    a model record shifted by a change d moves the optimum by -H^-1 (g_d - g_0), where g is
+    the criterion's gradient at x0 with and without d: central differences over one
+    standard deviation of each variable (one batch of 2k model runs; every change is then
+    only a re-evaluation of the criterion). The second moment of those moves over the
+    changes is returned: with changes drawn from the field model's accuracy
+    (:func:`msens.diagnose.field_modes.field_draws`), the part of the parameters'
+    uncertainty that comes from the field model.
+
+    Parameters
+    ----------
+    effect, ctx, base, predictor, objective, weights
+        As for :func:`fit_effect`.
+    fit : EffectFit
+        The effect's fit (with its ``curvature``).
+    changes : ndarray, shape (draws, sensors, nt)
+        Changes of the model's records (the records' units).
+
+    Returns
+    -------
+    ndarray, shape (k, k)
+        In search variables, the continuous parameters in the order of the effect's space.
+    """
+    space = effect.space(ctx, base)
+    continuous = [i for i, p in enumerate(space) if not p.integer]
+    internal(fit.curvature is not None and len(continuous) == fit.curvature.shape[0],
+             "internal: field_spread needs the fit's curvature")
+    x0 = np.array([_to_x(space[i], float(fit.parameters[space[i].name])) for i in continuous])
+    lower = np.array([_to_x(space[i], space[i].lower) for i in continuous])
+    upper = np.array([_to_x(space[i], space[i].upper) for i in continuous])
+    span = upper - lower
+    h = np.clip(CURVATURE_STEP * np.sqrt(np.maximum(np.diag(fit.curvature), 0.0)),
+                1e-4 * span, 0.1 * span)
+    points = []
+    for i in range(len(continuous)):
+        for sign in (-1.0, 1.0):
+            x = x0.copy()
+            x[i] = np.clip(x0[i] + sign * h[i], lower[i], upper[i])
+            points.append(x)
+
+    def params(x: np.ndarray) -> dict:
+        out = dict(fit.parameters)
+        for j, i in enumerate(continuous):
+            out[space[i].name] = _from_x(space[i], float(x[j]))
+        return out
+
+    records = predictor.records([effect.apply(ctx, base, params(x)) for x in points])
+    steps = np.array([points[2 * i + 1][i] - points[2 * i][i] for i in range(len(continuous))])
+
+    def gradient(change) -> np.ndarray:
+        f = np.array([float(weights @ objective.rss(r + change)) for r in records])
+        return (f[1::2] - f[0::2]) / np.where(steps > 0, steps, 1.0)
+
+    g0 = gradient(0.0)
+    moves = np.array([-0.5 * fit.curvature @ (gradient(d) - g0) for d in changes])
+    return moves.T @ moves / len(moves)
+
+
+def widened(effect: Effect, ctx: Context, base: ModelState, fit: EffectFit,
+            extra: np.ndarray) -> dict:
+    """The fit's intervals with the covariance ``extra`` (k, k; search variables, e.g.
+    :func:`field_spread`) added to its own."""
+    space = [p for p in effect.space(ctx, base) if not p.integer]
+    x = np.array([_to_x(p, float(fit.parameters[p.name])) for p in space])
+    return interval_map(space, x, fit.widening * fit.curvature + extra)
 
 
 def recentred(effect: Effect, ctx: Context, base: ModelState, intervals: dict,

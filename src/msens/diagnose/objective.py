@@ -45,6 +45,9 @@ from msens.results import SetupResult
 #: Largest change of the impact-to-trigger offset searched per candidate model, s. A 3x
 #: faster striker moves the first arrival by less than this.
 MAX_SHIFT_S = 80e-6
+#: With field-model modes, the whole samples on either side of the correlation's peak at
+#: which the profiled chi^2 is compared before the sub-sample refinement.
+LAG_WINDOW = 6
 #: A channel is usable when its largest excursion exceeds this many noise stds.
 MIN_SNR = 8.0
 #: Field-model mode directions whose variance over the whole record is below this many
@@ -305,6 +308,12 @@ class WaveformObjective:
         limit = int(MAX_SHIFT_S / self.dt)
         score[np.abs(lags) > limit] = -np.inf
         d1 = shot.delay0 + lags[int(np.argmax(score))] * self.dt
+        if shot.modes is not None:
+            # the profiled modes can move the chi^2 optimum a few samples off the
+            # correlation's peak (the pull's modes shift the pulse's timing): the best
+            # whole sample near it, or the chi^2 jumps when the peak's sample does
+            near = d1 + np.arange(-LAG_WINDOW, LAG_WINDOW + 1) * self.dt
+            d1 = float(near[np.argmin([self._rss_at(shot, sig, d).rss.sum() for d in near])])
         opt = minimize_scalar(lambda d: float(self._rss_at(shot, sig, d).rss.sum()),
                               bounds=(d1 - 1.5 * self.dt, d1 + 1.5 * self.dt),
                               method="bounded", options={"xatol": 1e-3 * self.dt})

@@ -75,8 +75,15 @@ from msens.diagnose.diagnosis import Candidate, Diagnosis
 from msens.diagnose.effects import Context
 from msens.diagnose.effects import get as get_effect
 from msens.diagnose.effects.base import ModelState
-from msens.diagnose.field_modes import record_modes
-from msens.diagnose.fit import recentred, refit_jointly
+from msens.diagnose.field_modes import field_draws, record_modes
+from msens.diagnose.fit import (
+    EffectFit,
+    field_spread,
+    fit_effect,
+    recentred,
+    refit_jointly,
+    widened,
+)
 from msens.diagnose.likelihood import variance_split
 from msens.diagnose.noise import shot_matrix
 from msens.diagnose.objective import FeatureObjective, WaveformObjective, check_channels
@@ -208,25 +215,52 @@ def waveform_baseline(waveform: Waveform, study: Study, *, fit: DissipationFit |
     plain = baseline_state(ctx, gc, gw)
     base = with_added(ctx, plain, added)
     base_result = setup_result(ctx, base, predictor)
-    shifts, per_shot = None, None
+    per_shot = None
     if len({c.repeat for c in waveform.channels}) > 1:
         # each shot's own speed and delay: align the shots on their impact, and average
         # every model over the shots' spread of speeds as the data are
         per_shot = fit_shots(waveform, base, base_result, predictor)
-        shifts = np.round((per_shot.delays[0] - per_shot.delays) / waveform.dt).astype(int)
         plain = dataclasses.replace(plain, velocity_spread=per_shot.spread)
         base = with_added(ctx, plain, added)
         _log.info("%d shots: striker speed spread %.2g %%", len(per_shot.speeds),
                   100 * per_shot.spread)
-    objective = WaveformObjective(waveform, base_result, shifts)
     records0 = predictor.records([base])[0]
-    # the likelihood's variance: the noise and the model's own uncertainty (physics MsS)
-    _log.info("field-model modes of the records (each contact, the circuit, each bead's "
-              "pull; ~60 chain runs)")
-    objective.add_model_uncertainty(records0, record_modes(base, predictor))
+    objective = objective_at(waveform, base_result, per_shot, predictor, base, records0)
     return WaveformBaseline(ctx=ctx, gamma_contact=gc, gamma_wall=gw, predictor=predictor,
                             plain=plain, base=base, result=base_result, per_shot=per_shot,
                             objective=objective, records=records0)
+
+
+def objective_at(waveform: Waveform, result: SetupResult, per_shot: ShotFits | None,
+                 predictor: Predictor, state: ModelState, records: np.ndarray
+                 ) -> WaveformObjective:
+    """The likelihood of a measured file with its model uncertainty taken at ``state``.
+
+    Parameters
+    ----------
+    waveform : Waveform
+    result : SetupResult
+        The baseline's run (its only use: the starting time offset).
+    per_shot : ShotFits or None
+        The shots' own delays (two or more shots).
+    predictor : Predictor
+    state : ModelState
+        The model whose field-model modes and diagonal variance the likelihood holds.
+    records : ndarray, shape (sensors, nt)
+        ``state``'s records.
+
+    Returns
+    -------
+    WaveformObjective
+    """
+    shifts = None if per_shot is None else \
+        np.round((per_shot.delays[0] - per_shot.delays) / waveform.dt).astype(int)
+    objective = WaveformObjective(waveform, result, shifts)
+    # the likelihood's variance: the noise and the model's own uncertainty (physics MsS)
+    _log.info("field-model modes of the records (each contact, the circuit, each bead's "
+              "pull; ~60 chain runs)")
+    objective.add_model_uncertainty(records, record_modes(state, predictor))
+    return objective
 
 
 # ------------------------------------------------------------------------ workflows
@@ -271,6 +305,8 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     cands, misfit0 = score_candidates(fits, rss0, objective.n_obs, ctx, base)
     winner, wfit = decide(cands, fits, threshold)
     log_decision(cands, winner, threshold)
+    if wfit is not None and not added and any(m is not None for m in objective.field_modes):
+        winner, wfit, objective = _named_refit(waveform, b, winner, wfit, weights)
     after = wfit.state if wfit is not None else base
     refit: tuple[tuple[str, dict], ...] = ()
     if wfit is not None and added:
@@ -306,6 +342,49 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
                "model_uncertainty": _model_uncertainty_json(objective, names)},
         before=base, after=after, overlay=_overlay(objective, records0, records1, base_result),
         calibration=_calibration(objective, records1, base_result, names))
+
+
+def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
+                 wfit: EffectFit, weights: np.ndarray
+                 ) -> tuple[Candidate, EffectFit, WaveformObjective]:
+    """The named effect refitted with the field-model modes taken at its own fit, and its
+    intervals widened by joint draws of the field model's errors.
+
+    The candidates are compared under one likelihood, the baseline's; but the modes are
+    shapes of the baseline's record, and an effect that moves the pulse (a stiffer wall,
+    stronger magnets) moves the shapes the field model's errors take with it. So the
+    named effect is fitted again with the modes (and the diagonal model variance) of its
+    own fitted record, and that likelihood judges the final model. Its intervals then add
+    to the curvature's the spread of the optimum over :data:`~msens.diagnose.field_modes.
+    BOOTSTRAP_DRAWS` joint draws of every field-model quantity (:func:`~msens.diagnose.
+    field_modes.field_draws`, :func:`~msens.diagnose.fit.field_spread`): the pull's effect
+    is not linear near lightly loaded contacts, its errors and the sensitivities' combine,
+    and the modes hold only their linear parts and a few draws. A refit that ends at a
+    bound of its search keeps the first fit.
+
+    Returns
+    -------
+    (winner, fit, objective)
+    """
+    ctx, predictor = b.ctx, b.predictor
+    effect = get_effect(wfit.effect)
+    _log.info("refit of %s with the model uncertainty of its own fitted record", effect.name)
+    obj = objective_at(waveform, b.result, b.per_shot, predictor, wfit.state,
+                       predictor.records([wfit.state])[0])
+    fit = fit_effect(effect, ctx, b.base, predictor, obj, weights)
+    if fit.at_bound:
+        _log.info("the refit of %s ends at a bound (%s): the first fit is kept",
+                  effect.name, ", ".join(fit.at_bound))
+        return winner, wfit, b.objective
+    intervals = dict(fit.intervals)
+    changes = field_draws(fit.state, predictor) if fit.curvature is not None else None
+    if changes is not None:
+        _log.info("%s: its intervals over %d draws of the field model's errors", effect.name,
+                  len(changes))
+        intervals = widened(effect, ctx, b.base, fit, field_spread(
+            effect, ctx, b.base, predictor, obj, weights, fit, changes))
+    return (dataclasses.replace(winner, parameters=dict(fit.parameters), intervals=intervals),
+            fit, obj)
 
 
 def _model_uncertainty_json(objective: WaveformObjective, names: list[str]) -> dict:

@@ -73,7 +73,10 @@ INTERVAL_DEFINITION = ("95 % interval of each continuous parameter from the curv
                        "difference Hessian in the search variables, log10 for scale "
                        "parameters; widened by the reduced chi^2 when it exceeds 1; the "
                        "likelihood's variance holds the noise and the model's own "
-                       "uncertainty), clipped to the searched range; integer parameters "
+                       "uncertainty); for a named effect on a physics MsS, refitted with "
+                       "the field-model modes of its own fitted record and widened by the "
+                       "spread of the optimum over joint draws of the field model's "
+                       "errors; clipped to the searched range; integer parameters "
                        "have none. at_bound: the optimum is within 0.5 % of the searched "
                        "span from one of its ends, or from an end of its physical range "
                        "inside it")

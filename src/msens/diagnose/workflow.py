@@ -36,6 +36,10 @@ Steps:
    must also beat by the threshold every plausible change below its floor: when a negligible
    change (say a striker 0.5 % faster) fits better than a significant one, nothing practical
    is missing.
+   On a physics MsS (first pass) the named effect is then fitted again under the
+   likelihood of its own fitted record (the field model's modes taken there, not at the
+   baseline), and its intervals widened by the spread of that fit over joint draws of the
+   field model's errors (:func:`_named_refit`).
 7. *Verdict.* Whether the final model explains the data: its residual against the noise, for
    the record and for each window, by an F test (:mod:`msens.diagnose.verdict`);
    ``explained`` false says that the named effect (or the baseline) still misses, and where.

@@ -98,6 +98,7 @@ from msens.diagnose.where import feature_residuals, feature_table, window_residu
 from msens.errors import InputError
 from msens.io.waveform import Waveform
 from msens.pipeline import calibrate_dissipation, output_times
+from msens.progress import heartbeat
 from msens.results import SetupResult
 from msens.synth import GAIN_CONVENTION, GAIN_KEY, gain_unit
 
@@ -375,7 +376,8 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
     _log.info("refit of %s with the model uncertainty of its own fitted record", effect.name)
     obj = objective_at(waveform, b.result, b.per_shot, predictor, wfit.state,
                        predictor.records([wfit.state])[0])
-    fit = fit_effect(effect, ctx, b.base, predictor, obj, weights)
+    with heartbeat(_log, f"refit of {effect.name}"):
+        fit = fit_effect(effect, ctx, b.base, predictor, obj, weights)
     if fit.at_bound:
         _log.info("the refit of %s ends at a bound (%s): the first fit is kept",
                   effect.name, ", ".join(fit.at_bound))

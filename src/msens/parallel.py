@@ -18,6 +18,7 @@ Results do not depend on where a task ran: each task is a pure function of its a
 
 from __future__ import annotations
 
+import functools
 import logging
 import multiprocessing
 import os
@@ -217,6 +218,30 @@ def run_tasks(fn: Callable[[Any], Any], args: Sequence[Any], *,
         finally:
             for fut in pending:
                 fut.cancel()
+
+
+@functools.cache
+def _blas():
+    """The process's BLAS libraries, found once (a search reads /proc, ~3 ms per call)."""
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
+@contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """A context (and decorator) in which BLAS runs on one thread.
+
+    For work made of many small dense products and solves (a sparse LU's blocks, the
+    design's batched spectra, a diagnosis's or calibration's profiled likelihoods): they
+    gain nothing from threads, and OpenBLAS's threads on a loaded machine wait for a time
+    slice on every call. Measured on 2 cores with one other busy process: a diagnosis of
+    the main study's two-shot file 317 s with OpenBLAS's threads, 109 s with one (its
+    alignments 196 s -> 12 s); a sparse factor jumped between 0.03 s and 5.8 s (cf. scipy
+    issue 13999); a design's spectrum chunk 0.2 s instead of 0.02 s at load 5.
+    """
+    with _blas().limit(limits=1, user_api="blas"):
+        yield
 
 
 def _share_cores(threads: int) -> None:

@@ -11,7 +11,7 @@ from msens.config.study import default_study_path, load_study
 from msens.diagnose import physics
 from msens.diagnose.effects import Context
 from msens.diagnose.field_modes import FIELD_ACCURACY, PULL_DRAWS, field_draws, record_modes
-from msens.diagnose.objective import ModeBasis, WaveformObjective, _profiled
+from msens.diagnose.objective import ModeBasis, WaveformObjective, _profiled, _profiled_many
 from msens.diagnose.predict import Predictor, baseline_state
 from msens.diagnose.verdict import verdict
 from msens.diagnose.where import window_residuals
@@ -46,6 +46,29 @@ def test_profiled_modes_are_the_low_rank_covariance():
     # a negative gain is refused: the model column is dropped
     g2, _, chi2, _ = _profiled(w, -y, m, ModeBasis.of(u, w, -y))
     assert g2 == 0.0 and chi2 > chi
+
+
+def test_profiled_in_a_batch_is_profiled_one_by_one():
+    """The batched profile (the alignment's whole-sample comparison) gives each model
+    signal's chi^2 as the one-by-one profile does, with and without modes, a refused
+    negative gain included."""
+    rng = np.random.default_rng(5)
+    n, k = 120, 3
+    x = np.linspace(0.0, 1.0, n)
+    shapes = np.array([np.sin(7 * (x - d)) * np.exp(-3 * x) for d in np.linspace(-0.05, 0.05, 7)])
+    ms = np.vstack([shapes, -shapes[:2]])  # the last two want a negative gain
+    u = 0.05 * rng.normal(size=(k, n))
+    w = 1.0 / rng.uniform(0.5, 2.0, n) / 0.01**2
+    y = 1.3 * shapes[3] + 0.2 + rng.normal(size=k) @ u + rng.normal(size=n) / np.sqrt(w)
+    basis = ModeBasis.of(u, w, y)
+    one = np.array([_profiled(w, y, m, basis)[2] for m in ms])
+    np.testing.assert_allclose(_profiled_many(w, y, ms, basis), one, rtol=1e-9)
+    assert _profiled(w, y, ms[-1], basis)[0] == 0.0  # the refused case is exercised
+    # without modes: the weighted gain-and-offset fit
+    design = [np.column_stack([m, np.ones(n)]) for m in shapes]
+    plain = [float(w @ (y - a @ np.linalg.lstsq(a * np.sqrt(w)[:, None], y * np.sqrt(w),
+                                                rcond=None)[0]) ** 2) for a in design]
+    np.testing.assert_allclose(_profiled_many(w, y, shapes, None), plain, rtol=1e-9)
 
 
 def md_particle(state, j):

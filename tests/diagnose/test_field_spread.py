@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from msens.diagnose.effects.base import Parameter
-from msens.diagnose.fit import EffectFit, curvature_covariance, field_spread, widened
+from msens.diagnose.fit import EffectFit, curvature_covariance, field_spread, fit_effect, widened
 
 T = np.linspace(0.0, 1.0, 400)
 #: Two record shapes (one sensor) that a linear model adds with its parameters' weights.
@@ -22,6 +22,11 @@ class Linear:
     (held at its fitted value)."""
 
     space_: tuple
+    name: str = "linear"
+    grid_points: int = 12
+
+    def strides(self, ctx):
+        return {}
 
     def space(self, ctx, base):
         return list(self.space_)
@@ -90,3 +95,27 @@ def test_widened_intervals_add_the_spread_to_the_curvature():
     half = 1.959963984540054 * np.sqrt(4.0 * 1e-4 + 3e-4)
     assert np.log10(hi) - 1.0 == pytest.approx(half, rel=1e-9)
     assert 1.0 - np.log10(lo) == pytest.approx(half, rel=1e-9)
+
+
+def test_a_refit_near_an_earlier_fit():
+    """A refit started from an earlier optimum searches a few grid points around it (the
+    integer parameter held) and finds the optimum the whole search finds, with a fraction
+    of the runs; started far from it, its best point lies at the end of that window and the
+    whole grid is searched."""
+    effect = Linear((Parameter("a0", -2.0, 2.0), Parameter("a1", -2.0, 2.0),
+                     Parameter("n", 1, 4, integer=True)))
+    truth = {"a0": 0.73, "a1": -1.31, "n": 2}
+    rng = np.random.default_rng(8)
+    objective = Chi2(Records().records([truth])[0][0] + SIGMA * rng.normal(size=T.size))
+    whole = fit_effect(effect, None, None, Records(), objective, np.ones(1))
+    near = fit_effect(effect, None, None, Records(), objective, np.ones(1),
+                      near={**whole.parameters, "a0": whole.parameters["a0"] + 0.1})
+    for k in ("a0", "a1"):
+        assert near.parameters[k] == pytest.approx(whole.parameters[k], abs=0.01)
+        assert near.intervals[k] == pytest.approx(whole.intervals[k], abs=0.01)
+    assert near.parameters["n"] == whole.parameters["n"]
+    assert near.evaluations < whole.evaluations / 3
+    far = fit_effect(effect, None, None, Records(), objective, np.ones(1),
+                     near={"a0": -1.9, "a1": 1.9, "n": 2})
+    assert far.parameters["a0"] == pytest.approx(whole.parameters["a0"], abs=1e-6)
+    assert far.evaluations == whole.evaluations

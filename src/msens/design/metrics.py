@@ -18,7 +18,6 @@ DAQ input capacitances, DAQ input resistance). From them:
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -26,12 +25,12 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 from scipy.interpolate import PchipInterpolator
-from threadpoolctl import ThreadpoolController
 
 from msens.field.parts import Coil
 from msens.magnetics.eddy_readout import PAD, emf_spectra
 from msens.magnetics.emf import ContactRates, emf_from_rates
 from msens.magnetics.frequency_response import interp
+from msens.parallel import one_blas_thread
 from msens.params.units import TWO_PI
 from msens.readout.electronics import (
     ElectronicsSpec,
@@ -289,19 +288,6 @@ def _coil_impedances(spectra: _ChainSpectra, frequencies: np.ndarray,
     return z
 
 
-@functools.cache
-def _blas() -> ThreadpoolController:
-    """The process's BLAS libraries, found once."""
-    return ThreadpoolController()
-
-
-def _one_blas_thread():
-    """One BLAS thread for the batched spectra: their products are small, and OpenBLAS's
-    threads on a loaded machine wait for a time slice on each (measured: 0.2 s instead of
-    0.02 s a chunk at load 5 on 2 cores; cf. :mod:`msens.field.linsolve`)."""
-    return _blas().limit(limits=1, user_api="blas")
-
-
 def _peaks(x: np.ndarray) -> np.ndarray:
     """max |x| along the last axis."""
     return np.maximum(np.max(x, axis=-1), -np.min(x, axis=-1))
@@ -345,7 +331,7 @@ def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductanc
     resistance = np.asarray(resistance, float)
     keys, circuits = _circuits(coils, resistance, inductance, electronics, decay=False)
     rows: list[dict] = []
-    with _one_blas_thread():
+    with one_blas_thread():
         for lo in range(0, len(coils), SPECTRUM_CHUNK):
             rows.extend(_dynamic_chunk(slice(lo, min(lo + SPECTRUM_CHUNK, len(coils))), sp,
                                        coils, resistance, inductance, frequencies, villari,

@@ -41,6 +41,10 @@ BOUND_TOL = 5e-3
 #: Integer combinations whose continuous parameters are refined, for effects searched coarse
 #: to fine (``Effect.strides``); 1 otherwise.
 REFINED_COMBINATIONS = 4
+#: A refit near an earlier optimum (``fit_effect(..., near=...)``) searches this many start
+#: grid points on either side of it; when its best point is at the end of that window, the
+#: whole grid is searched after all.
+NEAR_STEPS = 2
 #: Coverage of the reported intervals (two-sided, normal approximation).
 LEVEL = 0.95
 #: Normal quantile of ``LEVEL``.
@@ -119,8 +123,14 @@ def _stride_grid(g: np.ndarray, stride: int) -> np.ndarray:
     return out if out[-1] == g[-1] else np.append(out, g[-1])
 
 
+def _window(g: np.ndarray, x: float, steps: int) -> np.ndarray:
+    """The points of grid ``g`` within ``steps`` of the one nearest ``x``, and ``x``."""
+    k = int(np.argmin(np.abs(g - x)))
+    return np.unique(np.append(g[max(k - steps, 0):k + steps + 1], x))
+
+
 def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predictor,
-               objective, weights: np.ndarray) -> EffectFit:
+               objective, weights: np.ndarray, near: dict | None = None) -> EffectFit:
     """Fit ``effect`` on top of ``base`` to the measurement behind ``objective``.
 
     Parameters
@@ -133,6 +143,12 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
         Anything with ``rss(records (sensors, nt)) -> (sensors,)``.
     weights : ndarray, shape (sensors,)
         1 / sigma^2 per sensor.
+    near : dict, optional
+        Parameters of an earlier fit of the effect (another likelihood of the same data):
+        the integer parameters are held at their values, and the start grid of each
+        continuous one holds only its :data:`NEAR_STEPS` points on either side of its value
+        (and the value). When the best of those is at the end of that window (and not of
+        the searched range), the whole grid is searched.
 
     Returns
     -------
@@ -140,6 +156,11 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
     """
     space = effect.space(ctx, base)
     grids = [_grid(p, effect.grid_points) for p in space]
+    if near is not None:
+        full_grids = grids
+        grids = [np.array([float(round(near[p.name]))]) if p.integer else
+                 _window(g, _to_x(p, near[p.name]), NEAR_STEPS)
+                 for p, g in zip(space, grids, strict=True)]
     points = list(itertools.product(*grids))
 
     def params_of(x) -> dict:
@@ -160,6 +181,8 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
         return [cache[tuple(map(float, x))] for x in xs]
 
     strides = {k: int(v) for k, v in effect.strides(ctx).items() if int(v) > 1}
+    if near is not None:
+        strides = {}
     if strides:
         # coarse to fine: the integer parameters with a stride on every stride-th value and
         # the continuous ones on a coarser grid, then every integer between the best coarse
@@ -177,6 +200,10 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
     rss = evaluate(points)
     crit = np.array([float(weights @ r) for r in rss])
     best = np.array(points[int(np.argmin(crit))], dtype=float)
+    if near is not None and any(
+            not p.integer and (best[i] == g[0] != f[0] or best[i] == g[-1] != f[-1])
+            for i, (p, g, f) in enumerate(zip(space, grids, full_grids, strict=True))):
+        return fit_effect(effect, ctx, base, predictor, objective, weights)  # moved further
 
     continuous = [i for i, p in enumerate(space) if not p.integer]
     if continuous:

@@ -293,6 +293,17 @@ class WaveformObjective:
         return Alignment(delay=delay, gains=g, offsets=b, rss=np.maximum(chi2, 0.0),
                          amplitudes=tuple(amps), shifts=tuple(shifts))
 
+    def _chi2_at(self, shot: Shot, sig: np.ndarray, delays: np.ndarray) -> np.ndarray:
+        """The profiled chi^2 summed over the sensors at each of ``delays`` (L,), s: what
+        :meth:`_rss_at` gives at each, in one batch of products and solves."""
+        x = shot.tau[None, :] + np.asarray(delays, dtype=float)[:, None]
+        total = np.zeros(x.shape[0])
+        for j, s in enumerate(sig):
+            m = np.interp(x, self.t, s, left=0.0, right=0.0)
+            basis = None if shot.modes is None else shot.modes[j]
+            total += _profiled_many(shot.w[j], shot.y[j], m, basis)
+        return total
+
     def align(self, shot: Shot, sig: np.ndarray) -> Alignment:
         """Best time offset and gains of ``shot`` for model signals ``sig`` (sensors, nt)."""
         nt = self.t.size
@@ -313,7 +324,7 @@ class WaveformObjective:
             # correlation's peak (the pull's modes shift the pulse's timing): the best
             # whole sample near it, or the chi^2 jumps when the peak's sample does
             near = d1 + np.arange(-LAG_WINDOW, LAG_WINDOW + 1) * self.dt
-            d1 = float(near[np.argmin([self._rss_at(shot, sig, d).rss.sum() for d in near])])
+            d1 = float(near[np.argmin(self._chi2_at(shot, sig, near))])
         opt = minimize_scalar(lambda d: float(self._rss_at(shot, sig, d).rss.sum()),
                               bounds=(d1 - 1.5 * self.dt, d1 + 1.5 * self.dt),
                               method="bounded", options={"xatol": 1e-3 * self.dt})
@@ -432,6 +443,52 @@ def _profiled(w: np.ndarray, y: np.ndarray, m: np.ndarray, basis: ModeBasis
         theta = np.concatenate([[0.0], np.linalg.solve(h[1:, 1:], rhs[1:])])
     chi2 = yy - float(theta @ rhs)
     return float(theta[0]), float(theta[1]), max(chi2, 0.0), theta[2:]
+
+
+def _profiled_many(w: np.ndarray, y: np.ndarray, m: np.ndarray, basis: ModeBasis | None
+                   ) -> np.ndarray:
+    """The minimum of :func:`_profiled` (or, without ``basis``, of the gain-and-offset fit
+    alone) for each of L model signals at once.
+
+    Parameters
+    ----------
+    w, y : ndarray, shape (n,)
+        Inverse variances (1/V^2) and data (V).
+    m : ndarray, shape (L, n)
+        Model signals on the data's samples, V.
+    basis : ModeBasis or None
+
+    Returns
+    -------
+    ndarray, shape (L,)
+        chi^2 of each.
+    """
+    wm = m * w
+    mm = np.einsum("ln,ln->l", wm, m)
+    s1, my = wm.sum(axis=1), wm @ y
+    s0, sy, yy = float(w.sum()), float(w @ y), float(w @ (y * y))
+    if basis is None:
+        det = s0 * mm - s1**2
+        ok = det > 1e-12 * s0 * np.maximum(mm, 1e-300)
+        g = np.maximum(np.where(ok, (s0 * my - s1 * sy) / np.where(ok, det, 1.0), 0.0), 0.0)
+        b = (sy - g * s1) / s0
+        chi2 = yy + g**2 * mm + s0 * b**2 - 2 * g * my - 2 * b * sy + 2 * g * b * s1
+        return np.maximum(chi2, 0.0)
+    k = basis.u.shape[0]
+    h = np.empty((m.shape[0], k + 2, k + 2))
+    um = m @ basis.uw.T
+    h[:, 0, 0], h[:, 0, 1], h[:, 1, 0], h[:, 1, 1] = mm, s1, s1, s0
+    h[:, 0, 2:] = h[:, 2:, 0] = um
+    h[:, 1, 2:] = h[:, 2:, 1] = basis.u1
+    h[:, 2:, 2:] = basis.gram
+    rhs = np.empty((m.shape[0], k + 2))
+    rhs[:, 0], rhs[:, 1], rhs[:, 2:] = my, sy, basis.uy
+    theta = np.linalg.solve(h, rhs[..., None])[..., 0]
+    chi2 = yy - np.einsum("lk,lk->l", theta, rhs)
+    neg = theta[:, 0] < 0.0
+    if neg.any():  # the gain kept >= 0: without the model column (the same for every row)
+        chi2[neg] = yy - float(np.linalg.solve(h[0, 1:, 1:], rhs[0, 1:]) @ rhs[0, 1:])
+    return np.maximum(chi2, 0.0)
 
 
 class FeatureObjective:

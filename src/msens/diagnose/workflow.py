@@ -97,6 +97,7 @@ from msens.diagnose.verdict import verdict
 from msens.diagnose.where import feature_residuals, feature_table, window_residuals, worst_window
 from msens.errors import InputError
 from msens.io.waveform import Waveform
+from msens.parallel import one_blas_thread
 from msens.pipeline import calibrate_dissipation, output_times
 from msens.progress import heartbeat
 from msens.results import SetupResult
@@ -270,6 +271,7 @@ def objective_at(waveform: Waveform, result: SetupResult, per_shot: ShotFits | N
 
 # ------------------------------------------------------------------------ workflows
 
+@one_blas_thread()
 def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = None,
              added: Sequence[tuple[str, Mapping[str, float]]] = (),
              effects: Sequence[str] | None = None, threshold: float = THRESHOLD) -> Diagnosis:
@@ -359,7 +361,9 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
     shapes of the baseline's record, and an effect that moves the pulse (a stiffer wall,
     stronger magnets) moves the shapes the field model's errors take with it. So the
     named effect is fitted again with the modes (and the diagonal model variance) of its
-    own fitted record, and that likelihood judges the final model. Its intervals then add
+    own fitted record, near its first fit (:func:`~msens.diagnose.fit.fit_effect`'s
+    ``near``: the first fit's integer parameters, a few grid points on either side of its
+    continuous ones), and that likelihood judges the final model. Its intervals then add
     to the curvature's the spread of the optimum over :data:`~msens.diagnose.field_modes.
     BOOTSTRAP_DRAWS` joint draws of every field-model quantity (:func:`~msens.diagnose.
     field_modes.field_draws`, :func:`~msens.diagnose.fit.field_spread`): the pull's effect
@@ -377,7 +381,8 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
     obj = objective_at(waveform, b.result, b.per_shot, predictor, wfit.state,
                        predictor.records([wfit.state])[0])
     with heartbeat(_log, f"refit of {effect.name}"):
-        fit = fit_effect(effect, ctx, b.base, predictor, obj, weights)
+        fit = fit_effect(effect, ctx, b.base, predictor, obj, weights,
+                         near=dict(wfit.parameters))
     if fit.at_bound:
         _log.info("the refit of %s ends at a bound (%s): the first fit is kept",
                   effect.name, ", ".join(fit.at_bound))

@@ -23,7 +23,6 @@ SuperLU leave a diagonal 100× smaller than its column as a guard against growth
 
 from __future__ import annotations
 
-import functools
 import hashlib
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -32,9 +31,9 @@ import numpy as np
 import pymetis
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
-from threadpoolctl import ThreadpoolController
 
 from msens.errors import require
+from msens.parallel import one_blas_thread
 
 
 @dataclass(frozen=True)
@@ -103,16 +102,6 @@ def ordering(matrix: sp.csc_matrix) -> Ordering:
     return found
 
 
-@functools.cache
-def _blas() -> ThreadpoolController:
-    """The process's BLAS libraries, found once (a search reads /proc, ~3 ms per call)."""
-    return ThreadpoolController()
-
-
-def _one_blas_thread():
-    return _blas().limit(limits=1, user_api="blas")
-
-
 class SparseLU:
     """LU of a matrix in its pattern's nested-dissection order; solves in the original order.
 
@@ -129,7 +118,7 @@ class SparseLU:
         self._complex = bool(np.iscomplexobj(matrix.data))
         permuted = order.permuted(matrix.data)
         pivot = 0.01 if self._complex else 0.0
-        with _one_blas_thread():
+        with one_blas_thread():
             self._lu = splu(permuted, permc_spec="NATURAL", diag_pivot_thresh=pivot,
                             panel_size=4, relax=4, options={"SymmetricMode": True})
 
@@ -145,7 +134,7 @@ class SparseLU:
             b = b.astype(complex, copy=False)
         elif np.iscomplexobj(b):
             return self.solve(b.real) + 1j * self.solve(b.imag)
-        with _one_blas_thread():
+        with one_blas_thread():
             y = self._lu.solve(np.ascontiguousarray(b[self._perm]))
         x = np.empty_like(y)
         x[self._perm] = y

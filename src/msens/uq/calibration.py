@@ -26,6 +26,7 @@ import numpy as np
 from msens.config.study import Study
 from msens.errors import InputError
 from msens.io.output import DPI, OutputDir
+from msens.parallel import one_blas_thread
 from msens.progress import heartbeat, refreshing
 from msens.results import JsonReport
 from msens.uq.inputs import InputSet, load_inputs
@@ -263,6 +264,7 @@ def predictive(study: Study, inputs: InputSet, coords: Coordinates, theta: np.nd
     return ev.features, reference, band
 
 
+@one_blas_thread()
 def run_calibrate(study: Study, out: str | Path, *, data=None, reference: str | None = None,
                   inputs: str | Path | None = None, params: Sequence[str] | None = None,
                   walkers: int | None = None, steps: int = DEFAULT_STEPS, seed: int = 0,

@@ -23,7 +23,7 @@ import numpy as np
 
 from msens.config.study import Study
 from msens.io.output import DPI, OutputDir
-from msens.parallel import check_scheduler, check_workers, pools_allowed
+from msens.parallel import check_scheduler, check_workers, one_blas_thread, pools_allowed
 from msens.results import JsonReport
 from msens.uq.inputs import InputSet, load_inputs
 from msens.uq.propagate import Propagation, check_samples, propagate
@@ -82,6 +82,7 @@ def nominal_features(study: Study, inputs: InputSet) -> dict[str, float]:
     return {k: float(v[0]) for k, v in ev.features.items()}
 
 
+@one_blas_thread()
 def run_uq(study: Study, out: str | Path, *, inputs: str | Path | None = None,
            samples: int = DEFAULT_SAMPLES, seed: int = 0, scheduler: str | None = None,
            workers: int | None = None, fig_format: str = "png",

@@ -27,6 +27,7 @@ from msens.compare import compare as compare_records
 from msens.config.study import Study
 from msens.io.output import DPI, OutputDir, to_json
 from msens.io.waveform import Waveform
+from msens.parallel import one_blas_thread
 from msens.pipeline import run_study
 from msens.results import JsonReport, StudyResult
 from msens.signals.signalcheck import check_amplitudes, check_pulses, check_shots
@@ -99,6 +100,7 @@ def check_measurement(study: Study, waveform: Waveform, source: str) -> StudyRes
     return result
 
 
+@one_blas_thread()
 def compare(study: Study, data: Path, out: Path, *,
             fig_format: str = "png") -> CompareResult:
     """Compare measured ``data`` with the model of ``study``; write ``compare.json`` and an

@@ -68,3 +68,24 @@ def test_batches_are_bounded_by_their_output_memory(states, monkeypatch):
     Predictor(T).records([states[0], states[2], states[3]])
     mss = read_contacts(zip(states[2].kinds, states[2].particles, strict=True), 30).tolist()
     assert calls == [(1, [11, 12, 16, 17]), (1, mss), (1, [11, 12, 16, 17])]
+
+
+def test_a_coil_is_read_once_per_run_and_spec(mss, monkeypatch):
+    """States that differ only in one coil's offset share their chain run and the other
+    coil's read-out: each coil spec is read once per run, and every record is what a state
+    read alone gives."""
+    from msens.diagnose import physics
+    from msens.diagnose.effects import get as get_effect
+
+    ctx, base, predictor, _, _ = mss
+    effect = get_effect("coil_position")
+    names = [p.name for p in effect.space(ctx, base)]
+    grid = [(a, b) for a in (-1e-3, 0.0, 1e-3) for b in (-1e-3, 0.0, 1e-3)]
+    states = [effect.apply(ctx, base, dict(zip(names, g, strict=True))) for g in grid]
+    calls = []
+    real = physics.signals
+    monkeypatch.setattr(physics, "signals", lambda *a, **k: calls.append(1) or real(*a, **k))
+    together = predictor.records(states)
+    assert len(calls) == 6  # three offsets of each of the two coils
+    alone = np.array([predictor.records([s])[0] for s in states[::4]])
+    np.testing.assert_array_equal(together[::4], alone)

@@ -90,9 +90,12 @@ class Predictor:
         forces = self._simulate(order, [_read_contacts(needs[i]) for i in range(len(order))])
         dt = float(self.t[1] - self.t[0])
         out = np.empty((len(states), len(states[0].particles), self.t.size))
+        # a coil read once per chain run and spec (a coil offset moves one sensor; a record
+        # operation none): the grid of such an effect reads each coil's few specs only
+        memos: list[dict] = [{} for _ in order]
         for r, (k, s) in enumerate(zip(keys, states, strict=True)):
             force, contacts, approach = forces[unique[k]]
-            out[r] = observe_state(s, force, contacts, dt, approach)
+            out[r] = observe_state(s, force, contacts, dt, approach, memo=memos[unique[k]])
         return out
 
     def _simulate(self, states: list[ModelState], needs: list[np.ndarray] | None = None,
@@ -152,16 +155,26 @@ def _physics(state: ModelState) -> tuple:
 
 
 def observe_state(state: ModelState, force: np.ndarray, contacts: np.ndarray | None,
-                  dt: float, approach: np.ndarray | None = None) -> np.ndarray:
+                  dt: float, approach: np.ndarray | None = None, memo: dict | None = None
+                  ) -> np.ndarray:
     """Sensor records (sensors, nt) of a state from contact forces (nt, c): column j is the
     0-based contact ``contacts[j]``, or contact j if ``contacts`` is None. Bead, rod and
     four-contact MsS records are forces (N); a physics MsS record is its DAQ voltage (V),
-    driven by the contact approaches ``approach`` (nt, c; m) when given."""
+    driven by the contact approaches ``approach`` (nt, c; m) when given. ``memo``: physics
+    MsS records already read from this same chain run, by spec (read and added here)."""
     t = np.arange(force.shape[0]) * dt
     cols = None if contacts is None else np.asarray(contacts) + 1  # 1-based contact numbers
+
+    def read(ph) -> np.ndarray:
+        if memo is not None and ph in memo:
+            return memo[ph]
+        v = voltage_on(physics.signals(ph, t, force, approach=approach, columns=cols))
+        if memo is not None:
+            memo[ph] = v
+        return v
+
     out = np.array([
-        observe(kind, force, p, contacts=contacts) if ph is None else
-        voltage_on(physics.signals(ph, t, force, approach=approach, columns=cols))
+        observe(kind, force, p, contacts=contacts) if ph is None else read(ph)
         for kind, p, ph in zip(state.kinds, state.particles, _physics(state), strict=True)])
     for op in state.post:
         out = op(out, dt)

@@ -177,7 +177,9 @@ def field_draws(state: ModelState, predictor: Predictor, draws: int = BOOTSTRAP_
     base = observe_state(plain, *sims[0][:2], dt, sims[0][2])
     out = []
     for run, (force, contacts, approach) in zip(runs[1:], sims[1:], strict=True):
-        raw = observe_state(dataclasses.replace(run, post=()), force, contacts, dt, approach)
+        # the other sensors' records (the physics MsS's rows are read below, drawn)
+        raw = observe_state(dataclasses.replace(run, post=(), physics=()), force, contacts, dt,
+                            approach)
         cols = None if contacts is None else np.asarray(contacts) + 1
         for j, spec in enumerate(phys):
             if spec is None:

@@ -76,5 +76,9 @@ def diagnose_hidden(study_path, tmp_path, effect: str, seed: int = 3) -> dict:
     return first
 
 
+@pytest.mark.slow
 def test_diagnose_names_a_hidden_cable_on_mss_data(tmp_path):
+    """A whole diagnosis (~70 s on 2 cores): in the slow group, which also runs it on the
+    eddy-current study (tests/verification/test_eddy_roundtrip.py); the default suite keeps
+    the undisturbed round trip."""
     diagnose_hidden(default_study_path(), tmp_path, "cable_capacitance")

@@ -12,8 +12,14 @@ Prints JSON: per change the read run's wall time, and per coil the peak DAQ volt
 time, the peak EMF, R, L and the resonance of both, with the relative differences. The
 committed field model (``meshes/``) serves both; only the user caches differ.
 
+With ``--eddy`` the main study runs with eddy currents (``[field] eddy_currents = true``): the
+changed coils' frequency responses are read from the solved eddy-current model's harmonic
+tables (:mod:`msens.magnetics.eddy_coil_read`; the first change of each coil builds them),
+the rebuild solves the changed geometry's own eddy-current model too.
+
     python benchmarks/coil_read.py                 # five changes (about half an hour)
     python benchmarks/coil_read.py --changes turns # one
+    python benchmarks/coil_read.py --eddy --changes turns,axial_offset
 """
 
 from __future__ import annotations
@@ -39,8 +45,9 @@ KEYS = ("peak_voltage_V", "peak_voltage_time_us", "peak_emf_V", "resistance_ohm"
         "inductance_H", "resonance_Hz")
 
 
-def _run(cache: Path, out: Path, sets: dict[str, str]) -> tuple[float, list[dict]]:
-    args = [sys.executable, "-m", "msens", "run", "paper-mss", "--out", str(out), "-q",
+def _run(cache: Path, out: Path, sets: dict[str, str], study: str = "paper-mss"
+         ) -> tuple[float, list[dict]]:
+    args = [sys.executable, "-m", "msens", "run", study, "--out", str(out), "-q",
             "--no-figures"]
     for k, v in sets.items():
         for i in (1, 2):
@@ -57,21 +64,31 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--changes", default=",".join(CHANGES),
                     help=f"comma-separated subset of {', '.join(CHANGES)}")
+    ap.add_argument("--eddy", action="store_true",
+                    help="the main study with eddy currents ([field] eddy_currents = true)")
     args = ap.parse_args(argv)
     names = [n for n in args.changes.split(",") if n]
     unknown = sorted(set(names) - set(CHANGES))
     if unknown:
         ap.error(f"unknown changes {unknown}; allowed: {', '.join(CHANGES)}")
-    report = {"study": "paper-mss", "changes": {}}
+    report = {"study": "paper-mss", "eddy_currents": args.eddy, "changes": {}}
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
+        study = "paper-mss"
+        if args.eddy:
+            from msens.config.study import default_study_path
+
+            path = tmp / "paper-mss-eddy.toml"
+            path.write_text(default_study_path().read_text().replace(
+                "[field]", "[field]\neddy_currents = true", 1))
+            study = str(path)
         warm = tmp / "warm-cache"
-        default_s, _ = _run(warm, tmp / "default", {})
+        default_s, _ = _run(warm, tmp / "default", {}, study)
         report["default_run_s"] = round(default_s, 2)
         for name in names:
             sets = CHANGES[name]
-            read_s, read = _run(warm, tmp / f"read-{name}", sets)
-            rebuild_s, full = _run(tmp / f"cold-{name}", tmp / f"full-{name}", sets)
+            read_s, read = _run(warm, tmp / f"read-{name}", sets, study)
+            rebuild_s, full = _run(tmp / f"cold-{name}", tmp / f"full-{name}", sets, study)
             coils = []
             for a, b in zip(read, full, strict=True):
                 coils.append({"particle": a["particle"], "read": a, "rebuild": b,

@@ -41,13 +41,11 @@ def test_the_solved_coil_read_from_its_tables_is_its_transducer(stores, tmp_path
     assert [p.name.split("-")[1] for p in warm.directory.glob("coil-*")] == ["model"]
     # the same geometry is read from the transducer artifact, not the tables
     assert transducer_report(g, options=COARSE, store=warm).read_from is None
-    from msens.magnetics.coil_read import coil_free_key, read_coil, read_model, read_tables
+    from msens.magnetics.coil_read import read_coil, read_model, read_tables
     from msens.magnetics.steel_law import law_for_steel
-    from msens.magnetics.transducer_cache import _free_payload
-    from msens.params.materials import BEAD_STEEL
+    from msens.magnetics.transducer_cache import free_key
 
-    free = coil_free_key(_free_payload(COARSE, g.beads.contact_load, law_for_steel(g.steel),
-                                       BEAD_STEEL, True, g), g)
+    free = free_key(g, COARSE)
     coils, inductance = read_model(warm, free)
     tables = read_tables(warm, free, coils, inductance, [13])
     assert 13 not in tables.tables  # no coil has changed yet: nothing built

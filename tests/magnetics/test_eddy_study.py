@@ -262,3 +262,33 @@ def test_summary_says_what_rests_on_the_equivalent_magnet(eddy_runs):
     assert beads.shape == full.shape == (3, 2) and np.all(beads >= full)
     share = np.asarray(split["magnet_share_of_screening"])
     assert np.all((share >= 0) & (share <= 1))
+
+
+
+CHANGED = TINY.replace('model = "physics"', 'model = "physics"\n[sensor.coil]\nturns = 900\n'
+                       'length_m = 8e-3\n') + EDDY
+
+
+def _changed_run(tmp_path):
+    path = tmp_path / "changed.toml"
+    path.write_text(CHANGED)
+    return api.run(api.load(path))
+
+
+def test_a_changed_coil_with_eddy_currents_is_read_not_rebuilt(eddy_runs, monkeypatch,
+                                                               tmp_path, caplog):
+    """``msens run`` of the eddy-current study with its coil changed, after the default run:
+    the coil's response is read from the solved model's harmonic tables
+    (msens.magnetics.eddy_coil_read), nothing is meshed. Against a rebuild:
+    tests/verification/test_eddy_coil_change.py (slow)."""
+    tmp, _, result, _ = eddy_runs
+    monkeypatch.setenv("MSENS_MESH_DIR", str(tmp / "cache"))
+    meshes = sorted((tmp / "cache").glob("sensor-*.msh"))
+    with caplog.at_level("INFO"):
+        read = _changed_run(tmp_path)
+    assert "read from the model of the solved coils" in caplog.text
+    assert sorted((tmp / "cache").glob("sensor-*.msh")) == meshes
+    coil, solved = (api.physics_summary(r)["coils"][0] for r in (read, result))
+    assert coil["resistance_ohm"] != solved["resistance_ohm"]
+    assert coil["frequency_response"]["resistance_ohm"][0] == coil["resistance_ohm"]
+    assert "screening_by_part" not in coil["frequency_response"]

@@ -54,7 +54,7 @@ from msens.magnetics.coil_read import (
     inductance_grid,
     scaled_inductance,
 )
-from msens.magnetics.dynamic import dynamic_report, eddy_bias_solution
+from msens.magnetics.dynamic import dynamic_report, eddy_sources
 from msens.magnetics.emf import ContactRates
 from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables
 from msens.magnetics.mechanisms import contact_profiles, mechanism_potentials
@@ -158,9 +158,7 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
     eddy = eddy_settings(study)
     response = dynamic_report(geometry, options=eddy.options,
                               steel=eddy.steel).responses[particle]
-    sol = eddy_bias_solution(geometry, eddy.options)
-    model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
-                                 law=law_for_steel(geometry.steel))
+    model = eddy_sources(geometry, eddy.options)
     harmonic = harmonic_tables(model, geometry, response.frequencies, r_rng, z_rng,
                                TABLE_SPACING, steel=eddy.steel)
     static = LinkageTable(harmonic.r, harmonic.z, harmonic.cumulative[0].real)

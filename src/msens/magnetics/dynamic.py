@@ -448,19 +448,28 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, store: Store | Non
     ``start``: the geometry's bias solution on the plain mesh (``options=None``, e.g.
     :attr:`msens.magnetics.transducer.TransducerReport.bias`), where the eddy mesh's Newton
     starts; without it that solution is solved first (the same start, so the same result).
+
+    A geometry whose eddy-current model is not stored but whose sensors were solved with
+    other coils (the same everything else) reads its changed coils from that model
+    (:mod:`msens.magnetics.eddy_coil_read`) instead of solving a new one.
     """
-    from msens.magnetics.steel_law import law_for_steel
-    from msens.magnetics.transducer import cache_key
-    from msens.params.materials import BEAD_STEEL
+    from msens.magnetics import eddy_coil_read
 
     store = Store.default() if store is None else store
-    tkey = cache_key(geometry, options, stress_force=geometry.beads.contact_load,
-                     law=law_for_steel(geometry.steel), material=BEAD_STEEL, approach=True)
     grid = offset_grid(RESPONSE_OFFSET_STEP).tolist() if offsets else None
-    name = f"dynamic-{dynamic_key(tkey, frequencies, steel, magnets, grid)}.json"
+    tkey, name = report_name(geometry, options, frequencies, steel, magnets, grid)
+    free = eddy_coil_read.free_key(geometry, options, frequencies, steel, magnets, grid)
     data = None if refresh else store.read_json(name)
     if data is not None:
-        return report_from_json(data)
+        rep = report_from_json(data)
+        eddy_coil_read.record_model(store, free, geometry, rep)
+        return rep
+    if not refresh:  # the same sensors with other coils solved before: read this one
+        rep = eddy_coil_read.read_changed_coils(
+            geometry, free, store=store, options=options, frequencies=frequencies,
+            steel=steel, magnets=magnets, offsets=grid)
+        if rep is not None:
+            return rep
     freqs = [float(f) for f in frequencies]
     from msens.progress import heartbeat
 
@@ -476,8 +485,39 @@ def dynamic_report(geometry: SensorGeometry, *, options=None, store: Store | Non
                       None, i == 0) for i, c in enumerate(chunks)]  # one chunk splits
             rep = join_reports(list(mapper(_report_task, tasks)))
     rep.details["transducer_key"] = tkey
-    store.write_json(name, report_to_json(rep), optional=True)
+    if store.write_json(name, report_to_json(rep), optional=True) is not None:
+        eddy_coil_read.record_model(store, free, geometry, rep)
     return rep
+
+
+def report_name(geometry: SensorGeometry, options: MeshOptions | None,
+                frequencies: Sequence[float], steel: float,
+                magnets: Mapping[str, float] | None,
+                offsets: Sequence[float] | None) -> tuple[str, str]:
+    """The static transducer key and the artifact name (``dynamic-<key>.json``) of
+    :func:`dynamic_report`'s model of ``geometry`` (``offsets``: the profiles' offset grid,
+    m, or None)."""
+    from msens.magnetics.steel_law import law_for_steel
+    from msens.magnetics.transducer import cache_key
+    from msens.params.materials import BEAD_STEEL
+
+    tkey = cache_key(geometry, options, stress_force=geometry.beads.contact_load,
+                     law=law_for_steel(geometry.steel), material=BEAD_STEEL, approach=True)
+    return tkey, f"dynamic-{dynamic_key(tkey, frequencies, steel, magnets, offsets)}.json"
+
+
+def eddy_sources(geometry: SensorGeometry, options: MeshOptions | None, *,
+                 store: Store | None = None,
+                 start: FieldSolution | None = None) -> MechanismPotentials:
+    """The bias on the eddy-current mesh (:func:`eddy_bias_solution`) and the mechanism
+    sources :func:`dynamic_report` solves at each frequency (the static transducer's:
+    stress at the geometry's contact load, the steel's JAS law, both mechanisms)."""
+    from msens.magnetics.mechanisms import mechanism_potentials
+    from msens.magnetics.steel_law import law_for_steel
+
+    sol = eddy_bias_solution(geometry, options, store=store, start=start)
+    return mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
+                                law=law_for_steel(geometry.steel))
 
 
 def _task_map(workers: int | Callable, tasks: int) -> tuple[Callable, int]:
@@ -511,15 +551,12 @@ def eddy_bias_solution(geometry: SensorGeometry, options: MeshOptions | None, *,
 
 def _report_task(args: tuple) -> DynamicReport:
     """Mesh, bias, sources and the harmonic solves of one list of frequencies (from 0)."""
-    from msens.magnetics.mechanisms import mechanism_potentials
-    from msens.magnetics.steel_law import law_for_steel
     from msens.progress import timed
 
     geometry, options, store, freqs, steel, magnets, offsets, start, screening = args
-    with timed(_log, "eddy currents: mesh and bias solve"):
-        sol = eddy_bias_solution(geometry, options, store=store, start=start)
-    model = mechanism_potentials(sol, geometry, stress_force=geometry.beads.contact_load,
-                                 law=law_for_steel(geometry.steel))
+    with timed(_log, "eddy currents: mesh, bias solve and sources"):
+        model = eddy_sources(geometry, options, store=store, start=start)
+    sol = model.solution
     rep = frequency_responses(model, geometry, freqs, steel=steel, magnets=magnets,
                               offsets=offsets, screening=screening)
     rep.details["bias_newton_iterations"] = sol.iterations
@@ -581,10 +618,12 @@ __all__ = [
     "dynamic_key",
     "dynamic_report",
     "eddy_bias_solution",
+    "eddy_sources",
     "equivalent_magnet_elements",
     "frequency_responses",
     "join_reports",
     "report_from_json",
+    "report_name",
     "report_to_json",
     "screening_split",
     "sensor_conductivity",

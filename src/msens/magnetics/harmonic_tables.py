@@ -122,19 +122,45 @@ def harmonic_tables(model: MechanismPotentials, geometry: SensorGeometry,
     steel, magnets
         Conductivities as :func:`msens.magnetics.dynamic.frequency_responses`.
     """
+    return harmonic_tables_over(model, geometry, frequencies, [(r_range, z_range)], spacing,
+                                steel=steel, magnets=magnets)[0]
+
+
+def harmonic_tables_over(model: MechanismPotentials, geometry: SensorGeometry,
+                         frequencies: Sequence[float],
+                         ranges: Sequence[tuple[tuple[float, float], tuple[float, float]]],
+                         spacing: float, *, steel: float = SIGMA_1018,
+                         magnets: Mapping[str, float] | None = None) -> list[HarmonicTables]:
+    """:func:`harmonic_tables` over several rectangles (e.g. the windows of several coils)
+    from one factorisation and one set of source solves per frequency.
+
+    Parameters
+    ----------
+    ranges : sequence of ((float, float), (float, float))
+        (r_range, z_range) of each table, m.
+
+    Other parameters as :func:`harmonic_tables`.
+
+    Returns
+    -------
+    list of HarmonicTables
+        One per rectangle, in the order of ``ranges``.
+    """
     freqs = np.asarray([float(f) for f in frequencies])
     require(freqs.size >= 1 and freqs[0] == 0.0 and bool(np.all(np.diff(freqs) > 0)),
             f"frequencies must increase from 0 Hz, got {freqs.tolist()}")
     sol = model.solution
     op = HarmonicOperator(sol, sensor_conductivity(sol.problem.mesh, geometry, steel=steel,
                                                    magnets=magnets))
-    grid = table_grid(sol, r_range, z_range, spacing)  # one probe matrix for all frequencies
-    tables = []
+    # one probe matrix per rectangle for all frequencies
+    grids = [table_grid(sol, r_rng, z_rng, spacing) for r_rng, z_rng in ranges]
+    cumulative: list[list[np.ndarray]] = [[] for _ in grids]
     for f in freqs:
         pots = op.solve(op.factor(f), model.rhs)
-        tables.append(tabulate(grid, pots))
-    return HarmonicTables(frequencies=freqs, r=tables[0].r, z=tables[0].z,
-                          cumulative=np.stack([t.cumulative for t in tables]))
+        for acc, grid in zip(cumulative, grids, strict=True):
+            acc.append(tabulate(grid, pots).cumulative)
+    return [HarmonicTables(frequencies=freqs, r=g.r, z=g.z, cumulative=np.stack(acc))
+            for g, acc in zip(grids, cumulative, strict=True)]
 
 
-__all__ = ["HarmonicTables", "harmonic_tables"]
+__all__ = ["HarmonicTables", "harmonic_tables", "harmonic_tables_over"]

@@ -138,8 +138,8 @@ def transducer_report(geometry: SensorGeometry, *, options: MeshOptions | None =
                              refresh=refresh)
         return replace(report, transducers={p: replace(tr, approach_map=maps.get(p))
                                             for p, tr in report.transducers.items()})
-    free = coil_free_key(_free_payload(options, force, law, material, approach, geometry),
-                         geometry)
+    free = free_key(geometry, options, stress_force=force, law=law, material=material,
+                    approach=approach)
     data = None if refresh else store.read_json(name)
     if data is not None:
         _log.info("transducers %s (cached: yes)", key)
@@ -171,13 +171,18 @@ def _keep_tables(store: Store, free: str, tables: CoilTables) -> None:
         _log.warning("%s; coil tables not kept", exc)
 
 
-def _free_payload(options: MeshOptions | None, force: float, law: JilesAthertonSablik,
-                  material: ElasticMaterial, approach: bool, geometry: SensorGeometry) -> dict:
-    """What a transducer set depends on besides its coils (:func:`coil_free_key`)."""
-    return {"transducer": TRANSDUCER_VERSION, "builder": BUILDER_VERSION,
-            "options": canonical(options or MeshOptions()),
-            **model_payload(geometry, stress_force=force, law=law, material=material,
-                            approach=approach)}
+def free_key(geometry: SensorGeometry, options: MeshOptions | None = None, *,
+             stress_force: float | None = None, law: JilesAthertonSablik | None = None,
+             material: ElasticMaterial = BEAD_STEEL, approach: bool = True) -> str:
+    """The coil-free key (:func:`~msens.magnetics.coil_read.coil_free_key`) of the field model
+    that :func:`transducer_report` solves for ``geometry`` (same arguments and defaults):
+    what the transducer set depends on besides its coils."""
+    force = geometry.beads.contact_load if stress_force is None else float(stress_force)
+    law = law_for_steel(geometry.steel) if law is None else law
+    return coil_free_key({"transducer": TRANSDUCER_VERSION, "builder": BUILDER_VERSION,
+                          "options": canonical(options or MeshOptions()),
+                          **model_payload(geometry, stress_force=force, law=law,
+                                          material=material, approach=approach)}, geometry)
 
 
 def _read_coils(geometry: SensorGeometry, free: str, *, store: Store,
@@ -244,9 +249,7 @@ def solved_for(geometry: SensorGeometry, *, options: MeshOptions | None = None,
     kwargs = {"stress_force": force, "law": law, "material": material, "approach": approach}
     if store.read_json(f"transducer-{cache_key(geometry, options, **kwargs)}.json"):
         return geometry
-    free = coil_free_key(_free_payload(options, force, law, material, approach, geometry),
-                         geometry)
-    model = read_model(store, free)
+    model = read_model(store, free_key(geometry, options, **kwargs))
     if model is None:
         return geometry
     solved = solved_geometry(geometry, model[0])
@@ -264,6 +267,7 @@ def transducers_for(geometry: SensorGeometry, **kwargs) -> dict[int, Transducer]
 
 
 __all__ = [
+    "free_key",
     "solved_for",
     "transducer_report",
     "transducers_for",

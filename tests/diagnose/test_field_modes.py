@@ -11,13 +11,19 @@ from msens.config.study import default_study_path, load_study
 from msens.diagnose import physics
 from msens.diagnose.effects import Context
 from msens.diagnose.field_modes import FIELD_ACCURACY, PULL_DRAWS, field_draws, record_modes
-from msens.diagnose.objective import ModeBasis, WaveformObjective, _profiled, _profiled_many
+from msens.diagnose.objective import ModeBasis, WaveformObjective, _fit_many
 from msens.diagnose.predict import Predictor, baseline_state
 from msens.diagnose.verdict import verdict
 from msens.diagnose.where import window_residuals
 from msens.diagnose.workflow import baseline_dissipation
 from msens.pipeline import output_times
 from msens.synth import RigEffects, synthesize
+
+
+def _profiled(w, y, m, basis):
+    """One model signal's profile: (g, b, chi2, a)."""
+    g, b, chi2, a = _fit_many(w, y, m[None], basis)
+    return g[0], b[0], chi2[0], None if a is None else a[0]
 
 
 def test_profiled_modes_are_the_low_rank_covariance():
@@ -61,14 +67,27 @@ def test_profiled_in_a_batch_is_profiled_one_by_one():
     w = 1.0 / rng.uniform(0.5, 2.0, n) / 0.01**2
     y = 1.3 * shapes[3] + 0.2 + rng.normal(size=k) @ u + rng.normal(size=n) / np.sqrt(w)
     basis = ModeBasis.of(u, w, y)
-    one = np.array([_profiled(w, y, m, basis)[2] for m in ms])
-    np.testing.assert_allclose(_profiled_many(w, y, ms, basis), one, rtol=1e-9)
-    assert _profiled(w, y, ms[-1], basis)[0] == 0.0  # the refused case is exercised
+    one = [_profiled(w, y, m, basis) for m in ms]
+    g, b, chi2, a = _fit_many(w, y, ms, basis)
+    for got, want in zip((g, b, chi2, a), zip(*one, strict=True), strict=True):
+        np.testing.assert_allclose(got, np.array(want), rtol=1e-9, atol=1e-12)
+    assert g[-1] == 0.0 and g[-2] == 0.0  # the refused case is exercised
     # without modes: the weighted gain-and-offset fit
     design = [np.column_stack([m, np.ones(n)]) for m in shapes]
-    plain = [float(w @ (y - a @ np.linalg.lstsq(a * np.sqrt(w)[:, None], y * np.sqrt(w),
-                                                rcond=None)[0]) ** 2) for a in design]
-    np.testing.assert_allclose(_profiled_many(w, y, shapes, None), plain, rtol=1e-9)
+    fits = [np.linalg.lstsq(a * np.sqrt(w)[:, None], y * np.sqrt(w), rcond=None)[0]
+            for a in design]
+    plain = [float(w @ (y - a @ f) ** 2) for a, f in zip(design, fits, strict=True)]
+    g, b, chi2, a = _fit_many(w, y, shapes, None)
+    assert a is None
+    np.testing.assert_allclose(chi2, plain, rtol=1e-9)
+    np.testing.assert_allclose(g, [f[0] for f in fits], rtol=1e-9)
+    # one data set per signal (the channels of one alignment) as each alone
+    ws, ys = np.vstack([w, 2 * w]), np.vstack([y, -y + 0.1])
+    rows = _fit_many(ws, ys, shapes[:2], None)
+    for i in range(2):
+        alone = _fit_many(ws[i], ys[i], shapes[i:i + 1], None)
+        for got, want in zip(rows[:3], alone[:3], strict=True):
+            assert got[i] == pytest.approx(want[0], rel=1e-12, abs=1e-15)
 
 
 def md_particle(state, j):

@@ -267,30 +267,20 @@ class WaveformObjective:
         m = np.array([np.interp(shot.tau + delay, self.t, s, left=0.0, right=0.0)
                       for s in sig])
         # weighted least squares y ~ g m + b per channel (2x2 normal equations), g kept >= 0
-        w, y = shot.w, shot.y
-        s0 = w.sum(axis=1)
-        sm, sy = (w * m).sum(axis=1), (w * y).sum(axis=1)
-        mm = np.einsum("ij,ij,ij->i", w, m, m)
-        ym = np.einsum("ij,ij,ij->i", w, y, m)
-        yy = np.einsum("ij,ij,ij->i", w, y, y)
-        det = s0 * mm - sm**2
-        ok = det > 1e-12 * s0 * np.maximum(mm, 1e-300)
-        g = np.where(ok, (s0 * ym - sm * sy) / np.where(ok, det, 1.0), 0.0)
-        g = np.maximum(g, 0.0)
-        b = (sy - g * sm) / s0
-        chi2 = yy + g**2 * mm + s0 * b**2 - 2 * g * ym - 2 * b * sy + 2 * g * b * sm
+        g, b, chi2, _ = _fit_many(shot.w, shot.y, m, None)
         if shot.modes is None:
-            return Alignment(delay=delay, gains=g, offsets=b, rss=np.maximum(chi2, 0.0))
+            return Alignment(delay=delay, gains=g, offsets=b, rss=chi2)
         amps, shifts = [], []
         for j, u in enumerate(shot.modes):
             if u is None:
                 amps.append(None)
                 shifts.append(None)
                 continue
-            g[j], b[j], chi2[j], a = _profiled(w[j], y[j], m[j], u)
-            amps.append(a)
-            shifts.append(a @ u.u)
-        return Alignment(delay=delay, gains=g, offsets=b, rss=np.maximum(chi2, 0.0),
+            gj, bj, cj, a = _fit_many(shot.w[j], shot.y[j], m[j][None], u)
+            g[j], b[j], chi2[j] = gj[0], bj[0], cj[0]
+            amps.append(a[0])
+            shifts.append(a[0] @ u.u)
+        return Alignment(delay=delay, gains=g, offsets=b, rss=chi2,
                          amplitudes=tuple(amps), shifts=tuple(shifts))
 
     def _chi2_at(self, shot: Shot, sig: np.ndarray, delays: np.ndarray) -> np.ndarray:
@@ -301,7 +291,7 @@ class WaveformObjective:
         for j, s in enumerate(sig):
             m = np.interp(x, self.t, s, left=0.0, right=0.0)
             basis = None if shot.modes is None else shot.modes[j]
-            total += _profiled_many(shot.w[j], shot.y[j], m, basis)
+            total += _fit_many(shot.w[j], shot.y[j], m, basis)[2]
         return total
 
     def align(self, shot: Shot, sig: np.ndarray) -> Alignment:
@@ -409,71 +399,39 @@ class ModeBasis:
                    uy=uw @ y)
 
 
-def _profiled(w: np.ndarray, y: np.ndarray, m: np.ndarray, basis: ModeBasis
-              ) -> tuple[float, float, float, np.ndarray]:
-    """One channel's gain g >= 0, offset b and mode amplitudes a minimising
-    ``sum w (y - g m - b - a @ u)^2 + |a|^2`` (the modes' unit Gaussian prior), and that
-    minimum: the chi^2 of the residual against the covariance ``diag(1/w) + u^T u``
-    (Woodbury), with gain and offset profiled.
+def _fit_many(w: np.ndarray, y: np.ndarray, m: np.ndarray, basis: ModeBasis | None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """Gain g >= 0, offset b and mode amplitudes a minimising, for each of L model signals
+    at once, ``sum w (y - g m - b - a @ u)^2 + |a|^2`` (the modes' unit Gaussian prior), and
+    that minimum: the chi^2 of the residual against the covariance ``diag(1/w) + u^T u``
+    (Woodbury), with gain and offset profiled. Without ``basis``, the weighted least-squares
+    fit ``y ~ g m + b`` alone (2x2 normal equations).
 
     Parameters
     ----------
-    w, y, m : ndarray, shape (n,)
-        Inverse variances (1/V^2), data (V) and model signal on the data's samples.
-    basis : ModeBasis
+    w, y : ndarray, shape (n,), or (L, n) without ``basis``
+        Inverse variances (1/V^2) and data (V): one channel's, or one per signal.
+    m : ndarray, shape (L, n)
+        Model signals on the data's samples, V.
+    basis : ModeBasis or None
         The channel's modes and their products with ``w`` and ``y``.
 
     Returns
     -------
-    (g, b, chi2, a) with a of shape (k,)
-    """
-    k = basis.u.shape[0]
-    h = np.empty((k + 2, k + 2))
-    um = basis.uw @ m
-    wm = w * m
-    h[0, 0], h[0, 1], h[1, 1] = wm @ m, wm.sum(), w.sum()
-    h[1, 0] = h[0, 1]
-    h[0, 2:] = h[2:, 0] = um
-    h[1, 2:] = h[2:, 1] = basis.u1
-    h[2:, 2:] = basis.gram
-    rhs = np.concatenate([[wm @ y, w @ y], basis.uy])
-    yy = float(w @ (y * y))
-    theta = np.linalg.solve(h, rhs)
-    if theta[0] < 0.0:  # the gain kept >= 0: refit without the model column
-        theta = np.concatenate([[0.0], np.linalg.solve(h[1:, 1:], rhs[1:])])
-    chi2 = yy - float(theta @ rhs)
-    return float(theta[0]), float(theta[1]), max(chi2, 0.0), theta[2:]
-
-
-def _profiled_many(w: np.ndarray, y: np.ndarray, m: np.ndarray, basis: ModeBasis | None
-                   ) -> np.ndarray:
-    """The minimum of :func:`_profiled` (or, without ``basis``, of the gain-and-offset fit
-    alone) for each of L model signals at once.
-
-    Parameters
-    ----------
-    w, y : ndarray, shape (n,)
-        Inverse variances (1/V^2) and data (V).
-    m : ndarray, shape (L, n)
-        Model signals on the data's samples, V.
-    basis : ModeBasis or None
-
-    Returns
-    -------
-    ndarray, shape (L,)
-        chi^2 of each.
+    g, b, chi2 : ndarray, shape (L,)
+    a : ndarray, shape (L, k), or None without ``basis``
     """
     wm = m * w
     mm = np.einsum("ln,ln->l", wm, m)
-    s1, my = wm.sum(axis=1), wm @ y
-    s0, sy, yy = float(w.sum()), float(w @ y), float(w @ (y * y))
+    s1, my = wm.sum(axis=-1), (wm * y).sum(axis=-1)
+    s0, sy, yy = w.sum(axis=-1), (w * y).sum(axis=-1), (w * y * y).sum(axis=-1)
     if basis is None:
         det = s0 * mm - s1**2
         ok = det > 1e-12 * s0 * np.maximum(mm, 1e-300)
         g = np.maximum(np.where(ok, (s0 * my - s1 * sy) / np.where(ok, det, 1.0), 0.0), 0.0)
         b = (sy - g * s1) / s0
         chi2 = yy + g**2 * mm + s0 * b**2 - 2 * g * my - 2 * b * sy + 2 * g * b * s1
-        return np.maximum(chi2, 0.0)
+        return g, b, np.maximum(chi2, 0.0), None
     k = basis.u.shape[0]
     h = np.empty((m.shape[0], k + 2, k + 2))
     um = m @ basis.uw.T
@@ -484,11 +442,12 @@ def _profiled_many(w: np.ndarray, y: np.ndarray, m: np.ndarray, basis: ModeBasis
     rhs = np.empty((m.shape[0], k + 2))
     rhs[:, 0], rhs[:, 1], rhs[:, 2:] = my, sy, basis.uy
     theta = np.linalg.solve(h, rhs[..., None])[..., 0]
-    chi2 = yy - np.einsum("lk,lk->l", theta, rhs)
     neg = theta[:, 0] < 0.0
     if neg.any():  # the gain kept >= 0: without the model column (the same for every row)
-        chi2[neg] = yy - float(np.linalg.solve(h[0, 1:, 1:], rhs[0, 1:]) @ rhs[0, 1:])
-    return np.maximum(chi2, 0.0)
+        theta[neg, 0] = 0.0
+        theta[neg, 1:] = np.linalg.solve(h[0, 1:, 1:], rhs[0, 1:])
+    chi2 = yy - np.einsum("lk,lk->l", theta, rhs)
+    return theta[:, 0], theta[:, 1], np.maximum(chi2, 0.0), theta[:, 2:]
 
 
 class FeatureObjective:

@@ -293,24 +293,31 @@ class ContactMap:
     def _air_pchip(self) -> PchipInterpolator:
         return PchipInterpolator(np.asarray(self.air_gap), np.asarray(self.air_flux))
 
+    @cached_property
+    def _end_slopes(self) -> tuple[float, float, float]:
+        """The branches' slopes where they are extrapolated linearly: the closed branch's
+        at its first and last node, the open branch's at its largest gap."""
+        x, g = np.asarray(self.steel_delta), np.asarray(self.air_gap)
+        return (float(self._steel_spline(x[0], 1)), float(self._steel_spline(x[-1], 1)),
+                float(self._air_pchip(g[-1], 1)))
+
     def steel(self, delta: np.ndarray) -> np.ndarray:
         """Closed branch, Wb (cubic spline; linear extrapolation beyond the table)."""
         x = np.asarray(self.steel_delta)
-        f = self._steel_spline
         d = np.asarray(delta, dtype=float)
         lo, hi = x[0], x[-1]
-        out = f(np.clip(d, lo, hi))
-        out = np.where(d > hi, out + f(hi, 1) * (d - hi), out)
-        return np.where(d < lo, out + f(lo, 1) * (d - lo), out)
+        slope_lo, slope_hi, _ = self._end_slopes
+        out = self._steel_spline(np.clip(d, lo, hi))
+        out = np.where(d > hi, out + slope_hi * (d - hi), out)
+        return np.where(d < lo, out + slope_lo * (d - lo), out)
 
     def air(self, delta: np.ndarray) -> np.ndarray:
         """Open branch, Wb (PCHIP in the gap, exact for linear data; linear extrapolation
         beyond the largest gap, the first node's value below the smallest)."""
         x = np.asarray(self.air_gap)
-        f = self._air_pchip
         gap = np.maximum(self.delta_static - np.asarray(delta, dtype=float), float(x[0]))
-        out = f(np.minimum(gap, x[-1]))
-        return np.where(gap > x[-1], out + f(x[-1], 1) * (gap - x[-1]), out)
+        out = self._air_pchip(np.minimum(gap, x[-1]))
+        return np.where(gap > x[-1], out + self._end_slopes[2] * (gap - x[-1]), out)
 
     def __call__(self, delta: np.ndarray) -> np.ndarray:
         """Λ(δ) − Λ(δ_s), Wb, same shape as ``delta`` (m)."""

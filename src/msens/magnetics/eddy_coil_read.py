@@ -109,12 +109,8 @@ class EddyCoilTable:
     harmonic : HarmonicTables
         Over the coil's window plus the offset span (:func:`~msens.magnetics.coil_read.
         table_ranges`), at the model's frequencies.
-    particles : ndarray of int, shape (n_b,)
-        Beads with a Villari source.
-    approach_contacts : ndarray of int, shape (n_a,)
-        Contacts with an approach source.
-    count : int
-        Particles in the chain.
+    particles, approach_contacts, count
+        The sources' layout, as :class:`~msens.magnetics.coil_read.CoilTables` has it.
     """
 
     harmonic: HarmonicTables

@@ -126,6 +126,8 @@ def contact_columns(force: np.ndarray, contacts: np.ndarray,
     columns = np.asarray(columns, dtype=int)
     k = np.clip(np.searchsorted(columns, contacts), 0, max(columns.size - 1, 0))
     use = (columns.size > 0) & (columns[k] == contacts)
+    if use.all() and k.size and k[-1] - k[0] == k.size - 1 and np.all(np.diff(k) == 1):
+        return f[:, k[0]:k[-1] + 1].copy()  # consecutive columns: a slice, no gather
     out = np.zeros((f.shape[0], contacts.size))
     out[:, use] = f[:, k[use]]
     return out
@@ -174,8 +176,12 @@ def contact_rates(t: np.ndarray, force: np.ndarray, contacts: np.ndarray,
         contact_columns(approach, contacts, columns)
     if equivalent is not None:
         delta = equivalent(delta)
-    return ContactRates(t=t, force=np.gradient(fc, t, axis=0),
-                        approach=np.gradient(delta, t, axis=0))
+    step = t[1] - t[0]
+    # uniform sampling (the chain's output): numpy's scalar-spacing form, the same second-
+    # order differences without per-sample spacing coefficients
+    spacing = step if np.allclose(np.diff(t), step, rtol=1e-9, atol=0.0) else t
+    return ContactRates(t=t, force=np.gradient(fc, spacing, axis=0),
+                        approach=np.gradient(delta, spacing, axis=0))
 
 
 def emf_from_rates(rates: ContactRates, sensitivity_villari: np.ndarray,

@@ -30,7 +30,7 @@ from msens.config.study import load_study
 from msens.design.coil_sweep import build_context, evaluate
 from msens.design.sweep import design_geometry, parse_sweep
 from msens.errors import InputError
-from msens.magnetics.dynamic import dynamic_report
+from msens.magnetics.dynamic_cache import dynamic_report
 from msens.magnetics.transducer import compute_transducers
 from msens.store import Store
 

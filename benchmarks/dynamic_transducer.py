@@ -27,7 +27,7 @@ import numpy as np
 
 from msens.config.fieldsetup import eddy_settings, geometry_from_study
 from msens.config.study import load_study
-from msens.magnetics.dynamic import dynamic_report
+from msens.magnetics.dynamic_cache import dynamic_report
 from msens.readout.electronics import coil_transfer_function, transfer_function
 from msens.readout.mss import readout
 from msens.store import Store

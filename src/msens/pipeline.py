@@ -206,12 +206,13 @@ def setup_responses(study: Study, setup: SetupSpec, *,
     """Eddy-current frequency responses of a setup's physics MsS coils (cached on disk), or
     None unless the study asks for eddy currents (``[field] eddy_currents = true``).
     ``workers`` (an int or a map-like, e.g. :class:`msens.parallel.TaskMap` on a Dask
-    cluster): where the frequency solves run (:func:`msens.magnetics.dynamic.dynamic_report`)."""
+    cluster): where the frequency solves run
+    (:func:`msens.magnetics.dynamic_cache.dynamic_report`)."""
     if not study.field.eddy_currents or not any(s.model is MssModel.PHYSICS
                                                 for s in setup.sensors):
         return None
     from msens.config.fieldsetup import eddy_settings, geometry_from_study
-    from msens.magnetics.dynamic import dynamic_report
+    from msens.magnetics.dynamic_cache import dynamic_report
 
     eddy = eddy_settings(study)
     _log.info("setup %s: eddy-current frequency responses (steel %.3g MS/m)", setup.name,

@@ -21,13 +21,13 @@ from msens.field.sensor_model import bias_problem, coil_resistance, load_mesh
 from msens.field.solve import solve
 from msens.magnetics.approach import hertz_stiffness
 from msens.magnetics.dynamic import (
-    dynamic_report,
     frequency_responses,
     join_reports,
     report_from_json,
     report_to_json,
     sensor_conductivity,
 )
+from msens.magnetics.dynamic_cache import dynamic_report
 from msens.magnetics.mechanisms import adjoint_check, coil_linkage, mechanism_potentials
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import Transducer, bias_solution

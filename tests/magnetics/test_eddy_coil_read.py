@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from msens.field.sensor_model import coil_resistance
-from msens.magnetics.dynamic import RESPONSE_OFFSET_STEP, dynamic_report
+from msens.magnetics.dynamic import RESPONSE_OFFSET_STEP
+from msens.magnetics.dynamic_cache import dynamic_report
 from msens.magnetics.eddy_coil_read import free_key, read_response, read_table
 from msens.magnetics.mechanisms import offset_grid
 from msens.magnetics.transducer_cache import transducer_report

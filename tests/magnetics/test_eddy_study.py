@@ -188,7 +188,7 @@ def test_moved_coil_response_equals_the_moved_coils_own_model(eddy_runs):
     from dataclasses import replace
 
     from msens.config.fieldsetup import eddy_settings, geometry_from_study
-    from msens.magnetics.dynamic import dynamic_report
+    from msens.magnetics.dynamic_cache import dynamic_report
 
     tmp, study, _, _ = eddy_runs
     g, e = geometry_from_study(study), eddy_settings(study)

@@ -81,7 +81,7 @@ def test_remanence_family_between_nodes_matches_a_direct_solve(dirs):
 def test_remanence_responses_between_nodes_match_a_direct_eddy_solve(dirs):
     """The eddy-current responses over the remanence factors (what a diagnosis of an eddy
     study reads for magnet_remanence) against a direct eddy-current model between nodes."""
-    from msens.magnetics.dynamic import dynamic_report
+    from msens.magnetics.dynamic_cache import dynamic_report
     from msens.magnetics.variants import remanence_responses
 
     kw = {**dirs, "frequencies": (0.0, 1e4, 3e4, 1e5)}

@@ -54,7 +54,8 @@ from msens.magnetics.coil_read import (
     inductance_grid,
     scaled_inductance,
 )
-from msens.magnetics.dynamic import dynamic_report, eddy_sources
+from msens.magnetics.dynamic import eddy_sources
+from msens.magnetics.dynamic_cache import dynamic_report
 from msens.magnetics.emf import ContactRates
 from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables
 from msens.magnetics.mechanisms import contact_profiles, mechanism_potentials

@@ -11,7 +11,7 @@ contacts in its own bias field (:func:`msens.magnetics.contact_map.approach_maps
 12 s per contact on a core, cached as ``msens run`` caches them): a magnet changes their
 shape. With eddy
 currents each design also gets its own eddy-current model
-(:func:`msens.magnetics.dynamic.dynamic_report` with the run's mesh options and conductivity,
+(:func:`msens.magnetics.dynamic_cache.dynamic_report` with the run's mesh options and conductivity,
 cached beside the meshes) and its row is the frequency-domain read-out of
 :func:`msens.design.metrics.dynamic_design_rows`.
 
@@ -39,7 +39,7 @@ from msens.config.study import Study
 from msens.design.metrics import design_rows, dynamic_design_rows
 from msens.design.physics import study_wave
 from msens.field.geometry import SensorGeometry
-from msens.magnetics.dynamic import dynamic_report
+from msens.magnetics.dynamic_cache import dynamic_report
 from msens.magnetics.transducer import compute_transducers
 from msens.magnetics.transducer_cache import transducer_report
 from msens.store import Store

@@ -19,7 +19,7 @@ from msens.config.fieldsetup import EddySettings
 from msens.errors import internal
 from msens.field.geometry import SensorGeometry
 from msens.field.parts import Coil
-from msens.magnetics.dynamic import dynamic_report
+from msens.magnetics.dynamic_cache import dynamic_report
 from msens.magnetics.frequency_response import FrequencyResponse
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import Transducer, cache_key

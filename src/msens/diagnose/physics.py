@@ -8,7 +8,7 @@ module turns a ``PhysicsMss`` into the :class:`~msens.readout.mss.MssSensor` who
 voltage is the sensor's record — the same functions ``msens run`` uses, so an undisturbed
 diagnosis reproduces the run exactly. With eddy currents (``[field] eddy_currents = true``)
 a model also holds each coil's frequency response (the run's
-:func:`msens.magnetics.dynamic.dynamic_report`) and :func:`signals` is the frequency-domain
+:func:`msens.magnetics.dynamic_cache.dynamic_report`) and :func:`signals` is the frequency-domain
 read-out of :func:`msens.readout.mss.mss_signals`; the effects that need
 field-model variants (coil offset, magnet remanence) are then not searched.
 """

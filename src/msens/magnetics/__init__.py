@@ -13,7 +13,10 @@
   :mod:`.coil_read` — a changed coil read from another coil's field model (tables of the
   coil's window); :mod:`.variants` — transducers as a function of the magnets' remanence.
 - :mod:`.dynamic`, :mod:`.frequency_response`, :mod:`.eddy_readout` — eddy currents:
-  sensitivities and impedance per frequency, and the EMF spectra through them.
+  sensitivities and impedance per frequency, and the EMF spectra through them;
+  :mod:`.dynamic_cache` — their stored models; :mod:`.eddy_coil_read` — a changed coil
+  read from another coil's eddy-current model; :mod:`.harmonic_tables` — the sources'
+  harmonic potentials tabulated over a coil window.
 - :mod:`.emf` — a transducer's EMF from the chain's contact states and its parts (rigid
   translation, open contacts). The physics MsS's read-out, EMF to DAQ record, is
   :mod:`msens.readout.mss`.
@@ -32,7 +35,8 @@ _HOMES = {
     "coil_read": ("CoilTables", "InductanceGrid", "coil_window", "scaled_inductance"),
     "variants": ("RemanenceFamily", "remanence_family"),
     "emf": ("open_contact_emf", "rigid_translation_emf"),
-    "dynamic": ("DynamicReport", "dynamic_report", "frequency_responses"),
+    "dynamic": ("DynamicReport", "frequency_responses"),
+    "dynamic_cache": ("dynamic_report",),
     "frequency_response": ("FrequencyResponse", "coil_impedance"),
     "eddy_readout": ("emf_spectra", "mechanism_emfs"),
     "magnetoelastic": ("PiezomagneticCoefficient", "anhysteretic_magnetisation",

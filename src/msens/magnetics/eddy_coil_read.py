@@ -4,7 +4,7 @@ The eddy currents flow in the steel (beads, pole pieces) and the magnets, never 
 winding: a pick-up coil is copper in air that carries no current while it reads. Changing it
 changes neither the bias state nor the harmonic potentials a_s(ω) of the Villari and
 contact-approach sources, only which part of them the winding links — the eddy-current
-counterpart of :mod:`msens.magnetics.coil_read`. So :func:`msens.magnetics.dynamic.
+counterpart of :mod:`msens.magnetics.coil_read`. So :func:`msens.magnetics.dynamic_cache.
 dynamic_report` keys its model also on everything but the coils (:func:`free_key`) and serves
 a geometry that differs from a solved one only in its coils from two artifacts:
 
@@ -55,9 +55,18 @@ from msens.magnetics.coil_read import (
     table_ranges,
     write_model,
 )
+from msens.magnetics.dynamic import (
+    DynamicReport,
+    dynamic_key,
+    eddy_sources,
+    report_from_json,
+    report_name,
+)
 from msens.magnetics.frequency_response import FrequencyResponse
-from msens.magnetics.harmonic_tables import HarmonicTables
+from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables_over
 from msens.magnetics.mechanisms import contact_profiles
+from msens.magnetics.transducer_cache import free_key as static_free_key
+from msens.magnetics.transducer_cache import transducer_report
 from msens.params.units import TWO_PI
 from msens.readout.coil import Coil
 from msens.store import Store
@@ -76,12 +85,10 @@ SPACING = 0.2e-3
 def free_key(geometry: SensorGeometry, options: MeshOptions | None,
              frequencies: Sequence[float], steel: float,
              magnets: Mapping[str, float] | None, offsets: Sequence[float] | None) -> str:
-    """The key of :func:`msens.magnetics.dynamic.dynamic_report`'s model of ``geometry``
+    """The key of :func:`msens.magnetics.dynamic_cache.dynamic_report`'s model of ``geometry``
     with the coils left out (the static field model's coil-free key,
     :func:`msens.magnetics.transducer_cache.free_key`, with the frequencies, conductivities
     and offset grid)."""
-    from msens.magnetics.dynamic import dynamic_key
-    from msens.magnetics.transducer_cache import free_key as static_free_key
 
     return dynamic_key(static_free_key(geometry, options), frequencies, steel, magnets, offsets)
 
@@ -173,8 +180,6 @@ def build_tables(solved: SensorGeometry, particles: Sequence[int], *,
     eddy-current model was solved with): its eddy mesh's bias solve and sources
     (:func:`msens.magnetics.dynamic.eddy_sources`), every source solved once per frequency
     for all the coils (:func:`msens.magnetics.harmonic_tables.harmonic_tables_over`)."""
-    from msens.magnetics.dynamic import eddy_sources
-    from msens.magnetics.harmonic_tables import harmonic_tables_over
 
     units = [u for u in solved.sensors if u.coil.particle in {int(p) for p in particles}]
     model = eddy_sources(solved, options, store=store)
@@ -253,8 +258,6 @@ def read_changed_coils(geometry: SensorGeometry, key: str, *, store: Store,
     -------
     DynamicReport or None
     """
-    from msens.magnetics.dynamic import DynamicReport, report_from_json, report_name
-    from msens.magnetics.transducer_cache import transducer_report
     from msens.progress import heartbeat
 
     model = read_model(store, key)

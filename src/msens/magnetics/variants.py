@@ -10,9 +10,9 @@ evaluates any factor in microseconds. The interpolation error against a direct s
 checked in ``tests/magnetics/test_variants.py``.
 
 With eddy currents the coils' frequency responses change with the bias state too:
-:class:`RemanenceResponses` solves the eddy-current model (:func:`msens.magnetics.dynamic.
-dynamic_report`) at the same factors and interpolates S_c(ω), D_c(ω), Z(ω) and the static
-inductance the same way (real and imaginary parts, frequency by frequency).
+:class:`RemanenceResponses` solves the eddy-current model (:func:`msens.magnetics.
+dynamic_cache.dynamic_report`) at the same factors and interpolates S_c(ω), D_c(ω), Z(ω)
+and the static inductance the same way (real and imaginary parts, frequency by frequency).
 """
 
 from __future__ import annotations
@@ -119,10 +119,10 @@ def remanence_responses(geometry: SensorGeometry, nodes: tuple[float, ...] = NOD
                         **kwargs) -> RemanenceResponses:
     """Solve (or read from the store) the eddy-current model at each remanence factor.
 
-    Keyword arguments go to :func:`msens.magnetics.dynamic.dynamic_report` (``options``,
+    Keyword arguments go to :func:`msens.magnetics.dynamic_cache.dynamic_report` (``options``,
     ``steel``, ``store``...; no offsets).
     """
-    from msens.magnetics.dynamic import dynamic_report
+    from msens.magnetics.dynamic_cache import dynamic_report
 
     internal(all(a < b for a, b in pairwise(nodes)) and len(nodes) >= 2,
              "internal: remanence nodes must increase")

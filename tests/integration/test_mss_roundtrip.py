@@ -47,7 +47,12 @@ def test_compare_recovers_the_model_on_its_own_mss_data(data, tmp_path):
         assert m["correlation"]["mean"] >= 0.99
 
 
+@pytest.mark.slow
 def test_diagnose_finds_nothing_missing_in_undisturbed_mss_data(data, tmp_path):
+    """Slow group (~90 s, the whole library searched on the main study: the default suite
+    ran over its 10 min). The default suite keeps diagnose's `none` on bead data
+    (tests/diagnose); on physics-MsS data it is checked here and on the eddy-current main
+    study (tests/verification/test_eddy_roundtrip.py), both in the slow group."""
     out = tmp_path / "diag"
     assert main(["diagnose", str(data), "--study", STUDY, "--out", str(out)]) == 0
     report = json.loads((out / "diagnosis.json").read_text())

@@ -11,7 +11,7 @@ import pytest
 from msens.field.sensor_model import coil_resistance
 from msens.magnetics.dynamic import RESPONSE_OFFSET_STEP
 from msens.magnetics.dynamic_cache import dynamic_report
-from msens.magnetics.eddy_coil_read import free_key, read_response, read_table
+from msens.magnetics.eddy_coil_read import free_key, read_response, read_table, tables_key
 from msens.magnetics.mechanisms import offset_grid
 from msens.magnetics.transducer_cache import transducer_report
 from msens.params.materials import SIGMA_1018
@@ -116,9 +116,13 @@ def test_the_solved_coil_is_read_exactly_and_the_same_coil_from_its_model(warm, 
     np.testing.assert_allclose(changed.inductance, reference.responses[13].inductance * ratio,
                                rtol=1e-12)
     assert ratio != 1.0 and changed.screening is None
-    key = free_key(g, EDDY, FREQS, SIGMA_1018, None, None)  # tables: no offset grid
-    assert key != free_key(g, EDDY, FREQS, SIGMA_1018, None,
-                           offset_grid(RESPONSE_OFFSET_STEP).tolist())
+    coils = {13: g.sensors[0].coil}
+    key = tables_key(g, coils, EDDY, FREQS, SIGMA_1018, None)  # no offset grid in it
+    assert free_key(g, EDDY, FREQS, SIGMA_1018, None, None) != free_key(
+        g, EDDY, FREQS, SIGMA_1018, None, offset_grid(RESPONSE_OFFSET_STEP).tolist())
+    # tables of a model solved with another coil are other tables (another mesh)
+    assert key != tables_key(g, {13: with_coil(g, turns=900).sensors[0].coil}, EDDY, FREQS,
+                             SIGMA_1018, None)
     table = read_table(store, key, 13)
     assert table is not None
     coil = g.sensors[0].coil

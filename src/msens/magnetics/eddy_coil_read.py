@@ -49,6 +49,7 @@ from msens.field.parts import SensorUnit
 from msens.field.sensor_model import coil_resistance
 from msens.magnetics.coil_read import (
     COIL_TABLE_VERSION,
+    coil_record,
     fits,
     read_model,
     solved_geometry,
@@ -69,7 +70,7 @@ from msens.magnetics.transducer_cache import free_key as static_free_key
 from msens.magnetics.transducer_cache import transducer_report
 from msens.params.units import TWO_PI
 from msens.readout.coil import Coil
-from msens.store import Store
+from msens.store import Store, content_key
 
 _log = logging.getLogger(__name__)
 
@@ -91,6 +92,19 @@ def free_key(geometry: SensorGeometry, options: MeshOptions | None,
     and offset grid)."""
 
     return dynamic_key(static_free_key(geometry, options), frequencies, steel, magnets, offsets)
+
+
+def tables_key(geometry: SensorGeometry, solved: Mapping[int, Coil],
+               options: MeshOptions | None, frequencies: Sequence[float], steel: float,
+               magnets: Mapping[str, float] | None) -> str:
+    """The key of the harmonic tables of the model solved with coils ``solved`` (by
+    particle): :func:`free_key` without the offset grid (the tables do not depend on it, so
+    the models with and without offset profiles — run's and diagnose's — share them) and the
+    solved coils (the mesh the tables come from is graded around them)."""
+    return content_key({"version": EDDY_TABLE_VERSION,
+                        "model": free_key(geometry, options, frequencies, steel, magnets, None),
+                        "solved": {str(p): coil_record(c) for p, c in sorted(solved.items())}},
+                       16)
 
 
 def record_model(store: Store, key: str, geometry: SensorGeometry, report) -> None:
@@ -250,9 +264,7 @@ def read_changed_coils(geometry: SensorGeometry, key: str, *, store: Store,
                        offsets: Sequence[float] | None):
     """The eddy-current model of ``geometry`` read from the stored model of the same sensors
     with other coils (coil-free ``key``, :func:`free_key`), or None when there is none, its
-    report is gone or a coil lies outside its tables. The tables are keyed without the offset
-    grid (``free_key(..., offsets=None)``), so the models with and without offset profiles
-    share them.
+    report is gone or a coil lies outside its tables (keyed by :func:`tables_key`).
 
     Returns
     -------
@@ -280,9 +292,7 @@ def read_changed_coils(geometry: SensorGeometry, key: str, *, store: Store,
     changed = [u.coil.particle for u in geometry.sensors if u.coil != coils[u.coil.particle]]
     if not changed:
         return reference
-    # the tables do not depend on the offset profiles: one set serves the models with and
-    # without them (run and diagnose)
-    table_key = free_key(geometry, options, frequencies, steel, magnets, None)
+    table_key = tables_key(geometry, coils, options, frequencies, steel, magnets)
     tables = {p: t for p in changed if (t := read_table(store, table_key, p)) is not None}
     missing = [p for p in changed if p not in tables]
     if missing:
@@ -327,5 +337,6 @@ __all__ = [
     "read_table",
     "record_model",
     "table_name",
+    "tables_key",
     "write_table",
 ]

@@ -126,7 +126,7 @@ def contact_columns(force: np.ndarray, contacts: np.ndarray,
     columns = np.asarray(columns, dtype=int)
     k = np.clip(np.searchsorted(columns, contacts), 0, max(columns.size - 1, 0))
     use = (columns.size > 0) & (columns[k] == contacts)
-    if use.all() and k.size and k[-1] - k[0] == k.size - 1 and np.all(np.diff(k) == 1):
+    if k.size and use.all() and np.all(np.diff(k) == 1):
         return f[:, k[0]:k[-1] + 1].copy()  # consecutive columns: a slice, no gather
     out = np.zeros((f.shape[0], contacts.size))
     out[:, use] = f[:, k[use]]

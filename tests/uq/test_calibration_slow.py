@@ -3,7 +3,10 @@ shots alternately, true drop height and contact damping drawn from their priors)
 input's 90 % credible interval holds the truth in at least 80 % of the cases, and every
 calibration converged (split R-hat <= 1.05). The sampler runs the command's default number
 of steps (what a user gets): with 800 the drop height's coverage was 85 % or 75 % depending
-only on the walkers' starting cloud. About 25 minutes on 2 cores."""
+only on the walkers' starting cloud. About 25 minutes on 2 cores: the ``campaign`` group
+(``python -m pytest -m campaign``), not CI's slow group, which keeps the main study's
+command-line path below; ``python benchmarks/calibrate_coverage.py`` prints the same
+statistics."""
 
 from __future__ import annotations
 
@@ -13,9 +16,8 @@ from benchmarks.calibrate_coverage import NAMES, main
 from msens.uq.calibration import DEFAULT_STEPS
 from msens.uq.mcmc import RHAT_LIMIT
 
-pytestmark = pytest.mark.slow
 
-
+@pytest.mark.campaign
 def test_credible_intervals_cover_the_truth():
     summary = main(["--cases", "20", "--steps", str(DEFAULT_STEPS)])
     for name in NAMES:
@@ -23,6 +25,7 @@ def test_credible_intervals_cover_the_truth():
     assert summary["max_rhat"] <= RHAT_LIMIT, summary["max_rhat"]
 
 
+@pytest.mark.slow
 def test_main_study_synth_then_calibrate(tmp_path, capsys):
     """The main study end to end from the command line: msens synth writes a physics-MsS
     measurement from the nominal study, msens calibrate samples the magnet's remanence factor

@@ -64,7 +64,8 @@ def test_dask_local_cluster_gives_the_same_numbers(case):
         np.testing.assert_allclose(remote.indices[k].total, local.indices[k].total,
                                    rtol=1e-8, atol=1e-12, equal_nan=True, err_msg=k)
     for k in local.waveforms:
-        assert np.array_equal(local.waveforms[k], remote.waveforms[k]), k
+        np.testing.assert_allclose(remote.waveforms[k], local.waveforms[k], rtol=1e-11,
+                                   atol=1e-12 * np.max(np.abs(local.waveforms[k])), err_msg=k)
 
 
 def test_indices_agree_between_n_and_4n(case):

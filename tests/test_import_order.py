@@ -26,7 +26,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "msens"
 STAGES = {
     0: ("errors", "version", "parallel", "meshing", "vocabulary", "_lazy", "progress",
         "numba_cache"),
-    1: ("params", "io", "store"),
+    1: ("params", "io", "store", "numba_cache_file"),
     2: ("mechanics", "readout", "signals"),
     3: ("chain", "field"),
     4: ("calibrate",),

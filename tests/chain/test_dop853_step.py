@@ -208,3 +208,12 @@ def test_sqrt_step_keeps_the_order_at_a_closing():
         errs = [abs(step(mode, h)[1] - r) for h, r in zip(hs, ref, strict=True)]
         slopes.append(np.polyfit(np.log(hs), np.log(errs), 1)[0])
     assert slopes[0] >= 5.5 and slopes[1] <= 3.0, slopes
+
+
+def test_the_kernel_rounds_the_same_whatever_the_compiler_inlined():
+    """Fused multiply-adds ("contract") and reassociation change results with the code LLVM
+    inlines around them, and so with the order in which a process compiles the kernel's
+    variants (a batch then differed from its single runs by 1e-13 after some test orders).
+    The kernel's fast-math flags allow neither; every function it compiles uses them."""
+    assert not {"contract", "reassoc", "fast"} & set(dop853_codegen.FASTMATH)
+    assert dop853_step.FASTMATH == set(dop853_codegen.FASTMATH) == kernel.forces.FM

@@ -14,7 +14,7 @@ def test_readme_is_short_cites_the_paper_and_keeps_the_two_commands():
     assert len(text.splitlines()) <= 150
     assert DOI in text and "1231–1246" in text
     assert "pip install . && msens run" in text
-    assert 'pip install ".[test]" && pytest' in text
+    assert 'pip install ".[test]" && pytest -n auto --dist loadfile' in text
 
 
 def test_readme_links_point_at_files_in_the_repository():

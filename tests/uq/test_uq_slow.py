@@ -54,18 +54,15 @@ def test_dask_local_cluster_gives_the_same_numbers(case):
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster:
         remote = propagate(study, inputs, samples=4, seed=7, scheduler=cluster.scheduler_address)
-    # Equal to rounding, not bit for bit: the cluster's processes load the chain kernel from
-    # numba's shared cache, whose index two processes compiling different variants at once
-    # can mix up (numba.core.caching numbers a new entry from the index it read); measured
-    # differences 1e-13 relative (TOF). Tracked for a cache that is safe across processes.
+    # Bit for bit: whichever process compiles a variant of the chain kernel first, and in
+    # whatever order, every process computes alike (msens.numba_cache_file: one cache file per
+    # variant; the kernel's arithmetic has no fused multiply-adds, which depend on inlining).
     for k in local.features:
-        np.testing.assert_allclose(remote.features[k], local.features[k], rtol=1e-11,
-                                   atol=0.0, err_msg=k)
-        np.testing.assert_allclose(remote.indices[k].total, local.indices[k].total,
-                                   rtol=1e-8, atol=1e-12, equal_nan=True, err_msg=k)
+        assert np.array_equal(remote.features[k], local.features[k]), k
+        assert np.array_equal(remote.indices[k].total, local.indices[k].total,
+                              equal_nan=True), k
     for k in local.waveforms:
-        np.testing.assert_allclose(remote.waveforms[k], local.waveforms[k], rtol=1e-11,
-                                   atol=1e-12 * np.max(np.abs(local.waveforms[k])), err_msg=k)
+        assert np.array_equal(remote.waveforms[k], local.waveforms[k]), k
 
 
 def test_indices_agree_between_n_and_4n(case):

@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 from scipy.special import beta
 
+from msens import numba_cache_file  # noqa: F401 (user cache folder; one file per variant)
 from msens.chain import kernel
 from msens.chain.equilibrium import (
     contact_forces_from_loads,

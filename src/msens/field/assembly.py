@@ -15,6 +15,8 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
+from msens import numba_cache_file  # noqa: F401 (user cache folder; one file per variant)
+
 
 @dataclass(frozen=True)
 class Pattern:

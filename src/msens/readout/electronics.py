@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import linalg, optimize
 
+from msens import numba_cache_file  # noqa: F401 (user cache folder; one file per variant)
 from msens.errors import InputError, require
 
 #: Capacitance of 1 m of RG-58 coaxial cable, F (about 100 pF/m; e.g. Belden 8240:

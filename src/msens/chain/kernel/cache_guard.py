@@ -20,7 +20,9 @@ locator list, so the guard cannot act: a warning says so.
 
 Where: in the user cache folder (:func:`msens.numba_cache.use_user_cache`, unless
 ``NUMBA_CACHE_DIR`` is set), so the compiled kernel survives reinstalling msens: the stamp
-is the files' content, and a reinstall puts them at the same path.
+is the files' content, and a reinstall puts them at the same path. Each compiled variant has
+its own data file there (:mod:`msens.numba_cache_file`), so processes compiling at once
+cannot mix them up.
 """
 
 from __future__ import annotations
@@ -30,12 +32,10 @@ import hashlib
 import warnings
 from pathlib import Path
 
-from msens.numba_cache import use_user_cache
+import numba
+from numba.core import caching
 
-use_user_cache()  # before numba reads its configuration
-
-import numba  # noqa: E402
-from numba.core import caching  # noqa: E402
+import msens.numba_cache_file  # noqa: F401 (user cache folder; one file per variant)
 
 #: The folder whose ``*.py`` files the kernel is compiled from.
 PACKAGE_DIR = Path(__file__).resolve().parent

@@ -7,7 +7,7 @@ import numpy as np
 
 from msens.chain.kernel.noalias import njit_noalias
 
-FASTMATH = {"contract", "nnan", "ninf", "nsz"}
+FASTMATH = {"nnan", "ninf", "nsz"}
 N_STAGES = 12
 STEP_REGULAR = 0
 STEP_SQRT_START = 1

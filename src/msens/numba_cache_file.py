@@ -7,7 +7,7 @@ the data. Two processes compiling *different* variants of one function at once (
 workers, the processes of a Dask cluster, ``msens run`` beside its background compile) can
 both take number k: the index then files one variant under k while the data file holds the
 other's machine code, and every later process that loads the first variant runs the second
-one's code. msens has seen it as results differing at 1e-13 between runs that must be equal.
+one's code (``tests/test_numba_cache_file.py`` forces that interleaving).
 
 How: :class:`KeyedCacheFile` names each data file by a digest of what identifies its
 content (the function's source stamp and the variant's index key: signature, CPU, bytecode),

@@ -43,11 +43,11 @@ def test_two_processes_saving_from_one_stale_index_never_mix_variants(tmp_path):
     assert fresh.load(("int64",)) in (None, "code for int64")
     # numba's class, same interleaving: both variants are numbered 1
     (tmp_path / "numba").mkdir()
-    ours = [_files(tmp_path / "numba", NUMBA_CACHE_FILE) for _ in range(2)]
-    for files in ours:
+    numbas = [_files(tmp_path / "numba", NUMBA_CACHE_FILE) for _ in range(2)]
+    for files in numbas:
         files._load_index = lambda: dict(stale)
-    ours[0].save(("int64",), "code for int64")
-    ours[1].save(("float64",), "code for float64")
+    numbas[0].save(("int64",), "code for int64")
+    numbas[1].save(("float64",), "code for float64")
     assert sorted(p.name for p in (tmp_path / "numba").glob("*.nbc")) == ["f-1.py311.1.nbc"]
 
 

@@ -28,7 +28,7 @@ import numpy as np
 from msens.config.fieldsetup import eddy_settings, geometry_from_study
 from msens.config.study import load_study
 from msens.magnetics.dynamic_cache import dynamic_report
-from msens.readout.electronics import coil_transfer_function, transfer_function
+from msens.readout.electronics import peak_gain, transfer_function
 from msens.readout.mss import readout
 from msens.store import Store
 
@@ -42,10 +42,10 @@ def _ratio(values: np.ndarray) -> dict:
             "phase_deg": np.round(np.degrees(np.angle(r)), 2).tolist()}
 
 
-def _peak(f: np.ndarray, h: np.ndarray) -> dict:
-    k = int(np.argmax(np.abs(h)))
-    return {"f_peak_Hz": float(f[k]), "gain_peak": float(np.abs(h[k])),
-            "gain_dc": float(np.abs(h[0]))}
+def _peak(circuit, impedance=None) -> dict:
+    f, gain = peak_gain(circuit, impedance)
+    return {"f_peak_Hz": f, "gain_peak": gain,
+            "gain_dc": float(np.abs(transfer_function(circuit, [0.0])[0]))}
 
 
 def rebuild(geometry, eddy) -> dict:
@@ -77,7 +77,6 @@ def main(path: str | None = None, rebuild_models: bool = False) -> dict:
                  "frequencies_Hz": rep.details["frequencies_Hz"],
                  "seconds_this_call": time.perf_counter() - t0,
                  "coils": {}}
-    f_fine = np.geomspace(1e3, 2e6, 4000)
     for p, r in rep.responses.items():
         unit = next(u for u in geometry.iter_units() if u.coil.particle == p)
         w = 2 * np.pi * np.asarray(r.frequencies)
@@ -97,9 +96,8 @@ def main(path: str | None = None, rebuild_models: bool = False) -> dict:
                        "villari_Wb_per_N": r.villari[0, k].real.tolist()},
             "R_ohm": np.round(r.impedance.real, 3).tolist(),
             "L_H": [r.static_inductance_H, *(r.impedance[1:].imag / w[1:]).tolist()],
-            "readout_static_RL": _peak(f_fine, transfer_function(circuit, f_fine)),
-            "readout_eddy_Z": _peak(f_fine, coil_transfer_function(circuit, f_fine,
-                                                                   r.impedance_at(f_fine))),
+            "readout_static_RL": _peak(circuit),
+            "readout_eddy_Z": _peak(circuit, r.impedance_at),
             "capacitance_F": circuit.total_capacitance,
             "max_reciprocity_rel_error": max(chk["reciprocity_rel_error"], default=None),
             "max_power_balance_rel_error": max(chk["power_balance_rel_error"])}

@@ -49,20 +49,29 @@ def _positions(sensors: tuple[SensorSpec, ...]) -> list[str]:
             else f"middle-{s.particle}" for s in sensors]
 
 
-def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static: np.ndarray,
-                 transducers: dict, study: Study, index: int,
-                 responses: dict | None = None) -> SensorResult:
+def _mss_record(sensor: SensorSpec, history: ChainResult, static: np.ndarray,
+                transducers: dict, study: Study, index: int, response=None):
+    """The physics MsS record of one coil (:func:`msens.readout.mss.mss_signals`): with the
+    coil's eddy-current ``response``, or magnetostatic without it."""
     from msens.config.fieldsetup import coil_geometry
-    from msens.readout.mss import MssSensor, mss_signals, noise_model, readout, voltage_on
+    from msens.readout.mss import MssSensor, mss_signals, noise_model, readout
 
     tr = transducers[sensor.particle]
     coil = coil_geometry(sensor.coil, sensor.particle)
     circuit = readout(coil, tr.resistance_ohm, tr.inductance_H, study.electronics)
     e = study.electronics
-    rec = mss_signals(MssSensor(tr, circuit), history.t, history.force, e.sample_rate_hz,
-                      response=responses[sensor.particle] if responses else None,
-                      approach=history.approach, static=static, noise=noise_model(e),
-                      rng=e.seed + index)
+    return mss_signals(MssSensor(tr, circuit), history.t, history.force, e.sample_rate_hz,
+                       response=response, approach=history.approach, static=static,
+                       noise=noise_model(e), rng=e.seed + index)
+
+
+def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static: np.ndarray,
+                 transducers: dict, study: Study, index: int,
+                 responses: dict | None = None) -> SensorResult:
+    from msens.readout.mss import voltage_on
+
+    rec = _mss_record(sensor, history, static, transducers, study, index,
+                      responses[sensor.particle] if responses else None)
     voltage = voltage_on(rec)
     # features of what the DAQ records (integrated, in newtons), as compare and diagnose read
     # them: the read-out circuit reshapes the pulse that ``weighted_force`` has before it
@@ -73,11 +82,14 @@ def _physics_mss(sensor: SensorSpec, position: str, history: ChainResult, static
 
 def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
                   transducers: dict | None = None, study: Study | None = None,
-                  responses: dict | None = None) -> SetupResult:
+                  responses: dict | None = None,
+                  magnetostatic: bool = False) -> SetupResult:
     """Sensor records, features and speeds of one simulated setup.
 
     Physics MsS sensors need the setup's ``transducers`` and the ``study`` (electronics);
-    with eddy currents also their ``responses`` (:func:`setup_responses`).
+    with eddy currents also their ``responses`` (:func:`setup_responses`). ``magnetostatic``:
+    with eddy currents, also read each physics coil without them (same chain, transducer and
+    circuit; :attr:`SetupResult.magnetostatic`), as ``msens run`` reports beside its values.
     """
     t = history.t
     static = static_contact_forces(chain)
@@ -95,6 +107,10 @@ def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
         shape = time_derivative(force, t) if sensor.kind is SensorKind.MSS else None
         results.append(SensorResult(sensor=sensor, position=position, force=force,
                                     voltage_shape=shape, features=model_features(force, t)))
+    statics = None
+    if magnetostatic and responses:
+        statics = {s.particle: _mss_record(s, history, static, transducers, study, i)
+                   for i, s in enumerate(setup.sensors) if s.model is MssModel.PHYSICS}
     speed_in = speed_out = float("nan")
     by_pos = {r.position: r for r in results}
     if "top" in by_pos and "bottom" in by_pos:
@@ -107,7 +123,7 @@ def observe_setup(setup: SetupSpec, chain: Chain, history: ChainResult, *,
     return SetupResult(setup=setup, chain=chain, history=history, static_force=static,
                        sensors=tuple(results), speed_incident=speed_in,
                        speed_reflected=speed_out, transducers=transducers,
-                       responses=responses)
+                       responses=responses, magnetostatic=statics)
 
 
 #: Smallest peak of a sensor's force, relative to the striker contact's, that counts as a
@@ -316,7 +332,8 @@ def run_study(study: Study, *, static_forces: dict[str, np.ndarray] | None = Non
                                             transducers=transducers)
             observed = observe_setup(setup, chain, history, transducers=transducers,
                                      study=study,
-                                     responses=setup_responses(study, setup, workers=workers))
+                                     responses=setup_responses(study, setup, workers=workers),
+                                     magnetostatic=True)
             check_arrivals(study, observed)
             observed = budget.flag_unresolved(study, observed)  # no reflection: no TOF/AR
             check_speeds(study, observed)

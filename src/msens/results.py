@@ -117,6 +117,10 @@ class SetupResult:
     responses : dict or None
         With eddy currents: each coil's frequency response by particle
         (:class:`msens.magnetics.frequency_response.FrequencyResponse`).
+    magnetostatic : dict or None
+        With eddy currents, as ``msens run`` asks for it: each physics coil's record
+        without them (:class:`msens.readout.mss.MssRecord` by particle; the same chain,
+        transducer and circuit), the faster, less exact model to compare with.
     """
 
     setup: SetupSpec
@@ -128,6 +132,7 @@ class SetupResult:
     speed_reflected: float
     transducers: dict | None = None
     responses: dict | None = None
+    magnetostatic: dict | None = None
 
     def __repr__(self) -> str:
         coils = (f", transducers at {', '.join(map(str, sorted(self.transducers)))}"
@@ -393,6 +398,23 @@ def _trough(record) -> dict:
             "time_us": float(record.t[int(np.argmin(before))] * 1e6)}
 
 
+def _peaks(record) -> dict:
+    """Largest |DAQ voltage| (V) and its time (µs from the impact), largest |EMF| (V)."""
+    k = int(np.argmax(np.abs(record.voltage)))
+    return {"peak_voltage_V": float(abs(record.voltage[k])),
+            "peak_voltage_time_us": float(record.t_daq[k] * 1e6),
+            "peak_emf_V": float(np.max(np.abs(record.emf)))}
+
+
+def _readout_peak(circuit, response) -> dict:
+    """The read-out's resonance as the record sees it: the largest |V_daq / EMF| and its
+    frequency, with the eddy-current impedance Z(f) when there is a ``response``."""
+    from msens.readout.electronics import peak_gain
+
+    f, gain = peak_gain(circuit, None if response is None else response.impedance_at)
+    return {"frequency_Hz": f, "gain": gain}
+
+
 def physics_summary(result: StudyResult) -> dict:
     """Physics-MsS part of ``summary.json``: per-coil voltage, each mechanism's share of the
     signal and sensitivity profile, the magnet's precompression per contact and the
@@ -417,14 +439,17 @@ def physics_summary(result: StudyResult) -> dict:
             villari += float(np.sum(np.abs(tr.sensitivity_villari)))
             approach += float(np.sum(np.abs(tr.sensitivity_approach)))
             f0, q = resonance(r.mss.circuit)
+            response = s.responses[r.sensor.particle] if s.responses else None
+            static_rec = (s.magnetostatic or {}).get(r.sensor.particle)
             coils.append({
                 "setup": s.setup.name, "particle": r.sensor.particle,
-                "peak_voltage_V": float(np.max(np.abs(r.mss.voltage))),
-                "peak_voltage_time_us": float(r.mss.t_daq[np.argmax(np.abs(r.mss.voltage))]
-                                              * 1e6),
-                "peak_emf_V": float(np.max(np.abs(r.mss.emf))),
+                **_peaks(r.mss),
                 "resistance_ohm": tr.resistance_ohm, "inductance_H": tr.inductance_H,
                 "resonance_Hz": f0, "quality_factor": q,
+                "readout_peak": _readout_peak(r.mss.circuit, response),
+                **({} if static_rec is None else {"magnetostatic": {
+                    **_peaks(static_rec),
+                    "readout_peak": _readout_peak(static_rec.circuit, None)}}),
                 "pre_peak_trough": _trough(r.mss),
                 "mechanism_share": mechanism_share(
                     tr, s.history, s.responses[r.sensor.particle] if s.responses else None),

@@ -265,6 +265,26 @@ def test_summary_says_what_rests_on_the_equivalent_magnet(eddy_runs):
 
 
 
+
+def test_summary_puts_the_magnetostatic_values_beside_the_eddy_current_ones(eddy_runs):
+    """Issue 33: with eddy currents summary.json reports each coil's peak DAQ voltage, its
+    time and the read-out's resonance gain, and the same for the magnetostatic model, which
+    is exactly ``msens run`` of the study without eddy currents."""
+    _, _, result, static_result = eddy_runs
+    eddy, static = _coil_summary(result), _coil_summary(static_result)
+    ms = eddy["magnetostatic"]
+    for key in ("peak_voltage_V", "peak_voltage_time_us", "peak_emf_V"):
+        assert ms[key] == static[key]
+    assert ms["readout_peak"] == static["readout_peak"]
+    assert "magnetostatic" not in static
+    # eddy currents screen the beads (smaller peak) and their losses damp the resonance
+    assert eddy["peak_voltage_V"] < ms["peak_voltage_V"]
+    assert eddy["readout_peak"]["gain"] < ms["readout_peak"]["gain"]
+    # the lumped circuit's peak gain sits at its resonance (Q >> 1)
+    assert static["readout_peak"]["frequency_Hz"] == pytest.approx(static["resonance_Hz"],
+                                                                   rel=1e-3)
+
+
 CHANGED = TINY.replace('model = "physics"', 'model = "physics"\n[sensor.coil]\nturns = 900\n'
                        'length_m = 8e-3\n') + EDDY
 

@@ -14,6 +14,7 @@ from msens.readout.daq import daq_voltage
 from msens.readout.electronics import (
     ReadoutCircuit,
     bandwidth,
+    peak_gain,
     resonance,
     state_space,
     transfer_function,
@@ -91,6 +92,29 @@ def test_resonance_closed_form(circuit):
     f0, q = resonance(circuit)
     assert f0 == pytest.approx(w0 / (2 * math.pi), rel=1e-10)
     assert q == pytest.approx(w0 / (2 * sig), rel=1e-10)
+
+
+@pytest.mark.parametrize("q_target", [2.0, 5.0, 50.0])
+def test_peak_gain_closed_form(q_target):
+    """Series RLC into a capacitor: |H| peaks at ω0 √(1 − 1/(2Q²)) with Q/√(1 − 1/(4Q²));
+    a coil impedance given as the callable R + jωL is the same circuit."""
+    ind, cap = 10e-3, 1e-9
+    r = math.sqrt(ind / cap) / q_target
+    c = ReadoutCircuit(r, ind, 0.0, cap, math.inf, 0.0)
+    f0 = 1 / (2 * math.pi * math.sqrt(ind * cap))
+    f_peak, gain = peak_gain(c)
+    assert f_peak == pytest.approx(f0 * math.sqrt(1 - 0.5 / q_target**2), rel=1e-7)
+    assert gain == pytest.approx(q_target / math.sqrt(1 - 0.25 / q_target**2), rel=1e-9)
+    same = peak_gain(c, lambda f: r + 2j * np.pi * f * ind)
+    assert same == pytest.approx((f_peak, gain), rel=1e-12)
+    # a lossier coil at high frequency (eddy losses: R grows with f) lowers the peak
+    lossy = peak_gain(c, lambda f: r * (1 + (f / f0) ** 2) + 2j * np.pi * f * ind)
+    assert lossy[1] < gain
+
+
+def test_peak_gain_refuses_a_bad_band():
+    with pytest.raises(InputError, match="band"):
+        peak_gain(PAPER, band=(1e5, 1e3))
 
 
 @pytest.mark.parametrize("q_target", [0.3, 1 / math.sqrt(2), 5.0, 50.0])

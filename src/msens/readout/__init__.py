@@ -21,7 +21,7 @@ _HOMES = {
              "turn_to_turn_capacitance", "wheeler_inductance", "winding_capacitance",
              "wire_for"),
     "electronics": ("ElectronicsSpec", "ReadoutCircuit", "bandwidth", "coil_transfer_function",
-                    "poles", "readout_circuit", "resonance", "state_space",
+                    "peak_gain", "poles", "readout_circuit", "resonance", "state_space",
                     "transfer_function"),
     "daq": ("daq_voltage",),
     "noise": ("NoiseModel", "add_readout_noise", "noise_rms", "thermal_covariance",

@@ -20,7 +20,7 @@ the sampled DAQ record is in :mod:`msens.readout.daq`, the circuit's noise in
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numba
@@ -325,6 +325,52 @@ def resonance(circuit: ReadoutCircuit) -> tuple[float, float]:
     p = poles(circuit)[:2]
     omega0 = math.sqrt(abs((p[0] * p[1]).real))
     return omega0 / (2.0 * math.pi), omega0 / float(-(p[0] + p[1]).real)
+
+
+def peak_gain(circuit: ReadoutCircuit,
+              coil_impedance: Callable[[np.ndarray], np.ndarray] | None = None,
+              band: tuple[float, float] = (1e3, 2e6)) -> tuple[float, float]:
+    """The read-out's resonance: the largest gain |H(f)| = |V_daq / EMF| and its frequency.
+
+    :func:`resonance` gives the R + sL circuit's pole pair; this is the peak of the gain
+    itself, for the lumped coil or for a coil impedance Z(f) that eddy currents make
+    frequency dependent (their losses lower the peak and move it).
+
+    Parameters
+    ----------
+    circuit : ReadoutCircuit
+    coil_impedance : callable, optional
+        Z_s(f), Ω, of an array of frequencies (Hz), e.g.
+        :meth:`msens.magnetics.frequency_response.FrequencyResponse.impedance_at`; None: the
+        circuit's R + sL.
+    band : (float, float)
+        Frequencies searched, Hz: 4000 log-spaced points, then the bracket of the largest
+        refined to 1e-9 relative.
+
+    Returns
+    -------
+    f_peak : float
+        Hz.
+    gain : float
+        |H(f_peak)|, dimensionless (1 at DC for an unloaded coil).
+    """
+    lo, hi = (float(b) for b in band)
+    if not 0.0 < lo < hi:
+        raise InputError(f"peak_gain band must be 0 < low < high Hz, got {band}")
+
+    def gain(f: np.ndarray) -> np.ndarray:
+        f = np.atleast_1d(np.asarray(f, dtype=float))
+        if coil_impedance is None:
+            return np.abs(transfer_function(circuit, f))
+        return np.abs(coil_transfer_function(circuit, f, coil_impedance(f)))
+
+    grid = np.geomspace(lo, hi, 4000)
+    k = int(np.argmax(gain(grid)))
+    a, b = np.log(grid[max(k - 1, 0)]), np.log(grid[min(k + 1, grid.size - 1)])
+    best = optimize.minimize_scalar(lambda x: -gain(np.exp(x))[0], bounds=(a, b),
+                                    method="bounded", options={"xatol": 1e-9})
+    f_peak = float(np.exp(best.x))
+    return f_peak, float(gain(f_peak)[0])
 
 
 def bandwidth(circuit: ReadoutCircuit) -> float:

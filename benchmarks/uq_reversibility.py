@@ -12,8 +12,13 @@ EMF of the nominal chain run read through the surrogate's and the directly solve
 difference over the particles relative to the largest pull). With ``--composed`` it also
 checks the surrogate composed with a remanence change
 (:func:`msens.uq.model.at_reversibility`) against direct solves of both changes at once.
+With ``--eddy`` the main study has eddy currents and the coils are read with their frequency
+responses: the surrogate's (:class:`msens.magnetics.reversibility.ReversibilityResponses`,
+splines in log c over the eddy-current models at the nodes) against the eddy-current model
+solved at each held-out value (about 140 s each on 2 cores, then cached).
 
-Run: ``python benchmarks/uq_reversibility.py [--held-out 24] [--nodes 5] [--composed]``
+Run: ``python benchmarks/uq_reversibility.py [--held-out 24] [--nodes 5] [--composed]
+[--eddy]``
 (prints JSON: seconds per direct solve, the relative errors per held-out value and their
 maximum).
 """
@@ -28,9 +33,10 @@ from dataclasses import replace
 import numpy as np
 
 from msens import api
-from msens.config.fieldsetup import coil_geometry, geometry_from_study
+from msens.config.fieldsetup import coil_geometry, eddy_settings, geometry_from_study
 from msens.config.schema import CoilSpec
 from msens.magnetics import reversibility
+from msens.magnetics.dynamic_cache import dynamic_report
 from msens.magnetics.transducer import magnetic_precompression
 from msens.magnetics.transducer_cache import transducers_for
 from msens.magnetics.variants import remanence_family, scaled_geometry
@@ -56,23 +62,27 @@ def held_out(count: int, nodes: tuple[float, ...], seed: int = SEED) -> list[flo
     return sorted(out)
 
 
-def peaks(study, setup, tr) -> tuple[float, float]:
-    """Peak |DAQ voltage| and peak |EMF| (V) of the nominal chain run read through ``tr``."""
+def peaks(study, setup, tr, response=None) -> tuple[float, float]:
+    """Peak |DAQ voltage| and peak |EMF| (V) of the nominal chain run read through ``tr``
+    (with eddy currents: and its frequency ``response``)."""
     spec = next(s for s in study.setups[0].sensors if s.particle == tr.particle)
     sensor = MssSensor(tr, readout(coil_geometry(spec.coil or CoilSpec(), tr.particle),
                                    tr.resistance_ohm, tr.inductance_H, study.electronics))
     h = setup.history
     rec = mss_signals(sensor, h.t, h.force, study.electronics.sample_rate_hz,
-                      approach=h.approach)
+                      approach=h.approach, static=setup.static_force, response=response)
     return float(np.max(np.abs(rec.voltage))), float(np.max(np.abs(rec.emf)))
 
 
-def compare(study, setup, nominal, approx: dict, direct: dict, pull_approx, pull_direct) -> dict:
-    """Relative errors of the surrogate's coils and pull against the direct solve's."""
+def compare(study, setup, nominal, approx: dict, direct: dict, pull_approx, pull_direct,
+            responses: tuple[dict, dict] | None = None) -> dict:
+    """Relative errors of the surrogate's coils and pull against the direct solve's
+    (``responses``: the direct and the surrogate's eddy-current responses by particle)."""
     row = {}
     for p, tr0 in nominal.items():
-        (v1, e1) = peaks(study, setup, direct[p].reading_maps_of(tr0))
-        (v2, e2) = peaks(study, setup, approx[p])
+        r1, r2 = (None, None) if responses is None else (responses[0][p], responses[1][p])
+        (v1, e1) = peaks(study, setup, direct[p].reading_maps_of(tr0), r1)
+        (v2, e2) = peaks(study, setup, approx[p], r2)
         row[str(p)] = {"peak_voltage_V": [v1, v2], "voltage_error": v2 / v1 - 1.0,
                        "peak_emf_V": [e1, e2], "emf_error": e2 / e1 - 1.0}
     row["pull_error"] = float(np.max(np.abs(pull_approx - pull_direct))
@@ -94,25 +104,41 @@ def main(argv: list[str] | None = None) -> dict:
     args.add_argument("--nodes", type=int, default=0,
                       help="log-spaced nodes over [0.1, 1] (0: the module's NODES)")
     args.add_argument("--composed", action="store_true")
+    args.add_argument("--eddy", action="store_true",
+                      help="the main study with eddy currents: the coils' frequency "
+                           "responses through ReversibilityResponses against direct "
+                           "eddy-current models (137 s each, cached)")
     opts = args.parse_args(argv)
     nodes = reversibility.NODES if opts.nodes == 0 else tuple(
         float(v) for v in np.round(np.geomspace(0.1, 1.0, opts.nodes), 4))
     study = api.load_default()
+    if opts.eddy:
+        study = study.replace({"field.eddy_currents": True})
     geometry = geometry_from_study(study)
     setup = run_study(study).setups[0]
     nominal = setup.transducers
     start = time.perf_counter()
     family = reversibility.reversibility_family(geometry, nodes)
-    report = {"nodes": list(nodes), "family_seconds": time.perf_counter() - start,
+    if opts.eddy:
+        eddy = eddy_settings(study)
+        kwargs = {"options": eddy.options, "steel": eddy.steel}
+        responses = reversibility.reversibility_responses(geometry, nodes, **kwargs)
+    report = {"study": study.name + (" with eddy currents" if opts.eddy else ""),
+              "nodes": list(nodes), "family_seconds": time.perf_counter() - start,
               "solve_seconds": {}, "held_out": {}}
     for c in held_out(opts.held_out, nodes):
         start = time.perf_counter()
-        direct = transducers_for(replace(geometry, reversibility=c))
+        at_c = replace(geometry, reversibility=c)
+        direct = transducers_for(at_c)
+        pair = None
+        if opts.eddy:
+            pair = (dynamic_report(at_c, **kwargs).responses,
+                    {p: responses.response(p, c) for p in nominal})
         report["solve_seconds"][str(c)] = time.perf_counter() - start
         approx = {p: family.transducer(p, c).reading_maps_of(tr0) for p, tr0 in nominal.items()}
         report["held_out"][str(c)] = compare(study, setup, nominal, approx, direct,
                                              family.particle_force(c),
-                                             magnetic_precompression(direct))
+                                             magnetic_precompression(direct), pair)
         print(json.dumps({"reversibility": c, **worst({c: report["held_out"][str(c)]})}),
               flush=True)
     report["max_relative_error"] = worst(report["held_out"])

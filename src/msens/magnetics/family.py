@@ -7,7 +7,10 @@ every transducer quantity with a cubic spline through them, in the parameter its
 its logarithm; a diagnosis or a propagation then evaluates any value inside the nodes in
 microseconds. :class:`~msens.magnetics.variants.RemanenceFamily` and
 :class:`~msens.magnetics.reversibility.ReversibilityFamily` are the two families; each says
-which parameter it varies and on which axis it interpolates.
+which parameter it varies and on which axis it interpolates. With eddy currents the coils'
+frequency responses change with the same parameters: a :class:`ResponseFamily` interpolates
+them the same way (:class:`~msens.magnetics.variants.RemanenceResponses`,
+:class:`~msens.magnetics.reversibility.ReversibilityResponses`).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from typing import ClassVar
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from msens.errors import require
+from msens.errors import internal, require
 from msens.field.geometry import SensorGeometry
 from msens.magnetics.transducer import Transducer, magnetic_precompression
 
@@ -101,4 +104,65 @@ class TransducerFamily:
         require(lo <= x <= hi, f"{self.parameter} {x} outside the solved range {lo:g}..{hi:g}")
 
 
-__all__ = ["QUANTITIES", "TransducerFamily"]
+#: Frequency-response quantities interpolated over a family's parameter (complex, element
+#: by element; real and imaginary parts apart); frequencies, contacts and R are the same for
+#: every member.
+RESPONSE_QUANTITIES = ("villari", "approach", "impedance")
+
+
+@dataclass(frozen=True)
+class ResponseFamily:
+    """Eddy-current frequency responses of one geometry at the parameter values
+    :attr:`nodes`, splines in the parameter (or its logarithm) as :class:`TransducerFamily`.
+
+    Attributes
+    ----------
+    geometry : SensorGeometry
+        Nominal geometry.
+    nodes : tuple of float
+        Parameter values solved, increasing.
+    members : tuple of dict
+        ``{particle: FrequencyResponse}`` at each node (same frequencies and contacts;
+        solved without offset profiles).
+    """
+
+    geometry: SensorGeometry
+    nodes: tuple[float, ...]
+    members: tuple[dict, ...]
+
+    parameter: ClassVar[str] = "parameter"
+    log_axis: ClassVar[bool] = False
+    source_format: ClassVar[str] = ("{parameter} {x:.6g} (spline over {n} eddy-current "
+                                    "models)")
+
+    def __post_init__(self) -> None:
+        freqs = [np.asarray(r.frequencies) for m in self.members for r in m.values()]
+        internal(all(f.shape == freqs[0].shape and np.array_equal(f, freqs[0])
+                     for f in freqs), "internal: family responses at other frequencies")
+
+    bounds = TransducerFamily.bounds
+    _at = TransducerFamily._at
+    _check = TransducerFamily._check
+
+    def response(self, particle: int, x: float):
+        """The coil at ``particle`` at parameter value ``x``
+        (:class:`~msens.magnetics.frequency_response.FrequencyResponse`; S_c(ω), D_c(ω),
+        Z(ω) and the static inductance from the splines; no offset profiles or screening
+        split)."""
+        self._check(x)
+        rs = [m[particle] for m in self.members]
+        base = rs[self.nodes.index(1.0)] if 1.0 in self.nodes else rs[0]
+
+        def at(values):
+            v = np.stack([np.asarray(a) for a in values])
+            return self._at(list(v.real), x) + 1j * self._at(list(v.imag), x)
+
+        out = {name: at([getattr(r, name) for r in rs]) for name in RESPONSE_QUANTITIES}
+        static = float(self._at([r.static_inductance_H for r in rs], x))
+        return replace(base, **out, static_inductance_H=static, offsets=None,
+                       villari_by_offset=None, approach_by_offset=None, screening=None,
+                       source=f"{base.source}; " + self.source_format.format(
+                           parameter=self.parameter, x=x, n=len(self.nodes)))
+
+
+__all__ = ["QUANTITIES", "RESPONSE_QUANTITIES", "ResponseFamily", "TransducerFamily"]

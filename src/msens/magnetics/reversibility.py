@@ -16,6 +16,11 @@ The surrogate's error against direct solves at held-out reversibilities is measu
 ``python benchmarks/uq_reversibility.py`` (main study, 24 seeded log-uniform values: the
 coils' peak DAQ voltage and EMF within 0.01 %; the magnets' pull does not depend on c) and
 checked on five of them to 1 % in ``tests/uq/test_reversibility_slow.py``.
+
+With eddy currents the coils' frequency responses depend on c as well (the skin depth goes as
+1/√μ): :class:`ReversibilityResponses` solves the eddy-current model at the same nodes and
+interpolates S_c(ω), D_c(ω), Z(ω) in log c (``benchmarks/uq_reversibility.py --eddy``
+measures it against direct solves).
 """
 
 from __future__ import annotations
@@ -26,7 +31,7 @@ from typing import ClassVar
 
 from msens.errors import internal
 from msens.field.geometry import SensorGeometry
-from msens.magnetics.family import QUANTITIES, TransducerFamily
+from msens.magnetics.family import QUANTITIES, ResponseFamily, TransducerFamily
 from msens.magnetics.transducer_cache import transducers_for
 
 #: Reversibilities at which the field model is solved: five log-spaced values over [0.1, 1]
@@ -60,4 +65,36 @@ def reversibility_family(geometry: SensorGeometry, nodes: tuple[float, ...] = NO
                                members=members)
 
 
-__all__ = ["NODES", "QUANTITIES", "ReversibilityFamily", "reversibility_family"]
+@dataclass(frozen=True)
+class ReversibilityResponses(ResponseFamily):
+    """Eddy-current frequency responses of one geometry at the reversibilities
+    :attr:`nodes`, splines in log c: c sets the steel's small-signal permeability, so both
+    the static sensitivities and the skin depth (∝ 1/√μ) change with it."""
+
+    parameter: ClassVar[str] = "reversibility"
+    log_axis: ClassVar[bool] = True
+    source_format: ClassVar[str] = ("reversibility {x:.6g} (spline in log c over {n} "
+                                    "eddy-current models)")
+
+
+def reversibility_responses(geometry: SensorGeometry, nodes: tuple[float, ...] = NODES,
+                            **kwargs) -> ReversibilityResponses:
+    """Solve (or read from the store) the eddy-current model at each reversibility of
+    ``nodes``.
+
+    Keyword arguments go to :func:`msens.magnetics.dynamic_cache.dynamic_report`
+    (``options``, ``steel``, ``store``...; no offsets).
+    """
+    from msens.magnetics.dynamic_cache import dynamic_report
+
+    internal(all(a < b for a, b in pairwise(nodes)) and len(nodes) >= 4,
+             "internal: reversibility nodes must increase (at least four)")
+    internal("offsets" not in kwargs, "internal: family responses have no offset profiles")
+    members = tuple(dynamic_report(replace(geometry, reversibility=float(c)),
+                                   **kwargs).responses for c in nodes)
+    return ReversibilityResponses(geometry=geometry, nodes=tuple(float(c) for c in nodes),
+                                  members=members)
+
+
+__all__ = ["NODES", "QUANTITIES", "ReversibilityFamily", "ReversibilityResponses",
+           "reversibility_family", "reversibility_responses"]

@@ -21,13 +21,9 @@ from dataclasses import dataclass, replace
 from itertools import pairwise
 from typing import ClassVar
 
-import numpy as np
-from scipy.interpolate import CubicSpline
-
-from msens.errors import internal, require
+from msens.errors import internal
 from msens.field.geometry import SensorGeometry
-from msens.magnetics.family import TransducerFamily
-from msens.magnetics.frequency_response import FrequencyResponse
+from msens.magnetics.family import ResponseFamily, TransducerFamily
 from msens.magnetics.transducer_cache import transducers_for
 
 #: Remanence factors (B_r / nominal) at which the field model is solved.
@@ -63,56 +59,14 @@ def remanence_family(geometry: SensorGeometry, nodes: tuple[float, ...] = NODES,
     return RemanenceFamily(geometry=geometry, nodes=tuple(nodes), members=members)
 
 
-#: Frequency-response quantities interpolated in the remanence factor (complex, element by
-#: element); frequencies, contacts and R are the same for every member.
-RESPONSE_QUANTITIES = ("villari", "approach", "impedance")
-
-
 @dataclass(frozen=True)
-class RemanenceResponses:
+class RemanenceResponses(ResponseFamily):
     """Eddy-current frequency responses of one geometry at the remanence factors
-    :attr:`nodes`, splines in the factor.
+    :attr:`nodes` (all magnets scaled together; factor 1 is the nominal geometry), splines
+    in the factor."""
 
-    Attributes
-    ----------
-    geometry : SensorGeometry
-        Nominal geometry (factor 1).
-    nodes : tuple of float
-        Factors solved, increasing.
-    members : tuple of dict
-        ``{particle: FrequencyResponse}`` at each node (same frequencies).
-    """
-
-    geometry: SensorGeometry
-    nodes: tuple[float, ...]
-    members: tuple[dict[int, FrequencyResponse], ...]
-
-    def __post_init__(self) -> None:
-        freqs = [np.asarray(r.frequencies) for m in self.members for r in m.values()]
-        internal(all(f.shape == freqs[0].shape and np.array_equal(f, freqs[0])
-                     for f in freqs), "internal: remanence responses at other frequencies")
-
-    def response(self, particle: int, factor: float) -> FrequencyResponse:
-        """The coil at ``particle`` with every magnet's remanence × ``factor``
-        (interpolated; no offset profiles: the family is solved without them)."""
-        lo, hi = self.nodes[0], self.nodes[-1]
-        require(lo <= factor <= hi,
-                f"remanence factor {factor} outside the solved range {lo:g}..{hi:g}")
-        rs = [m[particle] for m in self.members]
-        x = np.array(self.nodes)
-
-        def at(values):
-            v = np.stack([np.asarray(a) for a in values])
-            return (CubicSpline(x, v.real, axis=0)(factor)
-                    + 1j * CubicSpline(x, v.imag, axis=0)(factor))
-
-        base = rs[self.nodes.index(1.0)] if 1.0 in self.nodes else rs[0]
-        out = {name: at([getattr(r, name) for r in rs]) for name in RESPONSE_QUANTITIES}
-        static = float(CubicSpline(x, [r.static_inductance_H for r in rs])(factor))
-        return replace(base, **out, static_inductance_H=static, offsets=None,
-                       villari_by_offset=None, approach_by_offset=None, screening=None,
-                       source=f"{base.source}; remanence x {factor:.6g} (spline over "
-                              f"{len(self.nodes)} eddy-current models)")
+    parameter: ClassVar[str] = "remanence factor"
+    source_format: ClassVar[str] = "remanence x {x:.6g} (spline over {n} eddy-current models)"
 
 
 def remanence_responses(geometry: SensorGeometry, nodes: tuple[float, ...] = NODES,
@@ -132,5 +86,5 @@ def remanence_responses(geometry: SensorGeometry, nodes: tuple[float, ...] = NOD
     return RemanenceResponses(geometry=geometry, nodes=tuple(nodes), members=members)
 
 
-__all__ = ["NODES", "RESPONSE_QUANTITIES", "RemanenceFamily", "RemanenceResponses",
+__all__ = ["NODES", "RemanenceFamily", "RemanenceResponses",
            "remanence_family", "remanence_responses", "scaled_geometry"]

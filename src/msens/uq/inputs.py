@@ -441,13 +441,10 @@ def _nominal_and_range(kind: Kind, sensor: int | None, study: Study,
         return 1.0, (0.5, 2.0), "half to twice the equivalent magnet's nominal size"
     if p == "field.reversibility":
         value = study.field.steel_reversibility
-        if not study.field.eddy_currents:  # propagated through the surrogate: its span
-            lo, hi = reversibility.NODES[0], reversibility.NODES[-1]
-            return value, (lo, hi), (f"the span {lo:g}..{hi:g} of the surrogate's field "
-                                     "models (msens.magnetics.reversibility.NODES) within "
-                                     "(0, 1], Jiles-Atherton's c")
-        return value, (1e-3, 1.0), ("the reversible part of the differential susceptibility "
-                                    "lies in (0, 1] (Jiles-Atherton's c)")
+        lo, hi = reversibility.NODES[0], reversibility.NODES[-1]  # the surrogate's span
+        return value, (lo, hi), (f"the span {lo:g}..{hi:g} of the surrogate's field models "
+                                 "(msens.magnetics.reversibility.NODES) within (0, 1], "
+                                 "Jiles-Atherton's c")
     value = study.field.steel_conductivity_s_per_m or SIGMA_1018
     return value, (1e5, 6.3e7), ("1e5 S/m to silver's 6.3e7 S/m (carbon steels: 5-7e6 S/m)")
 
@@ -466,10 +463,7 @@ def _route(kind: Kind, study: Study) -> tuple[str, str]:
             return HELD, ("with eddy currents the coils' frequency responses would need "
                           "variants of their own (not solved in this version)")
         return FIELD_TABLE, ""
-    if p == "field.reversibility":
-        if eddy:
-            return HELD, ("with eddy currents the coils' frequency responses would need a "
-                          "surrogate of their own (not made in this version)")
+    if p == "field.reversibility":  # with eddy currents the responses' surrogate too
         return FIELD_SURROGATE, ""
     return HELD, ("changes the field model's bias solve: it needs a design of field solves "
                   "and a surrogate with its error measured on held-out solves, not made in "

@@ -6,8 +6,9 @@ physics MsS gets the transducer of its field model as the inputs say (remanence 
 :class:`~msens.magnetics.variants.RemanenceFamily`, coil offset through its tabulated offset
 profiles, as ``msens diagnose`` varies them: :class:`msens.diagnose.models.FieldModel`; the
 steel's reversibility through the spline surrogate
-:class:`~msens.magnetics.reversibility.ReversibilityFamily`, see :func:`at_reversibility`;
-turns by :func:`with_turns`), the chains of a chunk of rows are integrated in one batch
+:class:`~msens.magnetics.reversibility.ReversibilityFamily`, see :func:`at_reversibility`,
+and with eddy currents the coils' frequency responses through
+:class:`~msens.magnetics.reversibility.ReversibilityResponses`; turns by :func:`with_turns`), the chains of a chunk of rows are integrated in one batch
 (:func:`msens.chain.integrate.simulate_batch`), and each run is observed by
 :func:`msens.pipeline.observe_setup`, the function ``msens run`` observes its setups with.
 So a row at the nominal values reproduces ``msens run`` exactly, and every feature is the
@@ -35,7 +36,12 @@ from msens.config.study import Study
 from msens.diagnose import physics
 from msens.diagnose.models import ModelBank, PhysicsMss
 from msens.errors import InputError
-from msens.magnetics.reversibility import ReversibilityFamily, reversibility_family
+from msens.magnetics.reversibility import (
+    ReversibilityFamily,
+    ReversibilityResponses,
+    reversibility_family,
+    reversibility_responses,
+)
 from msens.magnetics.transducer import Transducer, magnetic_precompression
 from msens.pipeline import observe_setup, output_times, setup_responses
 from msens.results import SetupResult
@@ -209,12 +215,13 @@ class _Setup:
         self.setup = setup
         self.index = study.setups.index(setup)
         self.specs: tuple[PhysicsMss | None, ...] = ()
-        self.responses = setup_responses(study, setup)
+        self.responses_nominal = setup_responses(study, setup)
         self.store = bank.store
         self._reversibility: ReversibilityFamily | None = None
+        self._responses: ReversibilityResponses | None = None
+        self.eddy = eddy_settings(study) if study.field.eddy_currents else None
         if any(s.model is MssModel.PHYSICS for s in setup.sensors):
-            eddy = eddy_settings(study) if study.field.eddy_currents else None
-            model = bank.register(geometry_from_study(study, setup), eddy,
+            model = bank.register(geometry_from_study(study, setup), self.eddy,
                                   contact_maps=study.field.contact_map)
             self.specs = tuple(
                 PhysicsMss(model=model, particle=s.particle,
@@ -228,6 +235,23 @@ class _Setup:
             model = next(p for p in self.specs if p is not None).model
             self._reversibility = reversibility_family(model.geometry, store=self.store)
         return self._reversibility
+
+    def response_family(self) -> ReversibilityResponses:
+        # with eddy currents: the coils' frequency responses over c (solved or read once)
+        if self._responses is None:
+            model = next(p for p in self.specs if p is not None).model
+            self._responses = reversibility_responses(
+                model.geometry, options=self.eddy.options, steel=self.eddy.steel,
+                store=self.store)
+        return self._responses
+
+    def responses(self, field: dict) -> dict | None:
+        # the coils' eddy-current responses of a row: the study's, or at the row's c
+        c = field.get("reversibility")
+        if self.responses_nominal is None or c is None or not self.specs or \
+                c == next(p for p in self.specs if p is not None).model.geometry.reversibility:
+            return self.responses_nominal
+        return {p: self.response_family().response(p, c) for p in self.responses_nominal}
 
     def row(self, changed: Study, field: dict) -> tuple[dict | None, np.ndarray | None]:
         # the transducers of the row's physics MsS and their magnets' pull on the beads
@@ -338,16 +362,16 @@ def evaluate(task: Task) -> Evaluation:
                                      "magnet inputs' distributions") from None
                 chains.append(chain)
                 velocities.append(s.striker.velocity_m_per_s)
-                extras.append((s, setup, trs))
+                extras.append((s, setup, trs, nominal.responses(field)))
             batch = simulate_batch(chains, np.array(velocities), t, dt=study.simulation.dt_s)
             runs += len(chains)
-            for j, (r, (s, setup, trs)) in enumerate(zip(block, extras, strict=True)):
+            for j, (r, (s, setup, trs, resp)) in enumerate(zip(block, extras, strict=True)):
                 # contiguous copies: the read-out gathers a coil's contacts column-wise
                 history = ChainResult(t=t, force=np.ascontiguousarray(batch.force[j]),
                                       approach=np.ascontiguousarray(batch.approach[j]))
                 with _quiet("msens.pipeline"):
                     result = observe_setup(setup, chains[j], history, transducers=trs,
-                                           study=s, responses=nominal.responses)
+                                           study=s, responses=resp)
                 for k, v in row_features(result).items():
                     features.setdefault(k, [np.nan] * rows.shape[0])[r] = v
                 if task.keep[r]:

@@ -457,11 +457,12 @@ def _route(kind: Kind, study: Study) -> tuple[str, str]:
     if p == "field.steel_conductivity_S_per_m" and not eddy:
         return HELD, ("does not enter this study's physics: [field] eddy_currents = false (the "
                       "steel's conductivity only sets the eddy currents)")
+    if p == "field.steel_conductivity_S_per_m":
+        return HELD, ("sets the eddy currents in the steel: it needs eddy-current models over "
+                      "the conductivity, not solved in this version; the band is conditional "
+                      "on the nominal value")
     if p in ("sensor[i].coil.turns", "sensor[i].coil.axial_offset_m",
-             "sensor.magnet.remanence_factor"):
-        if eddy:
-            return HELD, ("with eddy currents the coils' frequency responses would need "
-                          "variants of their own (not solved in this version)")
+             "sensor.magnet.remanence_factor"):  # with eddy currents: msens.uq.model.response_at
         return FIELD_TABLE, ""
     if p == "field.reversibility":  # with eddy currents the responses' surrogate too
         return FIELD_SURROGATE, ""

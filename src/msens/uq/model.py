@@ -6,10 +6,11 @@ physics MsS gets the transducer of its field model as the inputs say (remanence 
 :class:`~msens.magnetics.variants.RemanenceFamily`, coil offset through its tabulated offset
 profiles, as ``msens diagnose`` varies them: :class:`msens.diagnose.models.FieldModel`; the
 steel's reversibility through the spline surrogate
-:class:`~msens.magnetics.reversibility.ReversibilityFamily`, see :func:`at_reversibility`,
-and with eddy currents the coils' frequency responses through
-:class:`~msens.magnetics.reversibility.ReversibilityResponses`; turns by :func:`with_turns`), the chains of a chunk of rows are integrated in one batch
-(:func:`msens.chain.integrate.simulate_batch`), and each run is observed by
+:class:`~msens.magnetics.reversibility.ReversibilityFamily`, see :func:`at_reversibility`;
+turns by :func:`with_turns`), and with eddy currents the coil's frequency response changed
+the same way (:func:`response_at`: the remanence and reversibility families of eddy-current
+models, the offset profiles, the turns). The chains of a chunk of rows are integrated in one
+batch (:func:`msens.chain.integrate.simulate_batch`), and each run is observed by
 :func:`msens.pipeline.observe_setup`, the function ``msens run`` observes its setups with.
 So a row at the nominal values reproduces ``msens run`` exactly, and every feature is the
 run's feature.
@@ -36,6 +37,7 @@ from msens.config.study import Study
 from msens.diagnose import physics
 from msens.diagnose.models import ModelBank, PhysicsMss
 from msens.errors import InputError
+from msens.magnetics.frequency_response import FrequencyResponse
 from msens.magnetics.reversibility import (
     ReversibilityFamily,
     ReversibilityResponses,
@@ -71,15 +73,85 @@ def with_turns(tr: Transducer, turns: int) -> Transducer:
                    inductance_H=tr.inductance_H * s * s, resistance_ohm=tr.resistance_ohm * s)
 
 
+def response_at(nominal: FrequencyResponse, at_c: FrequencyResponse | None = None,
+                remanent: FrequencyResponse | None = None,
+                moved: tuple[FrequencyResponse, float] | None = None,
+                turns_ratio: float | None = None) -> FrequencyResponse:
+    """A coil's eddy-current frequency response with the row's field inputs changed, as
+    :func:`at_reversibility` and :func:`with_turns` change its transducer.
+
+    Parameters
+    ----------
+    nominal : FrequencyResponse
+        The study's (``msens run``'s) response of the coil.
+    at_c : FrequencyResponse, optional
+        The coil at another steel reversibility
+        (:class:`~msens.magnetics.reversibility.ReversibilityResponses`).
+    remanent : FrequencyResponse, optional
+        The coil with the magnets' remanence changed, nominal c
+        (:class:`~msens.magnetics.variants.RemanenceResponses`): taken as it is, or with
+        ``at_c`` added on top of it as :func:`at_reversibility` does (the change at the
+        nominal c scaled by the size of each quantity at c).
+    moved : (FrequencyResponse, float), optional
+        A response with offset profiles (the diagnosis model's) and the coil's axial offset,
+        m: the change of S_c(ω), D_c(ω) that moving the coil makes
+        (:meth:`FrequencyResponse.shifted`) is added on top, scaled the same way; Z(ω) is
+        kept, as :meth:`~msens.magnetics.transducer.Transducer.shifted` keeps R and L.
+    turns_ratio : float, optional
+        New turns over the solved coil's: S_c and D_c scale as N, R_dc as N, Z − R_dc and
+        the static inductance as N² (:func:`with_turns`).
+
+    Returns
+    -------
+    FrequencyResponse
+        Without offset profiles or screening split.
+    """
+    r = nominal if at_c is None else at_c
+    if remanent is not None:
+        if at_c is None:
+            r = remanent
+        else:
+            r = replace(r, **{name: _on_top(getattr(r, name), getattr(nominal, name),
+                                            getattr(remanent, name))
+                              for name in ("villari", "approach")},
+                        impedance=r.resistance_ohm + _on_top(
+                            r.impedance - r.resistance_ohm,
+                            nominal.impedance - nominal.resistance_ohm,
+                            remanent.impedance - remanent.resistance_ohm),
+                        static_inductance_H=float(_on_top(
+                            np.array([r.static_inductance_H]),
+                            np.array([nominal.static_inductance_H]),
+                            np.array([remanent.static_inductance_H]))[0]))
+    if moved is not None:
+        profiles, offset = moved
+        shifted = profiles.shifted(offset)
+        r = replace(r, **{name: _on_top(getattr(r, name), getattr(profiles, name),
+                                        getattr(shifted, name))
+                          for name in ("villari", "approach")})
+    if turns_ratio is not None:
+        s = float(turns_ratio)
+        r = replace(r, villari=np.asarray(r.villari) * s, approach=np.asarray(r.approach) * s,
+                    impedance=r.resistance_ohm * s + (np.asarray(r.impedance)
+                                                      - r.resistance_ohm) * s * s,
+                    resistance_ohm=r.resistance_ohm * s,
+                    static_inductance_H=r.static_inductance_H * s * s)
+    if r is nominal:
+        return nominal
+    return replace(r, offsets=None, villari_by_offset=None, approach_by_offset=None,
+                   screening=None)
+
+
 def _on_top(value: np.ndarray | None, nominal: np.ndarray | None,
             changed: np.ndarray | None) -> np.ndarray | None:
     # value + (changed - nominal), scaled by the size (2-norm) of value over that of nominal
     if value is None or nominal is None or changed is None:
         return value
-    value, nominal = np.asarray(value, dtype=float), np.asarray(nominal, dtype=float)
+    # complex values (frequency responses) stay complex; |.| is the 2-norm of the moduli
+    kind = np.result_type(value, nominal, changed, float)
+    value, nominal = np.asarray(value, dtype=kind), np.asarray(nominal, dtype=kind)
     size = np.linalg.norm(nominal)
     scale = np.linalg.norm(value) / size if size > 0.0 else 1.0
-    return value + scale * (np.asarray(changed, dtype=float) - nominal)
+    return value + scale * (np.asarray(changed, dtype=kind) - nominal)
 
 
 def at_reversibility(surrogate: Transducer, nominal: Transducer,
@@ -246,12 +318,27 @@ class _Setup:
         return self._responses
 
     def responses(self, field: dict) -> dict | None:
-        # the coils' eddy-current responses of a row: the study's, or at the row's c
-        c = field.get("reversibility")
-        if self.responses_nominal is None or c is None or not self.specs or \
-                c == next(p for p in self.specs if p is not None).model.geometry.reversibility:
+        # the coils' eddy-current responses of a row (None without eddy currents): the
+        # study's, changed as the row's field inputs say (response_at)
+        if self.responses_nominal is None or not self.specs:
             return self.responses_nominal
-        return {p: self.response_family().response(p, c) for p in self.responses_nominal}
+        model = next(p for p in self.specs if p is not None).model
+        c = field.get("reversibility")
+        if c == model.geometry.reversibility:
+            c = None
+        factor = field.get("remanence", 1.0)
+        out = {}
+        for i, p in enumerate(self.specs):
+            if p is None:
+                continue
+            nominal = self.responses_nominal[p.particle]
+            offset, turns = field.get(("offset", i), 0.0), field.get(("turns", i))
+            out[p.particle] = response_at(
+                nominal, None if c is None else self.response_family().response(p.particle, c),
+                None if factor == 1.0 else model.response_family().response(p.particle, factor),
+                None if offset == 0.0 else (model.responses[p.particle], offset),
+                None if turns is None else turns / p.coil.turns)
+        return out
 
     def row(self, changed: Study, field: dict) -> tuple[dict | None, np.ndarray | None]:
         # the transducers of the row's physics MsS and their magnets' pull on the beads
@@ -382,6 +469,7 @@ def evaluate(task: Task) -> Evaluation:
                       waveforms={k: np.asarray(v) for k, v in waves.items()}, runs=runs)
 
 
-__all__ = ["BATCH_RUNS", "Evaluation", "Task", "at_reversibility", "evaluate", "row_features",
+__all__ = ["BATCH_RUNS", "Evaluation", "Task", "at_reversibility", "evaluate", "response_at",
+           "row_features",
            "row_waveforms",
            "sensor_name", "waveform_unit", "with_turns"]

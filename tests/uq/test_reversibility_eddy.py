@@ -13,6 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from tests.uq.test_reversibility import REVERSIBILITY
 
 from msens import api
 from msens.config.fieldsetup import eddy_settings, geometry_from_study
@@ -26,15 +27,6 @@ from msens.magnetics.reversibility import (
 )
 from msens.uq.inputs import FIELD_SURROGATE, parse_inputs
 from msens.uq.model import Task, evaluate, response_at
-
-REVERSIBILITY = """schema = "msens.uncertainty/1"
-[[input]]
-name = "field.reversibility"
-distribution = "loguniform"
-lower = 0.1
-upper = 1.0
-reason = "test"
-"""
 
 
 @pytest.fixture(scope="module")
@@ -153,26 +145,12 @@ def test_response_at_each_field_input(study, family):
     np.testing.assert_allclose(same.impedance, at_c.impedance, rtol=1e-15)
 
 
-FIELD_INPUTS = """schema = "msens.uncertainty/1"
-[[input]]
-name = "sensor[1].coil.turns"
-distribution = "uniform"
-lower = 1000
-upper = 1200
-reason = "test"
-[[input]]
-name = "sensor.magnet.remanence_factor"
-distribution = "uniform"
-lower = 0.7
-upper = 1.3
-reason = "test"
-[[input]]
-name = "sensor[1].coil.axial_offset_m"
-distribution = "uniform"
-lower = -1e-3
-upper = 1e-3
-reason = "test"
-"""
+#: The field inputs a table or family reads (uniform, test ranges).
+FIELD_INPUTS = 'schema = "msens.uncertainty/1"\n' + "".join(
+    f'[[input]]\nname = "{name}"\ndistribution = "uniform"\nlower = {lo!r}\nupper = {hi!r}\n'
+    'reason = "test"\n' for name, lo, hi in (("sensor[1].coil.turns", 1000, 1200),
+                                             ("sensor.magnet.remanence_factor", 0.7, 1.3),
+                                             ("sensor[1].coil.axial_offset_m", -1e-3, 1e-3)))
 
 
 def test_uq_propagates_turns_offset_and_remanence_with_eddy_currents(study):

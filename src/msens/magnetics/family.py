@@ -16,7 +16,7 @@ them the same way (:class:`~msens.magnetics.variants.RemanenceResponses`,
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -24,6 +24,9 @@ from scipy.interpolate import CubicSpline
 from msens.errors import internal, require
 from msens.field.geometry import SensorGeometry
 from msens.magnetics.transducer import Transducer, magnetic_precompression
+
+if TYPE_CHECKING:
+    from msens.magnetics.frequency_response import FrequencyResponse
 
 #: Transducer quantities that depend on the field model, interpolated element by element
 #: (Wb/N, Wb/m, N; the offset profiles with their offsets axis). The inductance (H) is
@@ -144,7 +147,7 @@ class ResponseFamily:
     _at = TransducerFamily._at
     _check = TransducerFamily._check
 
-    def response(self, particle: int, x: float):
+    def response(self, particle: int, x: float) -> FrequencyResponse:
         """The coil at ``particle`` at parameter value ``x``
         (:class:`~msens.magnetics.frequency_response.FrequencyResponse`; S_c(ω), D_c(ω),
         Z(ω) and the static inductance from the splines; no offset profiles or screening

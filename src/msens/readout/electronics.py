@@ -352,7 +352,7 @@ def peak_gain(circuit: ReadoutCircuit,
     f_peak : float
         Hz.
     gain : float
-        |H(f_peak)|, dimensionless (1 at DC for an unloaded coil).
+        The gain at ``f_peak``, dimensionless (1 at DC for an unloaded coil).
     """
     lo, hi = (float(b) for b in band)
     if not 0.0 < lo < hi:

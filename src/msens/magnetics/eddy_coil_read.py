@@ -14,7 +14,9 @@ a geometry that differs from a solved one only in its coils from two artifacts:
 - ``eddy-coil-table-<key>-<particle>.npz``: the sources' harmonic summed-area tables over
   the coil's window and offset span (:class:`~msens.magnetics.harmonic_tables.HarmonicTables`,
   :data:`SPACING`), built the first time that coil changes (the eddy mesh's bias solve and
-  every source solved at every frequency: minutes; then kept in the user cache).
+  every source solved at every frequency: minutes; then kept in the user cache). The main
+  study's are committed as truncated singular value decompositions (:func:`low_rank`;
+  ``benchmarks/eddy_table_rank.py`` makes them and measures their error).
 
 A changed coil's :class:`~msens.magnetics.frequency_response.FrequencyResponse`:
 
@@ -154,15 +156,24 @@ class EddyCoilTable:
         return vr + 1j * vi, ar + 1j * ai
 
 
-def write_table(store: Store, key: str, particle: int, table: EddyCoilTable) -> None:
+def write_table(store: Store, key: str, particle: int, table: EddyCoilTable, *,
+                rank_tol: float | None = None) -> None:
     """Store ``table`` as artifact :func:`table_name` (atomic .npz with its checksum); a
-    failed write is a warning (the table only serves later coil changes)."""
+    failed write is a warning (the table only serves later coil changes).
+
+    ``rank_tol``: store the tables as a truncated singular value decomposition instead
+    (:func:`low_rank`; how the main study's tables are committed, a few MB instead of 59).
+    """
     from msens.errors import InputError
 
     h = table.harmonic
-    arrays = {"frequencies": h.frequencies, "r": h.r, "z": h.z, "cumulative": h.cumulative,
+    arrays = {"frequencies": h.frequencies, "r": h.r, "z": h.z,
               "particles": table.particles, "approach_contacts": table.approach_contacts,
               "count": np.array(table.count)}
+    if rank_tol is None:
+        arrays["cumulative"] = h.cumulative
+    else:
+        arrays.update(low_rank(h.cumulative, rank_tol))
 
     def write(tmp):
         buf = io.BytesIO()
@@ -176,13 +187,40 @@ def write_table(store: Store, key: str, particle: int, table: EddyCoilTable) -> 
         _log.warning("%s; eddy-current coil table not kept", exc)
 
 
+def low_rank(cumulative: np.ndarray, rank_tol: float) -> dict[str, np.ndarray]:
+    """The tables of every frequency and source as one matrix (rows: frequency × source,
+    columns: grid nodes), each row scaled to unit 2-norm, truncated to the singular values
+    above ``rank_tol`` × the largest.
+
+    The sources' potentials over a coil's window are smooth and alike (the window is air
+    and copper, away from every source), so a few dozen singular vectors carry them:
+    ``u`` = U_k Σ_k (complex128, rows × k) and ``v`` = V_k^H (complex64, k × nodes);
+    ``shape`` restores (n_f, n_sources, nr, nz).
+    """
+    n_f, n_s, nr, nz = cumulative.shape
+    m = cumulative.reshape(n_f * n_s, nr * nz)
+    # every row to unit size first: a weak source (a Villari one, a far contact) keeps the
+    # same relative accuracy as the strongest
+    w = np.linalg.norm(m, axis=1)
+    w = np.where(w > 0.0, w, 1.0)
+    u, s, vh = np.linalg.svd(m / w[:, None], full_matrices=False)
+    k = max(int(np.sum(s > rank_tol * s[0])), 1)
+    return {"u": w[:, None] * u[:, :k] * s[:k], "v": vh[:k].astype(np.complex64),
+            "shape": np.array(cumulative.shape)}
+
+
 def read_table(store: Store, key: str, particle: int) -> EddyCoilTable | None:
-    """The stored (verified) table of the coil at ``particle``, or None."""
+    """The stored (verified) table of the coil at ``particle``, or None (full or
+    :func:`low_rank` tables)."""
     path = store.find_file(table_name(key, particle))
     if path is None:
         return None
     with np.load(path) as f:
-        return EddyCoilTable(HarmonicTables(f["frequencies"], f["r"], f["z"], f["cumulative"]),
+        if "cumulative" in f:
+            cumulative = f["cumulative"]
+        else:
+            cumulative = (f["u"] @ f["v"].astype(complex)).reshape(tuple(f["shape"]))
+        return EddyCoilTable(HarmonicTables(f["frequencies"], f["r"], f["z"], cumulative),
                              f["particles"], f["approach_contacts"], int(f["count"]))
 
 
@@ -332,6 +370,7 @@ __all__ = [
     "EddyCoilTable",
     "build_tables",
     "free_key",
+    "low_rank",
     "read_changed_coils",
     "read_response",
     "read_table",

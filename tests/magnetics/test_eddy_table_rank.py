@@ -77,10 +77,11 @@ def test_the_main_studys_tables_are_committed(eddy_study):
         assert table.harmonic.cumulative.shape[:2] == (len(DEFAULT_FREQUENCIES), sources)
 
 
+@pytest.mark.slow  # 22-35 s: the static coil tables of an empty cache
 def test_a_changed_coil_on_the_main_study_with_eddy_currents_builds_no_table(
         eddy_study, tmp_path, monkeypatch):
     """Issue 33: a coil change after the default run is a read: the committed tables serve
-    it (nothing solved on the eddy-current mesh; the static coil tables, seconds)."""
+    it (nothing solved on the eddy-current mesh; only the static coil tables are built)."""
     monkeypatch.setenv("MSENS_MESH_DIR", str(tmp_path / "cache"))
     api.run(eddy_study)
     monkeypatch.setattr(eddy_coil_read, "build_tables", _refuse)

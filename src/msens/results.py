@@ -451,11 +451,9 @@ def physics_summary(result: StudyResult) -> dict:
                     **_peaks(static_rec),
                     "readout_peak": _readout_peak(static_rec.circuit, None)}}),
                 "pre_peak_trough": _trough(r.mss),
-                "mechanism_share": mechanism_share(
-                    tr, s.history, s.responses[r.sensor.particle] if s.responses else None),
-                **({"frequency_response": frequency_summary(s.responses[r.sensor.particle],
-                                                            tr)}
-                   if s.responses else {}),
+                "mechanism_share": mechanism_share(tr, s.history, response),
+                **({"frequency_response": frequency_summary(response, tr)}
+                   if response is not None else {}),
                 "sensitivity_profile": [
                     {"contact": int(c), "dLambda_dF_Wb_per_N": float(v + g),
                      "villari_Wb_per_N": float(v), "approach_Wb_per_N": float(g)}

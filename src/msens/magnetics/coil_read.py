@@ -14,7 +14,9 @@ the store serve a changed coil:
   unit area over the coil's window (:func:`coil_window`: the air between the tube and the
   magnet's ring, between its pole pieces, plus the offset span) and the window's
   :class:`InductanceGrid`; built the first time that coil changes, from the solved coils'
-  mesh (a bias solve, the sources and about 1,600 tangent solves: seconds).
+  mesh (a bias solve, the sources and about 1,600 tangent solves: half a minute), then kept
+  in the user cache. The main study's are committed, truncated (:func:`write_tables` with
+  ``rank_tol``), so its first coil change reads them too.
 
 A geometry that differs from a stored one only in its coils is then read
 (:func:`read_coil`), the way a coil sweep reads its designs (:mod:`msens.design.coil_sweep`):
@@ -47,6 +49,7 @@ from msens.field.geometry import SensorGeometry
 from msens.field.parts import SensorUnit
 from msens.field.sensor_model import coil_resistance
 from msens.field.solve import FieldSolution
+from msens.magnetics.low_rank import expand_symmetric, rows_svd, symmetric_eig
 from msens.magnetics.mechanisms import (
     OFFSET_SPAN,
     OFFSET_STEP,
@@ -391,15 +394,30 @@ def read_model(store: Store, key: str) -> tuple[dict[int, Coil], dict[int, float
             {int(p): float(v) for p, v in data["inductance_H"].items()})
 
 
-def write_tables(store: Store, key: str, tables: CoilTables) -> None:
+def write_tables(store: Store, key: str, tables: CoilTables, *,
+                 rank_tol: float | None = None) -> None:
     """Store each coil of ``tables`` as artifact :func:`table_name` (atomic .npz with its
-    checksum)."""
+    checksum).
+
+    ``rank_tol``: store the summed-area tables as a truncated SVD over sources
+    (:func:`msens.magnetics.low_rank.rows_svd`) and the inductance kernel as its leading
+    eigenpairs (:func:`msens.magnetics.low_rank.symmetric_eig`) instead: how the main study's
+    tables are committed (about 3 MB per coil instead of 17;
+    ``python benchmarks/coil_table_rank.py`` makes them and measures what a read loses).
+    """
     for p, t in sorted(tables.tables.items()):
         g = tables.grids[p]
         arrays = {"particles": tables.particles, "approach_contacts": tables.approach_contacts,
                   "count": np.array(tables.count), "r": t.r, "z": t.z,
-                  "cumulative": t.cumulative, "grid_r": g.r, "grid_z": g.z,
-                  "kernel": g.kernel}
+                  "grid_r": g.r, "grid_z": g.z}
+        if rank_tol is None:
+            arrays.update(cumulative=t.cumulative, kernel=g.kernel)
+        else:
+            u, v = rows_svd(t.cumulative.reshape(t.cumulative.shape[0], -1), rank_tol)
+            q, lam = symmetric_eig(g.kernel, rank_tol)
+            arrays.update(cumulative_u=u, cumulative_v=v,
+                          cumulative_shape=np.array(t.cumulative.shape), kernel_q=q,
+                          kernel_lam=lam)
 
         def write(tmp, arrays=arrays):
             buf = io.BytesIO()
@@ -413,15 +431,22 @@ def write_tables(store: Store, key: str, tables: CoilTables) -> None:
 def read_tables(store: Store, key: str, coils: dict[int, Coil],
                 inductance_H: dict[int, float], particles) -> CoilTables:
     """The stored tables of the coils at ``particles`` that the store has (verified; maybe
-    none), with ``coils`` and ``inductance_H`` from :func:`read_model`."""
+    none; full or truncated, :func:`write_tables`), with ``coils`` and ``inductance_H`` from
+    :func:`read_model`."""
     tables, grids, common = {}, {}, None
     for p in sorted({int(q) for q in particles}):
         path = store.find_file(table_name(key, p))
         if path is None:
             continue
         with np.load(path) as f:
-            tables[p] = LinkageTable(f["r"], f["z"], f["cumulative"])
-            grids[p] = InductanceGrid(f["grid_r"], f["grid_z"], f["kernel"])
+            if "cumulative" in f:
+                cumulative, kernel = f["cumulative"], f["kernel"]
+            else:
+                cumulative = (f["cumulative_u"] @ f["cumulative_v"].astype(float)).reshape(
+                    tuple(f["cumulative_shape"]))
+                kernel = expand_symmetric(f["kernel_q"], f["kernel_lam"])
+            tables[p] = LinkageTable(f["r"], f["z"], cumulative)
+            grids[p] = InductanceGrid(f["grid_r"], f["grid_z"], kernel)
             common = (f["particles"], f["approach_contacts"], int(f["count"]))
     if common is None:
         common = (np.zeros(0, dtype=int), np.zeros(0, dtype=int), 0)

@@ -67,6 +67,7 @@ from msens.magnetics.dynamic import (
 )
 from msens.magnetics.frequency_response import FrequencyResponse
 from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables_over
+from msens.magnetics.low_rank import rows_svd
 from msens.magnetics.mechanisms import contact_profiles
 from msens.magnetics.transducer_cache import free_key as static_free_key
 from msens.magnetics.transducer_cache import transducer_report
@@ -190,7 +191,7 @@ def write_table(store: Store, key: str, particle: int, table: EddyCoilTable, *,
 def low_rank(cumulative: np.ndarray, rank_tol: float) -> dict[str, np.ndarray]:
     """The tables of every frequency and source as one matrix (rows: frequency × source,
     columns: grid nodes), each row scaled to unit 2-norm, truncated to the singular values
-    above ``rank_tol`` × the largest.
+    above ``rank_tol`` × the largest (:func:`msens.magnetics.low_rank.rows_svd`).
 
     The sources' potentials over a coil's window are smooth and alike (the window is air
     and copper, away from every source), so a few dozen singular vectors carry them:
@@ -198,15 +199,8 @@ def low_rank(cumulative: np.ndarray, rank_tol: float) -> dict[str, np.ndarray]:
     ``shape`` restores (n_f, n_sources, nr, nz).
     """
     n_f, n_s, nr, nz = cumulative.shape
-    m = cumulative.reshape(n_f * n_s, nr * nz)
-    # every row to unit size first: a weak source (a Villari one, a far contact) keeps the
-    # same relative accuracy as the strongest
-    w = np.linalg.norm(m, axis=1)
-    w = np.where(w > 0.0, w, 1.0)
-    u, s, vh = np.linalg.svd(m / w[:, None], full_matrices=False)
-    k = max(int(np.sum(s > rank_tol * s[0])), 1)
-    return {"u": w[:, None] * u[:, :k] * s[:k], "v": vh[:k].astype(np.complex64),
-            "shape": np.array(cumulative.shape)}
+    u, v = rows_svd(cumulative.reshape(n_f * n_s, nr * nz), rank_tol)
+    return {"u": u, "v": v, "shape": np.array(cumulative.shape)}
 
 
 def read_table(store: Store, key: str, particle: int) -> EddyCoilTable | None:

@@ -30,6 +30,7 @@ import numpy as np
 import skfem
 
 from msens.field.bh import monotone_bh
+from msens.field.bias_cache import solve_bias
 from msens.field.build import MeshOptions
 from msens.field.cache import cached_mesh
 from msens.field.constitutive import energy_density, reluctivities
@@ -453,14 +454,16 @@ def axis_profile(sol: FieldSolution, geometry: SensorGeometry, n: int = 401
 def run_field_model(geometry: SensorGeometry, *,
                     options: MeshOptions | None = None, store: Store | None = None,
                     inductance: bool = True) -> FieldReport:
-    """Mesh (cached), solve the bias field and post-process the sensor model.
+    """Mesh (cached), solve the bias field (cached, :func:`msens.field.bias_cache.solve_bias`)
+    and post-process the sensor model.
 
     Parameters
     ----------
     geometry : SensorGeometry
     options : MeshOptions, optional
     store : Store, optional
-        Where the mesh is found or written (default :meth:`msens.store.Store.default`).
+        Where the mesh and the bias solution are found or written (default
+        :meth:`msens.store.Store.default`).
     inductance : bool
         False skips the two extra linear solves per coil.
 
@@ -474,7 +477,7 @@ def run_field_model(geometry: SensorGeometry, *,
     elapsed = stopwatch()
     with heartbeat(_log, "field model: mesh and bias solve"):
         axi, path = load_mesh(geometry, options, store)
-        sol = solve(bias_problem(geometry, axi))
+        sol = solve_bias(bias_problem(geometry, axi), geometry, options, store)
     _log.info("field model: %d dofs, %d Newton iterations, %.1f s", sol.dofs, sol.iterations,
               elapsed())
     with heartbeat(_log, "field model: coil inductances, bead fields, contact forces"):

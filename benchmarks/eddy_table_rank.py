@@ -40,7 +40,7 @@ from msens.magnetics.eddy_coil_read import (
     write_table,
 )
 from msens.magnetics.harmonic_tables import HarmonicTables
-from msens.store import Store
+from msens.store import Store, user_cache_dir
 
 #: Coil changes read (as benchmarks/coil_read.py): study keys of both coils.
 CHANGES = {"turns 1000": {"coil.turns": 1000}, "length 8 mm": {"coil.length_m": 8e-3},
@@ -58,7 +58,7 @@ def main(argv: list[str] | None = None) -> dict:
     eddy = eddy_settings(study)
     solved = {u.coil.particle: u.coil for u in geometry.sensors}
     key = tables_key(geometry, solved, eddy.options, DEFAULT_FREQUENCIES, eddy.steel, None)
-    store = Store.default()
+    store = Store.at(user_cache_dir())  # the full tables, never the committed truncated ones
     report: dict = {"tables_key": key, "tol": opts.tol, "coils": {}}
     for p in sorted(solved):
         full = read_table(store, key, p)

@@ -37,7 +37,7 @@ import numpy as np
 
 from msens import api
 from msens.config.fieldsetup import geometry_from_study
-from msens.magnetics.coil_read import read_model, read_tables, write_tables
+from msens.magnetics.coil_read import read_model, read_tables, table_name, write_tables
 from msens.magnetics.transducer_cache import free_key
 from msens.store import Store, user_cache_dir
 
@@ -62,11 +62,11 @@ def main(argv: list[str] | None = None) -> dict:
         raise SystemExit(f"no full coil tables {key} in {store.directory}: run a changed coil "
                          "on the main study first")
     with tempfile.TemporaryDirectory() as tmp:
-        return _measure(study, geometry, key, model, full, particles,
-                        Store.at(opts.out or tmp), opts.tol)
+        return _measure(study, key, model, full, particles, Store.at(opts.out or tmp),
+                        opts.tol)
 
 
-def _measure(study, geometry, key, model, full, particles, scratch: Store, tol: float) -> dict:
+def _measure(study, key, model, full, particles, scratch: Store, tol: float) -> dict:
     t0 = time.perf_counter()
     write_tables(scratch, key, full, rank_tol=tol)
     seconds = time.perf_counter() - t0
@@ -74,7 +74,7 @@ def _measure(study, geometry, key, model, full, particles, scratch: Store, tol: 
     report: dict = {"free_key": key, "tol": tol, "write_seconds": seconds, "coils": {}}
     shifts = np.linspace(-3e-3, 3e-3, 7)
     for p in particles:
-        path = scratch.find_file(f"coil-table-{key}-{p}.npz")
+        path = scratch.find_file(table_name(key, p))
         with np.load(path) as f:
             ranks = {"tables": int(f["cumulative_u"].shape[1]),
                      "kernel": int(f["kernel_lam"].size)}
@@ -96,6 +96,8 @@ def _measure(study, geometry, key, model, full, particles, scratch: Store, tol: 
         report["coils"][str(p)] = {
             "rank": ranks, "bytes_full": int(a_t.nbytes + a_k.nbytes),
             "bytes_stored": int(path.stat().st_size),
+            "size_ratio_full_to_stored": round((a_t.nbytes + a_k.nbytes)
+                                               / path.stat().st_size, 2),
             "tables_max_rel_error": float(np.max(np.abs(b_t - a_t)) / np.max(np.abs(a_t))),
             "kernel_max_rel_error": float(np.max(np.abs(b_k.astype(float) - a_k))
                                           / np.max(np.abs(a_k))),

@@ -30,6 +30,12 @@ def pytest_configure(config):
         "(once per numba cache, about a minute)")
     t0 = time.perf_counter()
     jobs = [compile_in_background("msens.chain.warmup", v) for v in missing]
+    said = t0
+    while any(j is not None and j.running() for j in jobs):  # a word every 15 s meanwhile
+        time.sleep(0.5)
+        if time.perf_counter() - said >= 15:
+            said = time.perf_counter()
+            say(f"  still compiling ({said - t0:.0f} s)")
     outcomes = {v: "not started" if j is None else j.wait()
                 for v, j in zip(missing, jobs, strict=True)}
     problems = [f"{v}: {why}" for v, why in outcomes.items() if why is not None]

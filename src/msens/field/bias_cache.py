@@ -17,6 +17,7 @@ import logging
 
 import numpy as np
 
+from msens.errors import InputError
 from msens.field.build import MeshOptions
 from msens.field.cache import geometry_key
 from msens.field.geometry import SensorGeometry
@@ -77,8 +78,6 @@ def solve_bias(problem: MagnetostaticProblem, geometry: SensorGeometry,
         buf = io.BytesIO()
         np.savez(buf, **arrays)
         tmp.write_bytes(buf.getvalue())
-
-    from msens.errors import InputError
 
     try:
         store.write_file(name, write, {"schema": BIAS_VERSION, "dofs": int(sol.a.size)})

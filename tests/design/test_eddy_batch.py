@@ -139,6 +139,7 @@ def _design_rows(tmp_path: Path, study_text: str, sweep_text: str, name: str) ->
         return list(csv.DictReader(fh))
 
 
+@pytest.mark.slow  # 48 s; the default suite keeps the API's eddy design = run test
 def test_design_cli_with_eddy_currents_on_the_tiny_study(tmp_path, monkeypatch):
     monkeypatch.setenv("MSENS_MESH_DIR", str(tmp_path / "cache"))
     eddy = _design_rows(tmp_path, TINY + EDDY, TINY_COIL, "eddy")

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import threading
+import time
+
 import numpy as np
 from threadpoolctl import threadpool_info
 
 from msens.diagnose import workflow
-from msens.parallel import one_blas_thread
+from msens.parallel import one_blas_thread, thread_map
 
 
 def _blas_threads() -> list[int]:
@@ -40,3 +43,20 @@ def test_the_diagnosis_runs_on_one_blas_thread(monkeypatch):
     except RuntimeError:
         pass
     assert seen and set(seen[0]) == {1}
+
+
+def test_thread_map_keeps_the_order_and_runs_on_threads_with_one_blas_thread():
+    seen: list = []
+
+    def work(k: int) -> int:
+        seen.append((threading.get_ident(), _blas_threads()))
+        time.sleep(0.05)  # long enough that both threads take items
+        return k * k
+
+    items = list(range(9))
+    assert thread_map(work, items, threads=2) == [k * k for k in items]
+    assert len({ident for ident, _ in seen}) == 2
+    assert all(set(b) == {1} for _, b in seen)
+    seen.clear()
+    assert thread_map(work, items) == [k * k for k in items]  # default: the calling thread
+    assert {ident for ident, _ in seen} == {threading.get_ident()}

@@ -25,7 +25,7 @@ import os
 import re
 import socket
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, ThreadPoolExecutor, wait
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
@@ -242,6 +242,23 @@ def one_blas_thread() -> Iterator[None]:
     """
     with _blas().limit(limits=1, user_api="blas"):
         yield
+
+
+def thread_map(fn: Callable[[Any], Any], items: Sequence[Any], threads: int = 1) -> list:
+    """``[fn(x) for x in items]``, on ``threads`` threads of this process, BLAS on one thread
+    each (:func:`one_blas_thread`).
+
+    For work whose time is spent in numpy, BLAS and pocketfft calls that release the GIL
+    (a coil sweep's chunks of spectra and inverse FFTs): threads share the process's
+    arrays, where worker processes would each need a copy of a coil sweep's ~150 MB
+    context. ``threads`` is decided by the caller (a workflow: :func:`default_workers`
+    for a local run); 1 runs in the calling thread.
+    """
+    with one_blas_thread():
+        if threads <= 1 or len(items) <= 1:
+            return [fn(x) for x in items]
+        with ThreadPoolExecutor(max_workers=min(threads, len(items))) as pool:
+            return list(pool.map(fn, items))
 
 
 def _share_cores(threads: int) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import importlib
 import pickle
 from pathlib import Path
 
@@ -27,6 +28,8 @@ from msens.readout.mss import readout
 
 from .test_design_cli import TINY_COIL
 from .test_metrics import _wave
+
+metrics = importlib.import_module("msens.design.metrics")  # msens.design is the workflow
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -86,20 +89,54 @@ def test_batched_rows_equal_the_design_by_design_readout(freqs):
     assert alone["peak_voltage_V"] == pytest.approx(rows[3]["peak_voltage_V"], rel=1e-13)
 
 
+def test_few_column_basis_above_the_last_frequency_is_exact():
+    """Designs whose sensitivities at f_n span 2 of 2 n_c = 16 columns: the batch reads them
+    through a 2-column basis (_top_basis) and still equals the design-by-design read-out; on
+    two threads the rows are the same bits."""
+    rng = np.random.default_rng(11)
+    freqs = np.array([0.0, 10.0, 300.0, 3e3, 1e4, 3e4, 1e5, 2e5])
+    wave, elec = _wave(n_c=8), ElectronicsSpec()
+    n_d = SPECTRUM_CHUNK + 9
+    coils = [Coil(particle=13, turns=400 + 100 * (k % 5)) for k in range(n_d)]
+    res = rng.uniform(30.0, 120.0, n_d)
+    # two contact profiles per mechanism, mixed by the same design-dependent lags
+    base_s = rng.uniform(-2e-8, 2e-8, (2, 8))
+    base_d = rng.uniform(-3e-2, 1e-2, (2, 8))
+    lag = 1.0 / (1.0 + 1j * freqs[None, :, None] / rng.uniform(2e4, 8e4, (n_d, 1, 2)))
+    mix = rng.uniform(0.5, 2.0, (n_d, 1, 2)) * lag  # (n_d, n_f, 2)
+    mix[:, 0] = mix[:, 0].real
+    villari = mix @ base_s
+    approach = mix @ base_d
+    ind_w = rng.uniform(5e-3, 3e-2, (n_d, 1)) * (0.8 + 0.2 * lag[..., 0])
+    ind_w[:, 0] = ind_w[:, 0].real
+    ind = ind_w[:, 0].real
+    sp = metrics._chain_spectra(wave, freqs)
+    basis = metrics._top_basis(sp, np.concatenate([villari[:, -1], approach[:, -1]], axis=1))
+    assert basis.weights.shape == (16, 2)
+    rows = dynamic_design_rows(coils, res, ind, freqs, villari, approach, ind_w, wave, elec)
+    for k in range(0, n_d, 5):
+        peak_e, peak_v = _reference(coils[k], res[k], ind[k], freqs, villari[k],
+                                    approach[k], ind_w[k], wave, elec)
+        assert rows[k]["peak_emf_V"] == pytest.approx(peak_e, rel=1e-12)
+        assert rows[k]["peak_voltage_V"] == pytest.approx(peak_v, rel=1e-12)
+    threaded = dynamic_design_rows(coils, res, ind, freqs, villari, approach, ind_w, wave,
+                                   elec, threads=2)
+    assert threaded == rows
+
+
 def test_coil_transfer_functions_are_the_circuits_own():
     elec = ElectronicsSpec()
     f = np.geomspace(1.0, 1e7, 50)
     circuits = [readout(Coil(particle=13, turns=n), 50.0 + n / 10, 1e-2, elec)
                 for n in (300, 700, 1100)]
     z = np.array([c.resistance + 2j * np.pi * f * c.inductance * (1 - 0.1j) for c in circuits])
-    h = coil_transfer_functions(circuits, f, z)
+    c_w = [c.winding_capacitance for c in circuits]
+    assert len(set(c_w)) == 3
+    h = coil_transfer_functions(circuits[0], c_w, f, z)
     for k, c in enumerate(circuits):
         np.testing.assert_allclose(h[k], coil_transfer_function(c, f, z[k]), rtol=1e-14)
-    other = readout(Coil(particle=13), 50.0, 1e-2, ElectronicsSpec(cable_capacitance_f=3e-10))
-    with pytest.raises(InputError, match="one cable"):
-        coil_transfer_functions([circuits[0], other], f, z[:2])
     with pytest.raises(InputError, match="shape"):
-        coil_transfer_functions(circuits, f, z[:2])
+        coil_transfer_functions(circuits[0], c_w, f, z[:2])
 
 
 def test_harmonic_linkage_is_each_frequency_table_read_alone():

@@ -16,12 +16,13 @@ from msens.readout.electronics import ElectronicsSpec
 from msens.readout.mss import readout
 
 
-def _wave() -> Wave:
-    """Three contacts loaded by smooth solitary-like pulses, 10 MHz over 400 µs."""
+def _wave(n_c: int = 3) -> Wave:
+    """``n_c`` contacts (from 12 on) loaded by smooth solitary-like pulses 30 µs apart,
+    10 MHz over 400 µs."""
     t = np.arange(4001) * 1e-7
-    centres = np.array([100e-6, 130e-6, 160e-6])
+    centres = 100e-6 + 30e-6 * np.arange(n_c)
     force = 2.0 + 8.0 / np.cosh((t[:, None] - centres) / 8e-6) ** 2
-    contacts = np.array([12, 13, 14])
+    contacts = np.arange(12, 12 + n_c)
     full = np.zeros((t.size, 20))
     full[:, contacts - 1] = force
     return Wave(contacts=contacts, rates=contact_rates(t, full, contacts, 1.2e10),

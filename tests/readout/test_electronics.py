@@ -13,13 +13,22 @@ from msens.params.units import K_B
 from msens.readout.daq import daq_voltage
 from msens.readout.electronics import (
     ReadoutCircuit,
+    _bandwidth_search,
     bandwidth,
     peak_gain,
     resonance,
+    resonance_figures,
     state_space,
     transfer_function,
 )
-from msens.readout.noise import NoiseModel, add_readout_noise, noise_rms, thermal_noise_psd
+from msens.readout.noise import (
+    NoiseModel,
+    add_readout_noise,
+    noise_rms,
+    thermal_covariance,
+    thermal_noise_psd,
+    total_noise_rms,
+)
 
 T_ROOM = 293.15
 #: The paper's coil (msens.readout.coil: R 91.9 Ω, Wheeler L 23.0 mH, C_w ~ 10.8 pF) on 1 m RG-58
@@ -130,6 +139,39 @@ def test_bandwidth_closed_form(q_target):
         assert bandwidth(c) == pytest.approx(f0, rel=1e-9)       # Butterworth
 
 
+def test_resonance_figures_equal_the_poles_and_the_search():
+    """The closed forms against the general route: eigenvalues of the state matrix for f0,
+    Q and the slowest decay, the grid-and-Brent search for the bandwidth (under-, critically
+    and overdamped circuits, finite and open inputs), vectorised in one call."""
+    rng = np.random.default_rng(5)
+    circuits = [ReadoutCircuit(r, ind, c_w, 100e-12, r_in, 20e-12)
+                for r, ind, c_w, r_in in zip(rng.uniform(5.0, 500.0, 12),
+                                             rng.uniform(1e-3, 50e-3, 12),
+                                             rng.uniform(1e-12, 30e-12, 12),
+                                             [1e6, math.inf, 1e3, 1e4] * 3, strict=True)]
+    circuits.append(ReadoutCircuit(2e4, 1e-3, 0.0, 1e-9, math.inf, 0.0))  # Q = 0.05
+    circuits.append(ReadoutCircuit(2 * math.sqrt(1e-3 / 1e-9), 1e-3, 0.0, 1e-9, math.inf,
+                                   0.0))  # critically damped
+    fig = resonance_figures([c.resistance for c in circuits],
+                            [c.inductance for c in circuits],
+                            [c.total_capacitance for c in circuits],
+                            [0.0 if math.isinf(c.input_resistance) else 1 / c.input_resistance
+                             for c in circuits])
+    for k, c in enumerate(circuits):
+        p = np.linalg.eigvals(state_space(c)[0])
+        omega0 = math.sqrt(abs((p[0] * p[1]).real))
+        assert fig.resonance_hz[k] == pytest.approx(omega0 / (2 * math.pi), rel=1e-9)
+        assert fig.quality_factor[k] == pytest.approx(omega0 / -(p[0] + p[1]).real, rel=1e-9)
+        assert fig.decay_s[k] == pytest.approx(1 / np.min(-p.real), rel=1e-6)
+        assert fig.bandwidth_hz[k] == pytest.approx(_bandwidth_search(c), rel=1e-9)
+        assert (resonance(c), bandwidth(c)) == ((fig.resonance_hz[k], fig.quality_factor[k]),
+                                                fig.bandwidth_hz[k])
+    # with a cable resistance the search stays the route, near the R_c = 0 value
+    assert bandwidth(WITH_CABLE_R) == pytest.approx(bandwidth(PAPER), rel=0.05)
+    with pytest.raises(InputError, match="inductance > 0"):
+        resonance_figures(50.0, 0.0, 1e-10, 0.0)
+
+
 # ---------------------------------------------------------------- time domain
 
 @pytest.mark.parametrize("daq_rate", [1e7, 3.3e6])
@@ -199,9 +241,18 @@ def test_johnson_noise_of_pure_resistor():
     (WITH_CABLE_R, WITH_CABLE_R.load_capacitance),
 ])
 def test_thermal_noise_total_is_equipartition(circuit, cap):
-    # All resistors at T: the DAQ node's capacitor holds ½ kT, so ⟨v²⟩ = kT / C.
+    # All resistors at T: every energy store holds ½ kT, so the Lyapunov solution is
+    # kT diag(1/L, 1/C...) and the DAQ node's ⟨v²⟩ = kT / C, the closed form noise_rms uses.
+    p = thermal_covariance(circuit, T_ROOM)
+    expected = np.diag([1 / circuit.inductance]
+                       + ([1 / circuit.winding_capacitance] if circuit.cable_resistance else [])
+                       + [1 / cap]) * K_B * T_ROOM
+    # (the Lyapunov solve of the stiff third-order circuit is good to ~1e-9)
+    np.testing.assert_allclose(p, expected, rtol=1e-8, atol=1e-9 * np.max(np.abs(expected)))
     assert noise_rms(circuit, NoiseModel(T_ROOM)) == pytest.approx(
-        math.sqrt(K_B * T_ROOM / cap), rel=1e-9)
+        math.sqrt(K_B * T_ROOM / cap), rel=1e-12)
+    np.testing.assert_allclose(total_noise_rms(np.array([cap, 2 * cap]), NoiseModel(T_ROOM)),
+                               np.sqrt(K_B * T_ROOM / np.array([cap, 2 * cap])), rtol=1e-14)
 
 
 @pytest.mark.parametrize("circuit", [PAPER, WITH_CABLE_R])

@@ -68,6 +68,7 @@ from msens.magnetics.potentials import (
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import bias_solution
 from msens.magnetics.transducer_cache import transducers_for
+from msens.parallel import default_workers
 from msens.readout.electronics import ElectronicsSpec
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm
@@ -227,8 +228,13 @@ def design_inductances(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Des
     """Bias-point incremental inductance of each design's coil, H, shape (n_d,): the study
     coil's carried by the window kernel (:func:`msens.magnetics.coil_read.scaled_inductance`,
     as ``msens run`` reads a changed coil)."""
+    return _inductances(ctx, unit, _windings(ctx, unit, designs, geometry), geometry)
+
+
+def _inductances(ctx: CoilContext, unit: SensorUnit, windings: tuple,
+                 geometry: SensorGeometry) -> np.ndarray:
     internal(ctx.grid is not None, "internal: a coil context without its inductance kernel")
-    _, zc, half, r_in, r_out, turns = _windings(ctx, unit, designs, geometry)
+    _, zc, half, r_in, r_out, turns = windings
     return scaled_inductance(ctx.grid, ctx.inductance, ctx.coil,
                              (r_in, r_out, zc - half, zc + half), turns,
                              (r_out - r_in) * 2 * half, geometry.coil_rect(unit))
@@ -236,14 +242,16 @@ def design_inductances(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Des
 
 def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
              geometry: SensorGeometry, electronics: ElectronicsSpec,
-             inductance: np.ndarray | None = None) -> list[dict]:
+             inductance: np.ndarray | None = None, *, threads: int = 1) -> list[dict]:
     """Metrics of coil designs (no validation: :func:`msens.design.sweep.validate_designs`);
     ``inductance``: the designs' L (H, shape (n_d,)) if known, else
-    :func:`design_inductances`."""
-    coils, zc, half, r_in, r_out, turns = _windings(ctx, unit, designs, geometry)
+    :func:`design_inductances`; ``threads``: threads the designs' chunks of spectra run on
+    (:func:`msens.parallel.thread_map`; the caller decides)."""
+    windings = _windings(ctx, unit, designs, geometry)
+    coils, zc, half, r_in, r_out, turns = windings
     resistance = np.array([coil_resistance(c) for c in coils])
     if inductance is None:
-        inductance = design_inductances(ctx, unit, designs, geometry)
+        inductance = _inductances(ctx, unit, windings, geometry)
     inductance = np.asarray(inductance, dtype=float)
     scale = inductance / ctx.inductance
     if ctx.harmonic is None:
@@ -252,7 +260,8 @@ def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
                                                        zc + half)
         contacts, s_vil, dl = contact_profiles(ctx.particles, ctx.approach_contacts,
                                                ctx.count, link)
-        rows = design_rows(coils, resistance, inductance, s_vil, dl, ctx.wave, electronics)
+        rows = design_rows(coils, resistance, inductance, s_vil, dl, ctx.wave, electronics,
+                           threads)
     else:
         link = ctx.harmonic.linkage(turns, r_in, r_out, zc - half, zc + half)
         contacts, vr, ar = contact_profiles(ctx.particles, ctx.approach_contacts, ctx.count,
@@ -262,7 +271,7 @@ def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
         rows = dynamic_design_rows(coils, resistance, inductance, ctx.harmonic.frequencies,
                                    vr + 1j * vi, ar + 1j * ai,
                                    scale[:, None] * ctx.inductance_w[None], ctx.wave,
-                                   electronics)
+                                   electronics, threads)
         s_vil, dl = vr[:, 0], ar[:, 0]
     # the run's transducer covers the same contacts
     internal(bool(np.array_equal(contacts, ctx.wave.contacts)),
@@ -284,12 +293,14 @@ class CoilChunk:
     geometry: SensorGeometry
     electronics: ElectronicsSpec
     inductance: tuple[float, ...]
+    threads: int = 1
 
 
 def evaluate_chunk(task: CoilChunk) -> dict:
     """``{"rows": [...]}`` of one chunk (a module-level task function)."""
     return {"rows": evaluate(task.context, task.unit, task.designs, task.geometry,
-                             task.electronics, np.array(task.inductance))}
+                             task.electronics, np.array(task.inductance),
+                             threads=task.threads)}
 
 
 def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
@@ -321,9 +332,12 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
     # the designs' L here, once: the tasks travel without the ~10 MB window kernel
     inductance = design_inductances(ctx, unit, designs, geometry)
     lean = replace(ctx, grid=None)
+    # the chunks run one after another here, each on this machine's cores as threads (they
+    # share the context); on a cluster one thread each, Dask spreading the chunks
+    threads = default_workers() if scheduler is None else 1
     tasks = [(content_key("coil-chunk/2", ckey, [d.values for d in c]),
               CoilChunk(lean, unit, c, geometry, study.electronics,
-                        tuple(float(x) for x in inductance[k:k + size])))
+                        tuple(float(x) for x in inductance[k:k + size]), threads))
              for k, c in zip(range(0, len(designs), size), chunks, strict=True)]
     fresh = sum(len(c) for c, (key, _) in zip(chunks, tasks, strict=True)
                 if cache.get(key) is None)

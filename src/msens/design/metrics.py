@@ -13,7 +13,8 @@ DAQ input capacitances, DAQ input resistance). From them:
   inside the band counts and does not wrap around);
 - ``noise_rms_V``: :func:`msens.readout.mss.figure_noise_rms` (Johnson noise of the circuit,
   DAQ noise, quantisation); ``snr`` = peak_voltage_V / noise_rms_V;
-- resonance, Q, DC gain and -3 dB bandwidth of the circuit (:mod:`msens.readout.electronics`).
+- resonance, Q and -3 dB bandwidth of the circuit, in closed form for all designs at once
+  (:func:`msens.readout.electronics.resonance_figures`).
 """
 
 from __future__ import annotations
@@ -26,20 +27,21 @@ import numpy as np
 import scipy.fft
 from scipy.interpolate import PchipInterpolator
 
+from msens.errors import internal, require
 from msens.field.parts import Coil
 from msens.magnetics.eddy_readout import PAD, emf_spectra
 from msens.magnetics.emf import ContactRates, emf_from_rates
 from msens.magnetics.frequency_response import interp
-from msens.parallel import one_blas_thread
+from msens.parallel import thread_map
 from msens.params.units import TWO_PI
 from msens.readout.electronics import (
     ElectronicsSpec,
-    bandwidth,
+    ReadoutCircuit,
+    ResonanceFigures,
     coil_transfer_functions,
-    poles,
-    resonance,
+    resonance_figures,
 )
-from msens.readout.mss import figure_noise_rms, readout
+from msens.readout.mss import figure_noise_rms_of, readout
 
 #: Designs whose EMF records are formed at once (bounds memory: chunk × nt doubles).
 EMF_CHUNK = 256
@@ -70,38 +72,61 @@ class Wave:
     wave_speed_change: float
 
 
-def _circuit_figures(coil: Coil, resistance: float, inductance: float,
-                     electronics: ElectronicsSpec, decay: bool) -> dict:
-    circuit = readout(coil, resistance, inductance, electronics)
-    f0, q = resonance(circuit)
-    out = {"circuit": circuit, "resonance_Hz": f0, "quality_factor": q,
-           "bandwidth_Hz": bandwidth(circuit), "noise_rms_V": figure_noise_rms(circuit,
-                                                                             electronics),
-           "winding_capacitance_F": circuit.winding_capacitance}
-    if decay:
-        out["decay_s"] = 1.0 / float(np.min(-poles(circuit).real))
-    return out
+@dataclass(frozen=True)
+class _Circuits:
+    """The designs' read-out circuits and their figures, one entry per design.
+
+    Attributes
+    ----------
+    load : ReadoutCircuit
+        The first design's circuit: the cable and DAQ input all designs share.
+    resistance, inductance, winding_capacitance : ndarray, shape (n_d,)
+        R (Ω), bias-point L (H) and C_w (F) of each design's circuit
+        (:func:`msens.readout.mss.readout`).
+    figures : ResonanceFigures
+        Resonance, Q, bandwidth and slowest decay, arrays of shape (n_d,) (closed form:
+        the sweep's circuits are second order, R_c = 0).
+    noise_rms : ndarray, shape (n_d,)
+        :func:`msens.readout.mss.figure_noise_rms`, V.
+    """
+
+    load: ReadoutCircuit
+    resistance: np.ndarray
+    inductance: np.ndarray
+    winding_capacitance: np.ndarray
+    figures: ResonanceFigures
+    noise_rms: np.ndarray
 
 
 def _circuits(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndarray,
-              electronics: ElectronicsSpec, *, decay: bool = True
-              ) -> tuple[list[tuple], dict]:
-    """Each design's circuit key, and the circuit figures once per distinct circuit (designs
-    that differ only in their axial offset share one); ``decay``: with the slowest pole's
-    decay time, s (``"decay_s"``)."""
-    keys = [(round(float(r), 12), round(float(ind), 15), c.turns, c.length, c.inner_radius,
-             c.wire.name, c.packing_factor) for c, r, ind in zip(coils, resistance, inductance,
-                                                                 strict=True)]
-    circuits: dict = {}
-    for k, c, r, ind in zip(keys, coils, resistance, inductance, strict=True):
-        if k not in circuits:
-            circuits[k] = _circuit_figures(c, float(r), float(ind), electronics, decay)
-    return keys, circuits
+              electronics: ElectronicsSpec) -> _Circuits:
+    """Each design's circuit (:func:`msens.readout.mss.readout`, built once per winding) and
+    its figures, vectorised over designs."""
+    resistance = np.asarray(resistance, dtype=float)
+    inductance = np.asarray(inductance, dtype=float)
+    built: dict = {}
+    c_w = np.empty(len(coils))
+    for k, (c, r, ind) in enumerate(zip(coils, resistance, inductance, strict=True)):
+        key = (c.turns, c.length, c.inner_radius, c.wire.name, c.packing_factor)
+        if key not in built:
+            built[key] = readout(c, float(r), float(ind), electronics)
+        c_w[k] = built[key].winding_capacitance
+    load = readout(coils[0], float(resistance[0]), float(inductance[0]), electronics)
+    internal(load.cable_resistance == 0.0,
+             "internal: a coil sweep's read-out circuit with a cable resistance")
+    for r, ind in ((resistance, "resistance"), (inductance, "inductance")):
+        require(bool(np.all(np.isfinite(r) & (r > 0))),
+                f"every design's coil {ind} must be finite and > 0, got {r.min()}")
+    capacitance = c_w + load.load_capacitance
+    conductance = (0.0 if math.isinf(load.input_resistance) else 1.0 / load.input_resistance)
+    return _Circuits(load, resistance, inductance, c_w,
+                     resonance_figures(resistance, inductance, capacitance, conductance),
+                     figure_noise_rms_of(capacitance, electronics))
 
 
 def design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndarray,
                 sensitivity_villari: np.ndarray, dlambda_dapproach: np.ndarray, wave: Wave,
-                electronics: ElectronicsSpec) -> list[dict]:
+                electronics: ElectronicsSpec, threads: int = 1) -> list[dict]:
     """Metrics of coil designs, one dict per design.
 
     Parameters
@@ -115,49 +140,58 @@ def design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.nd
         ∂Λ/∂δ_c, Wb/m.
     wave : Wave
     electronics : ElectronicsSpec
+    threads : int
+        Threads the chunks of designs run on (:func:`msens.parallel.thread_map`).
     """
     t = wave.rates.t
     nt = t.size
     dt = float(t[1] - t[0])
-    keys, circuits = _circuits(coils, resistance, inductance, electronics)
-    decay = max(cf["decay_s"] for cf in circuits.values())
+    cs = _circuits(coils, resistance, inductance, electronics)
+    decay = float(np.max(cs.figures.decay_s))
     n_fft = scipy.fft.next_fast_len(nt + math.ceil(DECAY_TIMES * decay / dt), real=True)
     freq = np.fft.rfftfreq(n_fft, dt)
     s = 2j * np.pi * freq
     s_app = dlambda_dapproach  # Wb/m
-    rows: list[dict] = []
-    for lo in range(0, len(coils), EMF_CHUNK):
-        hi = min(lo + EMF_CHUNK, len(coils))
-        e = emf_from_rates(wave.rates, sensitivity_villari[lo:hi], s_app[lo:hi])
+
+    def chunk(sl: slice) -> list[dict]:
+        e = emf_from_rates(wave.rates, sensitivity_villari[sl], s_app[sl])
         spectrum = scipy.fft.rfft(e, n_fft, axis=1)
         # the chunk's transfer functions at once (bit-identical to transfer_function per
         # circuit; a sweep may have as many distinct circuits as designs, so none is kept)
-        chunk = [circuits[keys[k]]["circuit"] for k in range(lo, hi)]
-        z_s = (np.array([c.resistance for c in chunk])[:, None]
-               + s * np.array([c.inductance for c in chunk])[:, None])
-        spectrum *= coil_transfer_functions(chunk, freq, z_s)
-        voltages = scipy.fft.irfft(spectrum, n_fft, axis=1)[:, :nt]
-        for k in range(lo, hi):
-            cf = circuits[keys[k]]
-            v = voltages[k - lo]
-            rows.append(_row(coils[k], float(resistance[k]), float(inductance[k]), cf,
-                             sensitivity_villari[k], dlambda_dapproach[k],
-                             float(np.max(np.abs(e[k - lo]))), float(np.max(np.abs(v))), wave))
-    return rows
+        z_s = cs.resistance[sl, None] + s * cs.inductance[sl, None]
+        spectrum = coil_transfer_functions(cs.load, cs.winding_capacitance[sl], freq, z_s,
+                                           spectrum)
+        peak_v = _peaks(scipy.fft.irfft(spectrum, n_fft, axis=1)[:, :nt])
+        peak_e = _peaks(e)
+        return [_row(coils[k], k, cs, sensitivity_villari[k], dlambda_dapproach[k],
+                     float(peak_e[j]), float(peak_v[j]), wave)
+                for j, k in enumerate(range(sl.start, sl.stop))]
+
+    return _chunked(chunk, len(coils), EMF_CHUNK, threads)
 
 
-def _row(coil: Coil, resistance: float, inductance: float, cf: dict, villari: np.ndarray,
-         approach: np.ndarray, peak_emf: float, peak_v: float, wave: Wave) -> dict:
+def _chunked(fn, n: int, size: int, threads: int) -> list[dict]:
+    """``fn``'s rows of the designs in slices of ``size``, on ``threads`` threads."""
+    parts = thread_map(fn, [slice(lo, min(lo + size, n)) for lo in range(0, n, size)],
+                       threads)
+    return [row for part in parts for row in part]
+
+
+def _row(coil: Coil, k: int, cs: _Circuits, villari: np.ndarray, approach: np.ndarray,
+         peak_emf: float, peak_v: float, wave: Wave) -> dict:
+    fig = cs.figures
+    noise = float(cs.noise_rms[k])
     return {
         "outer_radius_m": coil.outer_radius,
-        "resistance_ohm": resistance, "inductance_H": inductance,
-        "winding_capacitance_F": cf["winding_capacitance_F"],
-        "resonance_Hz": cf["resonance_Hz"], "quality_factor": cf["quality_factor"],
-        "bandwidth_Hz": cf["bandwidth_Hz"], "noise_rms_V": cf["noise_rms_V"],
+        "resistance_ohm": float(cs.resistance[k]), "inductance_H": float(cs.inductance[k]),
+        "winding_capacitance_F": float(cs.winding_capacitance[k]),
+        "resonance_Hz": float(fig.resonance_hz[k]),
+        "quality_factor": float(fig.quality_factor[k]),
+        "bandwidth_Hz": float(fig.bandwidth_hz[k]), "noise_rms_V": noise,
         "sensitivity_villari_Wb_per_N": float(np.sum(villari)),
         "dLambda_dapproach_Wb_per_m": float(np.sum(approach)),
         "peak_emf_V": peak_emf,
-        "peak_voltage_V": peak_v, "snr": peak_v / cf["noise_rms_V"],
+        "peak_voltage_V": peak_v, "snr": peak_v / noise,
         "precompression_N": wave.precompression_N,
         "precompression_max_N": wave.precompression_max_N,
         "wave_speed_change": wave.wave_speed_change,
@@ -241,11 +275,52 @@ def _chain_spectra(wave: Wave, frequencies: np.ndarray) -> _ChainSpectra:
                          top_rates=np.ascontiguousarray(-rates[top:].T))
 
 
+#: Singular values of the designs' weighted sensitivities at f_n kept by :func:`_top_basis`,
+#: relative to the largest (1e-14: rounding; on the main study's 12,740-design benchmark
+#: grid 21 of 60 columns).
+TOP_RANK_TOL = 1e-14
+
+
+@dataclass(frozen=True)
+class _TopBasis:
+    """The designs' sensitivities at f_n in a basis of few columns.
+
+    Above f_n every design's EMF is a_d · (−R(f)) with a_d = [S_c(f_n), D_c(f_n)] (2 n_c
+    values) and R the contact rates' spectra. Weighted by each rate spectrum's norm w, the
+    designs' rows a_d W span few dimensions (the coils' linkages of neighbouring contacts
+    are smooth functions of the winding): a_d W ≈ (a_d W V) Vᴴ with V the leading right
+    singular vectors. Then a_d · R = (a_d W V) · (Vᴴ W⁻¹ R): one product with r ≪ 2 n_c
+    rows instead of 2 n_c, exact to the singular values dropped (:data:`TOP_RANK_TOL`).
+
+    Attributes
+    ----------
+    weights : ndarray of complex, shape (2 n_c, r)
+        W V.
+    rates : ndarray of complex, shape (r, bins above f_n)
+        Vᴴ W⁻¹ (−R).
+    """
+
+    weights: np.ndarray
+    rates: np.ndarray
+
+
+def _top_basis(spectra: _ChainSpectra, at_top: np.ndarray) -> _TopBasis:
+    """:class:`_TopBasis` of designs whose sensitivities at f_n are ``at_top`` (shape
+    (n_d, 2 n_c))."""
+    w = np.linalg.norm(spectra.top_rates, axis=1)
+    w[w == 0] = 1.0
+    _, sv, vh = np.linalg.svd(at_top * w, full_matrices=False)
+    r = max(1, int(np.sum(sv > TOP_RANK_TOL * sv[0]))) if sv.size and sv[0] > 0 else 1
+    return _TopBasis(weights=np.ascontiguousarray(w[:, None] * vh[:r].conj().T),
+                     rates=np.ascontiguousarray((vh[:r] / w[None, :]) @ spectra.top_rates))
+
+
 def _emf_spectra(spectra: _ChainSpectra, frequencies: np.ndarray, villari: np.ndarray,
-                 approach: np.ndarray) -> np.ndarray:
+                 approach: np.ndarray, top_basis: _TopBasis | None = None) -> np.ndarray:
     """EMF(ω) of many designs, shape (n_d, bins): :func:`msens.magnetics.eddy_readout.
     emf_spectra` of their S_c(ω), D_c(ω) (shape (n_d, n_f, n_c) each), by the matrix
-    products of :class:`_ChainSpectra` (equal to it to rounding, tests)."""
+    products of :class:`_ChainSpectra` (equal to it to rounding, tests); above f_n through
+    ``top_basis`` (:func:`_top_basis` of these or more designs) if given."""
     freqs = np.asarray(frequencies, float)
     sp = spectra
     n_d = villari.shape[0]
@@ -268,7 +343,10 @@ def _emf_spectra(spectra: _ChainSpectra, frequencies: np.ndarray, villari: np.nd
             np.matmul(coef[:, :, k].reshape(n_d, -1), table, out=out[:, sl])
     else:
         at_top = both[1]
-    np.matmul(at_top, sp.top_rates, out=out[:, sp.top:])
+    if top_basis is None:
+        np.matmul(at_top, sp.top_rates, out=out[:, sp.top:])
+    else:
+        np.matmul(at_top @ top_basis.weights, top_basis.rates, out=out[:, sp.top:])
     return out
 
 
@@ -296,7 +374,7 @@ def _peaks(x: np.ndarray) -> np.ndarray:
 def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndarray,
                         frequencies: np.ndarray, villari: np.ndarray, approach: np.ndarray,
                         inductance_w: np.ndarray, wave: Wave,
-                        electronics: ElectronicsSpec) -> list[dict]:
+                        electronics: ElectronicsSpec, threads: int = 1) -> list[dict]:
     """Metrics of coil designs with eddy currents, one dict per design.
 
     The EMF and the DAQ voltage are those of ``msens run`` with eddy currents
@@ -325,37 +403,36 @@ def dynamic_design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductanc
         L(ω) of each design, H.
     wave : Wave
     electronics : ElectronicsSpec
+    threads : int
+        Threads the chunks of designs run on (:func:`msens.parallel.thread_map`).
     """
     sp = _chain_spectra(wave, frequencies)
     villari, approach = np.asarray(villari), np.asarray(approach)
     resistance = np.asarray(resistance, float)
-    keys, circuits = _circuits(coils, resistance, inductance, electronics, decay=False)
-    rows: list[dict] = []
-    with one_blas_thread():
-        for lo in range(0, len(coils), SPECTRUM_CHUNK):
-            rows.extend(_dynamic_chunk(slice(lo, min(lo + SPECTRUM_CHUNK, len(coils))), sp,
-                                       coils, resistance, inductance, frequencies, villari,
-                                       approach, np.asarray(inductance_w), keys, circuits,
-                                       wave))
-    return rows
+    cs = _circuits(coils, resistance, inductance, electronics)
+    inductance_w = np.asarray(inductance_w)
+    basis = _top_basis(sp, np.concatenate([villari[:, -1], approach[:, -1]], axis=1))
+
+    def chunk(sl: slice) -> list[dict]:
+        return _dynamic_chunk(sl, sp, basis, coils, frequencies, villari, approach,
+                              inductance_w, cs, wave)
+
+    return _chunked(chunk, len(coils), SPECTRUM_CHUNK, threads)
 
 
-def _dynamic_chunk(sl: slice, sp: _ChainSpectra, coils: Sequence[Coil],
-                   resistance: np.ndarray, inductance: np.ndarray, frequencies: np.ndarray,
+def _dynamic_chunk(sl: slice, sp: _ChainSpectra, basis: _TopBasis, coils: Sequence[Coil],
+                   frequencies: np.ndarray,
                    villari: np.ndarray, approach: np.ndarray, inductance_w: np.ndarray,
-                   keys: list, circuits: dict, wave: Wave) -> list[dict]:
+                   cs: _Circuits, wave: Wave) -> list[dict]:
     """The rows of designs ``sl`` of :func:`dynamic_design_rows`."""
     nt = wave.rates.t.size
-    e_hat = _emf_spectra(sp, frequencies, villari[sl], approach[sl])
-    z = _coil_impedances(sp, frequencies, inductance_w[sl], resistance[sl])
-    h = coil_transfer_functions([circuits[keys[k]]["circuit"]
-                                 for k in range(sl.start, sl.stop)], sp.f, z)
-    h *= e_hat
+    e_hat = _emf_spectra(sp, frequencies, villari[sl], approach[sl], basis)
+    z = _coil_impedances(sp, frequencies, inductance_w[sl], cs.resistance[sl])
+    h = coil_transfer_functions(cs.load, cs.winding_capacitance[sl], sp.f, z, e_hat)
     peak_e = _peaks(scipy.fft.irfft(e_hat, sp.n, axis=1)[:, :nt])
     peak_v = _peaks(scipy.fft.irfft(h, sp.n, axis=1)[:, :nt])
-    return [_row(coils[k], float(resistance[k]), float(inductance[k]), circuits[keys[k]],
-                 villari[k, 0].real, approach[k, 0].real, float(peak_e[j]), float(peak_v[j]),
-                 wave) for j, k in enumerate(range(sl.start, sl.stop))]
+    return [_row(coils[k], k, cs, villari[k, 0].real, approach[k, 0].real, float(peak_e[j]),
+                 float(peak_v[j]), wave) for j, k in enumerate(range(sl.start, sl.stop))]
 
 
 __all__ = ["DECAY_TIMES", "EMF_CHUNK", "SPECTRUM_CHUNK", "Wave", "design_rows",

@@ -20,7 +20,7 @@ the sampled DAQ record is in :mod:`msens.readout.daq`, the circuit's noise in
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -222,48 +222,58 @@ def coil_transfer_function(circuit: ReadoutCircuit, f: ArrayLike,
     return _transfer(circuit, s, z, y_b)
 
 
-def coil_transfer_functions(circuits: Sequence[ReadoutCircuit], f: ArrayLike,
-                            coil_impedance: ArrayLike) -> np.ndarray:
-    """:func:`coil_transfer_function` of many circuits on one cable and DAQ input at once.
+def coil_transfer_functions(load: ReadoutCircuit, winding_capacitance: ArrayLike, f: ArrayLike,
+                            coil_impedance: ArrayLike,
+                            numerator: np.ndarray | None = None) -> np.ndarray:
+    """:func:`coil_transfer_function` of many coils on one cable and DAQ input at once.
 
-    The circuits may differ in their coil (impedance and winding capacitance); their cable
-    and DAQ input (``cable_capacitance``, ``input_resistance``, ``input_capacitance``,
-    ``cable_resistance``) must be the same, as for the designs of one coil sweep.
+    The coils (the designs of one coil sweep) differ in their impedance and winding
+    capacitance; the cable and DAQ input (``cable_capacitance``, ``input_resistance``,
+    ``input_capacitance``, ``cable_resistance``) are ``load``'s.
 
     Parameters
     ----------
-    circuits : sequence of ReadoutCircuit, length m
+    load : ReadoutCircuit
+        Any of the circuits: its cable and DAQ input are used.
+    winding_capacitance : array_like, shape (m,)
+        Each coil's C_w, F.
     f : array_like, shape (n,)
         Frequencies, Hz (>= 0).
     coil_impedance : array_like of complex, shape (m, n)
-        Each circuit's Z_s at ``f``, Ω.
+        Each coil's Z_s at ``f``, Ω.
+    numerator : ndarray of complex, shape (m, n), optional
+        Spectra to filter (e.g. the coils' EMF): returns ``numerator * H``, formed in the
+        same pass as H.
 
     Returns
     -------
     ndarray of complex, shape (m, n)
-        Row k equals ``coil_transfer_function(circuits[k], f, coil_impedance[k])``.
+        Row k equals ``coil_transfer_function(c_k, f, coil_impedance[k])`` (times
+        ``numerator[k]``) for ``c_k`` the circuit ``load`` with winding capacitance
+        ``winding_capacitance[k]``.
     """
     f = np.asarray(f, dtype=float)
     z = np.asarray(coil_impedance, dtype=complex)
-    require(len(circuits) > 0 and z.shape == (len(circuits), *f.shape),
-            f"coil_impedance must have shape (circuits, frequencies) = "
-            f"{(len(circuits), *f.shape)}, got {z.shape}")
-    first = circuits[0]
-    load = (first.cable_capacitance, first.input_resistance, first.input_capacitance,
-            first.cable_resistance)
-    require(all((c.cable_capacitance, c.input_resistance, c.input_capacitance,
-                 c.cable_resistance) == load for c in circuits),
-            "coil_transfer_functions needs circuits on one cable and DAQ input")
-    s, _, y_b = _admittances(first, f)
-    div = 1.0 + first.cable_resistance * y_b
-    c_w = np.array([c.winding_capacitance for c in circuits])[:, None]
-    # _transfer's formula, its temporaries (circuits × frequencies) formed once, in place
-    h = s * c_w
-    h += y_b / div
-    h *= z
-    h += 1.0
-    h *= div
-    return np.divide(1.0, h, out=h)
+    c_w = np.asarray(winding_capacitance, dtype=float)
+    require(c_w.ndim == 1 and z.shape == (c_w.size, *f.shape),
+            f"coil_impedance must have shape (coils, frequencies) = "
+            f"{(c_w.size, *f.shape)}, got {z.shape}")
+    s, _, y_b = _admittances(load, f)
+    # _transfer's formula, its temporaries (coils × frequencies) formed once, in place
+    h = s * c_w[:, None]
+    if load.cable_resistance == 0.0:  # div = 1
+        h += y_b
+        h *= z
+        h += 1.0
+    else:
+        div = 1.0 + load.cable_resistance * y_b
+        h += y_b / div
+        h *= z
+        h += 1.0
+        h *= div
+    if numerator is None:
+        return np.divide(1.0, h, out=h)
+    return np.divide(numerator, h, out=h)
 
 
 def state_space(circuit: ReadoutCircuit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -314,14 +324,89 @@ def poles(circuit: ReadoutCircuit) -> np.ndarray:
     return p[np.argsort(np.abs(p))]
 
 
+@dataclass(frozen=True)
+class ResonanceFigures:
+    """Figures of the second-order read-out (R_c = 0), each of the input arrays' shape.
+
+    Attributes
+    ----------
+    resonance_hz : ndarray
+        f0 = ω0 / 2π, ω0² = (1 + R G) / (L C), Hz.
+    quality_factor : ndarray
+        Q = ω0 / β, β = R / L + G / C (the poles' sum is −β).
+    bandwidth_hz : ndarray
+        The −3 dB frequency: where |H(f)| = |H(0)| / √2, Hz.
+    decay_s : ndarray
+        1 / (decay rate of the slowest pole), s.
+    """
+
+    resonance_hz: np.ndarray
+    quality_factor: np.ndarray
+    bandwidth_hz: np.ndarray
+    decay_s: np.ndarray
+
+
+def resonance_figures(resistance: ArrayLike, inductance: ArrayLike, capacitance: ArrayLike,
+                      conductance: ArrayLike) -> ResonanceFigures:
+    """Resonance, Q, −3 dB bandwidth and slowest decay of second-order read-outs, in closed
+    form and vectorised (a coil sweep's circuits at once).
+
+    The circuit is :class:`ReadoutCircuit` with R_c = 0: EMF − R − L into C = C_w + C_B
+    across G = 1 / R_in, so H(s) = 1 / (1 + (R + sL)(G + sC)) and its poles solve
+    s² + β s + ω0² = 0 with β = R/L + G/C, ω0² = (1 + RG)/(LC).
+
+    Bandwidth: with x = ω², |H|⁻² = (a − LC x)² + b² x (a = 1 + RG, b = RC + LG), a
+    quadratic in x that starts at a² = |H(0)|⁻², so |H|² = |H(0)|²/2 at its one positive
+    root of L²C² x² + (b² − 2aLC) x − a² = 0 (below it the gain is higher: a resonance peak
+    is inside the band). Each root is taken in the form free of cancellation.
+
+    Decay: an underdamped pair (β² < 4ω0²) decays at β/2; an overdamped one at its slower
+    real pole, ω0² / (β/2 + √(β²/4 − ω0²)).
+
+    Parameters
+    ----------
+    resistance, inductance, capacitance : array_like
+        R (Ω, > 0), L (H, > 0), C (F, > 0); broadcast together.
+    conductance : array_like
+        G = 1 / R_in, S (>= 0).
+    """
+    r, ell, c, g = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in
+                                          (resistance, inductance, capacitance, conductance)))
+    require(bool(np.all(ell > 0)) and bool(np.all(c > 0)),
+            "the read-out's resonance needs coil inductance > 0 H and winding + cable + "
+            "input capacitance > 0 F")
+    a = 1.0 + r * g
+    lc = ell * c
+    omega0 = np.sqrt(a / lc)
+    beta = r / ell + g / c
+    b = r * c + ell * g
+    p = b * b - 2.0 * a * lc
+    root = np.sqrt(p * p + 4.0 * (lc * a) ** 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = np.where(p > 0, 2.0 * a * a / (p + root), (root - p) / (2.0 * lc * lc))
+        disc = 0.25 * beta * beta - omega0 * omega0
+        rate = np.where(disc < 0, 0.5 * beta,
+                        omega0 * omega0 / (0.5 * beta + np.sqrt(np.maximum(disc, 0.0))))
+    return ResonanceFigures(resonance_hz=omega0 / (2.0 * math.pi), quality_factor=omega0 / beta,
+                            bandwidth_hz=np.sqrt(x) / (2.0 * math.pi), decay_s=1.0 / rate)
+
+
+def _second_order(circuit: ReadoutCircuit) -> ResonanceFigures:
+    return resonance_figures(circuit.resistance, circuit.inductance,
+                             circuit.total_capacitance, _conductance(circuit.input_resistance))
+
+
 def resonance(circuit: ReadoutCircuit) -> tuple[float, float]:
     """Self-resonance frequency f0 (Hz) and quality factor Q of the coil read-out.
 
     From the two poles of smallest magnitude p1, p2 (the coil–capacitance pair; with
     R_c > 0 the third pole is the fast R_c pole): ω0 = √(p1 p2), Q = ω0 / (−(p1 + p2)).
-    For a complex pair −σ ± jω_d this is ω0 = |p|, Q = |p|/(2σ); for R_c = 0,
-    ω0² = (1 + R/R_in)/(L C) and Q = ω0 L C / (R C + L/R_in).
+    For a complex pair −σ ± jω_d this is ω0 = |p|, Q = |p|/(2σ); for R_c = 0 (closed form,
+    :func:`resonance_figures`) ω0² = (1 + R/R_in)/(L C) and Q = ω0 L C / (R C + L/R_in).
     """
+    if circuit.cable_resistance == 0.0:
+        fig = _second_order(circuit)
+        return float(fig.resonance_hz), float(fig.quality_factor)
     p = poles(circuit)[:2]
     omega0 = math.sqrt(abs((p[0] * p[1]).real))
     return omega0 / (2.0 * math.pi), omega0 / float(-(p[0] + p[1]).real)
@@ -376,8 +461,18 @@ def peak_gain(circuit: ReadoutCircuit,
 def bandwidth(circuit: ReadoutCircuit) -> float:
     """−3 dB bandwidth, Hz: the lowest f at which |H(f)| falls to |H(0)|/√2.
 
-    Above any resonance peak: the peak itself (|H| > |H(0)|) is inside the band.
+    Above any resonance peak: the peak itself (|H| > |H(0)|) is inside the band. With
+    R_c = 0 in closed form (:func:`resonance_figures`); with R_c > 0 the first crossing on a
+    logarithmic grid around the resonance, refined by Brent's method.
     """
+    if circuit.cable_resistance == 0.0:
+        return float(_second_order(circuit).bandwidth_hz)
+    return _bandwidth_search(circuit)
+
+
+def _bandwidth_search(circuit: ReadoutCircuit) -> float:
+    """:func:`bandwidth` of any circuit by search (the third-order one's; the closed form's
+    check in the tests)."""
     f0, _ = resonance(circuit)
     target = abs(transfer_function(circuit, [0.0])[0]) / math.sqrt(2.0)
     grid = np.geomspace(f0 * 1e-6, f0 * 1e6, 4001)

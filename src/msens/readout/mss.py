@@ -41,7 +41,7 @@ from msens.mechanics.hertz import hertz_approach
 from msens.readout.coil import Coil, winding_capacitance
 from msens.readout.daq import daq_voltage
 from msens.readout.electronics import ElectronicsSpec, ReadoutCircuit, coil_transfer_function
-from msens.readout.noise import NoiseModel, add_readout_noise, noise_rms
+from msens.readout.noise import NoiseModel, add_readout_noise, daq_capacitance, total_noise_rms
 from msens.signals.features import integrated
 
 #: FFT length of the frequency-domain read-out in record lengths (zero padding: the circuit's
@@ -321,10 +321,16 @@ def figure_noise_rms(circuit: ReadoutCircuit, electronics: ElectronicsSpec) -> f
     """RMS noise at the DAQ for figures of merit, V: Johnson noise of the circuit at the
     study's temperature (whether or not the study adds it to its records), the DAQ's input
     noise and quantisation, over all frequencies (per sample)."""
+    return float(figure_noise_rms_of(daq_capacitance(circuit), electronics))
+
+
+def figure_noise_rms_of(capacitance: np.ndarray, electronics: ElectronicsSpec) -> np.ndarray:
+    """:func:`figure_noise_rms` of read-outs whose DAQ node holds ``capacitance`` (F, any
+    shape: a coil sweep's circuits at once; :func:`msens.readout.noise.total_noise_rms`)."""
     noise = NoiseModel(temperature_K=electronics.temperature_k, adc_bits=electronics.adc_bits,
                        adc_range_V=electronics.adc_range_v,
                        input_noise_V_per_rtHz=electronics.input_noise_v_per_rthz)
-    return noise_rms(circuit, noise, sample_rate=electronics.sample_rate_hz)
+    return total_noise_rms(capacitance, noise, sample_rate=electronics.sample_rate_hz)
 
 
 def voltage_on(record: MssRecord) -> np.ndarray:
@@ -437,6 +443,7 @@ __all__ = [
     "emf_from_rates",
     "emf_spectrum",
     "figure_noise_rms",
+    "figure_noise_rms_of",
     "mss_signals",
     "noise_model",
     "readout",

@@ -254,6 +254,47 @@ def _integrate_psd(circuit: ReadoutCircuit, temperature: float, lo: float, hi: f
     return total
 
 
+def daq_capacitance(circuit: ReadoutCircuit) -> float:
+    """Capacitance of the DAQ node, F: all of it (C_w + C_B) with R_c = 0, else C_B."""
+    if circuit.cable_resistance == 0.0:
+        return circuit.total_capacitance
+    return circuit.load_capacitance
+
+
+def _has_daq_noise(noise: NoiseModel, sample_rate: float | None) -> bool:
+    has = noise.input_noise_V_per_rtHz > 0 or noise.adc_bits is not None
+    if has:
+        require(sample_rate is not None and sample_rate > 0,
+                "noise_rms needs sample_rate (Hz) for DAQ input or quantisation noise")
+    return has
+
+
+def total_noise_rms(capacitance: ArrayLike, noise: NoiseModel,
+                    sample_rate: float | None = None) -> np.ndarray:
+    """Per-sample RMS noise at the DAQ over all frequencies, V, of read-outs whose DAQ node
+    has ``capacitance`` (F, any shape; :func:`daq_capacitance`): vectorised, e.g. over a
+    coil sweep's circuits.
+
+    Thermal part: every resistor is at ``noise.temperature_K``, so the circuit is in
+    thermal equilibrium and the energy ½ C v² of the DAQ node's capacitor holds ½ kT
+    (equipartition; the stationary covariance of :func:`thermal_covariance` is
+    kT · diag(1/L, 1/C…), checked in the tests): ⟨v²⟩ = kT / C, whatever R, L and R_in.
+    DAQ part: the input noise density over the Nyquist band, e_n² fs / 2, and the
+    quantisation noise LSB² / 12.
+    """
+    c = np.asarray(capacitance, dtype=float)
+    var = np.zeros(c.shape)
+    if noise.temperature_K > 0:
+        require(bool(np.all(c > 0)), "the read-out's thermal noise needs a DAQ node "
+                "capacitance > 0 F (winding + cable + input)")
+        var = K_B * noise.temperature_K / c
+    if _has_daq_noise(noise, sample_rate):
+        var = var + noise.input_noise_V_per_rtHz**2 * sample_rate / 2.0
+        if noise.lsb is not None:
+            var = var + noise.lsb**2 / 12.0
+    return np.sqrt(var)
+
+
 def noise_rms(circuit: ReadoutCircuit, noise: NoiseModel,
               bandwidth: float | tuple[float, float] | None = None, *,
               sample_rate: float | None = None) -> float:
@@ -265,26 +306,16 @@ def noise_rms(circuit: ReadoutCircuit, noise: NoiseModel,
     noise : NoiseModel
     bandwidth : float or (float, float), optional
         Band 0…f_max or f_lo…f_hi, Hz. None: all frequencies, i.e. the per-sample RMS of
-        the recorded noise — thermal part from the stationary covariance (Lyapunov), DAQ
-        input noise over the Nyquist band, full quantisation noise.
+        the recorded noise (:func:`total_noise_rms`) — thermal part kT / C by
+        equipartition, DAQ input noise over the Nyquist band, full quantisation noise.
     sample_rate : float, optional
         DAQ rate, Hz; needed for the DAQ-noise and quantisation parts when they apply
         (quantisation noise LSB²/12 is spread evenly over 0…fs/2).
     """
-    var = 0.0
-    has_daq_noise = noise.input_noise_V_per_rtHz > 0 or noise.adc_bits is not None
-    if has_daq_noise:
-        require(sample_rate is not None and sample_rate > 0,
-                "noise_rms needs sample_rate (Hz) for DAQ input or quantisation noise")
     if bandwidth is None:
-        if noise.temperature_K > 0:
-            _, _, c = state_space(circuit)
-            var += float(c @ thermal_covariance(circuit, noise.temperature_K) @ c)
-        if has_daq_noise:
-            var += noise.input_noise_V_per_rtHz**2 * sample_rate / 2.0
-            if noise.lsb is not None:
-                var += noise.lsb**2 / 12.0
-        return math.sqrt(var)
+        return float(total_noise_rms(daq_capacitance(circuit), noise, sample_rate))
+    var = 0.0
+    has_daq_noise = _has_daq_noise(noise, sample_rate)
     lo, hi = _band(bandwidth)
     if noise.temperature_K > 0:
         var += _integrate_psd(circuit, noise.temperature_K, lo, hi)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import importlib
 import json
 import shutil
 import time
@@ -14,6 +15,7 @@ from msens import api
 from msens.cli import main
 from msens.config.study import load_study
 from msens.design import load_sweep, run_design
+from msens.parallel import default_workers
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -51,11 +53,20 @@ def _rows(path: Path) -> list[dict]:
         return list(csv.DictReader(fh))
 
 
-def test_coil_sweep_cli_outputs_and_byte_identical_rerun(tmp_path, capsys):
+def test_coil_sweep_cli_outputs_and_byte_identical_rerun(tmp_path, capsys, monkeypatch):
     study, spec = _files(tmp_path, TINY_COIL)
     out = tmp_path / "out"
     args = ["design", str(study), "--sweep", str(spec), "--out", str(out)]
+    coil_sweep = importlib.import_module("msens.design.coil_sweep")
+    evaluate, threads = coil_sweep.evaluate, []
+
+    def spy(*a, **kw):
+        threads.append(kw["threads"])
+        return evaluate(*a, **kw)
+
+    monkeypatch.setattr(coil_sweep, "evaluate", spy)
     assert main(args) == 0
+    assert threads == [default_workers()] * 4  # each chunk (a design) on the CPUs
     text = capsys.readouterr().out
     assert "4 designs (0 failed, 4 computed" in text and "recommended design" in text
     first = (out / "designs.csv").read_bytes()

@@ -305,13 +305,15 @@ def evaluate_chunk(task: CoilChunk) -> dict:
 
 def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
                    designs: Sequence[Design], cache: ResultCache, *,
-                   scheduler: str | None = None, progress: bool = True
-                   ) -> tuple[list[dict], int]:
+                   scheduler: str | None = None, workers: int | None = None,
+                   progress: bool = True) -> tuple[list[dict], int]:
     """All coil designs' rows (with ``status``) and how many were computed afresh.
 
     The field model runs here, once; the chunks of designs run through
-    :func:`msens.design.runner.run_cached` — in this process, or on the Dask cluster at
-    ``scheduler`` (the context travels inside each task, so workers need no shared files).
+    :func:`msens.design.runner.run_cached` — in this process, each chunk on ``workers``
+    threads (default: the CPUs available; :func:`msens.parallel.thread_map`), or on the
+    Dask cluster at ``scheduler`` (the context travels inside each task, so workers need no
+    shared files).
     """
     unit = next(u for u in geometry.sensors if u.coil.particle == particle)
     ckey = content_key("coil-context/5", study, geometry, particle,
@@ -332,9 +334,11 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
     # the designs' L here, once: the tasks travel without the ~10 MB window kernel
     inductance = design_inductances(ctx, unit, designs, geometry)
     lean = replace(ctx, grid=None)
-    # the chunks run one after another here, each on this machine's cores as threads (they
-    # share the context); on a cluster one thread each, Dask spreading the chunks
-    threads = default_workers() if scheduler is None else 1
+    # the chunks run one after another here, each on this machine's cores (or ``workers``
+    # of them) as threads that share the context; on a cluster one thread each, Dask
+    # spreading the chunks
+    threads = 1 if scheduler is not None else min(workers or default_workers(),
+                                                  default_workers())
     tasks = [(content_key("coil-chunk/2", ckey, [d.values for d in c]),
               CoilChunk(lean, unit, c, geometry, study.electronics,
                         tuple(float(x) for x in inductance[k:k + size]), threads))

@@ -109,7 +109,8 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         Dask scheduler address; default local processes (magnet sweeps) or this process
         (the chunks of a coil sweep).
     workers : int, optional
-        Local worker processes.
+        Local worker processes (magnet sweeps), or the threads a coil sweep's chunks run on
+        (default: the CPUs available).
     progress : bool
     cache_dir : str or Path, optional
         Cache location (default ``out/cache``).
@@ -146,7 +147,8 @@ def run_design(study: Study, spec: SweepSpec, out: str | Path, *,
         full = geometry_from_study(study)
         validate_designs(full, sensor.particle, designs, spec.source)
         rows, computed = run_coil_sweep(study, full, sensor.particle, designs, cache,
-                                        scheduler=scheduler, progress=progress)
+                                        scheduler=scheduler, workers=workers,
+                                        progress=progress)
         rows = [{**r, "contact_maps": study.field.contact_map} if r["status"] == "ok" else r
                 for r in rows]
     else:

@@ -119,6 +119,44 @@ def test_design_of_the_papers_coil_equals_msens_run(tmp_path):
     assert float(row["resonance_Hz"]) == pytest.approx(coil["resonance_Hz"], rel=1e-9)
 
 
+def _refuse(*args, **kwargs):
+    raise AssertionError("the coil sweep built its own tables instead of reading the run's")
+
+
+@pytest.mark.parametrize("eddy", [False, True], ids=["magnetostatic", "eddy"])
+def test_a_coil_sweep_on_the_main_study_reads_the_runs_window_tables(tmp_path, monkeypatch,
+                                                                      eddy):
+    """Issue 33: designs inside the coil's window are read from the run's stored (here
+    committed) tables, as ``msens run`` reads a changed coil, so a design is the run of that
+    coil: with eddy currents to the CSV's 10 digits (the solved coil's exact response plus
+    the tables' difference of the windings), magnetostatic the EMF likewise (table
+    quadrature both) and the DAQ voltage within 1e-4 (the design filters by FFT, the run
+    records through the DAQ's sampled circuit). No table or field model is built."""
+    coil_sweep = importlib.import_module("msens.design.coil_sweep")
+    monkeypatch.setattr(coil_sweep, "harmonic_tables", _refuse)
+    monkeypatch.setattr(coil_sweep, "linkage_table", _refuse)
+    study = api.load(ROOT / "studies" / "paper-mss.toml")
+    if eddy:
+        study = study.replace({"field.eddy_currents": True})
+    spec = tmp_path / "sweep.toml"
+    spec.write_text('schema = "msens.sweep/1"\nname = "window"\nsensor = 13\n[coil]\n'
+                    'turns = [1100, 800]\naxial_offset_m = [0.0, 1e-3]\n')
+    api.design(study, spec, tmp_path / "out", progress=False)
+    rows = {(int(r["coil_turns"]), float(r["coil_axial_offset_m"])): r
+            for r in _rows(tmp_path / "out" / "designs.csv")}
+    for turns, offset in ((1100, 0.0), (800, 1e-3)):
+        run = study.replace({"sensor[1].coil.turns": turns,
+                             "sensor[1].coil.axial_offset_m": offset})
+        coil = next(c for c in api.physics_summary(api.run(run))["coils"]
+                    if c["particle"] == 13)
+        row = rows[(turns, offset)]
+        assert float(row["inductance_H"]) == pytest.approx(coil["inductance_H"], rel=1e-9)
+        emf = 1e-9 if eddy or turns != 1100 else 1e-5  # the study coil's run is exact
+        assert float(row["peak_emf_V"]) == pytest.approx(coil["peak_emf_V"], rel=emf)
+        assert float(row["peak_voltage_V"]) == pytest.approx(coil["peak_voltage_V"],
+                                                             rel=1e-9 if eddy else 1e-4)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("sweep", [TINY_COIL, TINY_MAGNET], ids=["coil", "magnet"])
 def test_sweep_local_and_dask_identical(tmp_path, sweep, monkeypatch):

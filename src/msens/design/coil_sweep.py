@@ -23,6 +23,13 @@ each of the run's frequencies (:mod:`msens.magnetics.harmonic_tables`); a design
 S_c(ω), D_c(ω) come from it, its impedance from the study coil's L(ω) scaled by the same
 ratio as the static L, and the EMF and DAQ voltage from
 :func:`msens.design.metrics.dynamic_design_rows`.
+
+Where the tables come from: when every design fits the study coil's window and the run's
+field model has stored tables over it (committed for the main study; written by any
+``msens run`` whose coil was then changed), the sweep reads those, so each design is read
+exactly as ``msens run`` reads that coil (:func:`_window_context`): a design is the run of
+that coil, and the sweep's field model is a read of seconds. Otherwise the sweep tabulates
+the run's sources over a box around its designs (:data:`TABLE_SPACING`).
 """
 
 from __future__ import annotations
@@ -51,11 +58,18 @@ from msens.magnetics.coil_read import (
     InductanceGrid,
     coil_from,
     coil_record,
+    fits,
     inductance_grid,
+    read_model,
+    read_tables,
     scaled_inductance,
+    solved_geometry,
 )
 from msens.magnetics.dynamic import eddy_sources
 from msens.magnetics.dynamic_cache import dynamic_report
+from msens.magnetics.eddy_coil_read import free_key as eddy_free_key
+from msens.magnetics.eddy_coil_read import read_table as read_eddy_table
+from msens.magnetics.eddy_coil_read import tables_key
 from msens.magnetics.emf import ContactRates
 from msens.magnetics.harmonic_tables import HarmonicTables, harmonic_tables
 from msens.magnetics.mechanisms import contact_profiles, mechanism_potentials
@@ -67,9 +81,11 @@ from msens.magnetics.potentials import (
 )
 from msens.magnetics.steel_law import law_for_steel
 from msens.magnetics.transducer import bias_solution
+from msens.magnetics.transducer_cache import free_key as static_free_key
 from msens.magnetics.transducer_cache import transducers_for
 from msens.parallel import default_workers
 from msens.readout.electronics import ElectronicsSpec
+from msens.store import Store
 
 #: Grid spacing of the linkage table, m (rectangle integrals converge as spacing²; 0.1 mm
 #: gives < 1e-4 relative error against exact mesh quadrature for the paper's coil, tests).
@@ -110,6 +126,10 @@ class CoilContext:
         With eddy currents: the sources' harmonic tables (same grid as ``table``).
     inductance_w : ndarray of complex, shape (n_f,), or None
         With eddy currents: the study coil's L(ω) at ``harmonic.frequencies``, H.
+    correction : ndarray of complex, shape (n_f, 2 n_c), or None
+        With eddy currents and the run's window tables (:func:`_window_context`): the study
+        coil's exact S_c(ω) then D_c(ω) minus their table quadrature, added to every
+        design's (so a design reads as ``msens run`` reads a changed coil).
     """
 
     table: LinkageTable
@@ -123,6 +143,7 @@ class CoilContext:
     coil: Coil
     harmonic: HarmonicTables | None = None
     inductance_w: np.ndarray | None = None
+    correction: np.ndarray | None = None
 
 
 def _coil_box(unit: SensorUnit, designs: Sequence[Design], geometry: SensorGeometry
@@ -142,10 +163,13 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
     transducers = transducers_for(geometry, contact_maps=study.field.contact_map)
     tr = transducers[particle]
     wave = study_wave(study, transducers, particle)
-    r_rng, z_rng = _coil_box(unit, designs, geometry)
     common = {"wave": wave,
               "z_center": geometry.beads.center(particle), "inductance": tr.inductance_H,
               "coil": unit.coil}
+    window = _window_context(study, geometry, unit, designs, common)
+    if window is not None:
+        return window
+    r_rng, z_rng = _coil_box(unit, designs, geometry)
     if not study.field.eddy_currents:
         sol, _ = bias_solution(geometry)
         model = mechanism_potentials(sol, geometry, stress_force=tr.reference_force,
@@ -175,6 +199,58 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
                        harmonic=harmonic, inductance_w=np.asarray(response.inductance))
 
 
+def _window_context(study: Study, geometry: SensorGeometry, unit: SensorUnit,
+                    designs: Sequence[Design], common: dict) -> CoilContext | None:
+    """The context read from the stored tables of the run's field model over the study
+    coil's window (committed for the main study), or None when there are none or a design
+    does not fit the window (:func:`msens.magnetics.coil_read.fits`, as ``msens run``
+    decides whether it reads a changed coil).
+
+    A design is then read exactly as ``msens run`` reads that coil: magnetostatic, by the
+    window table's quadrature (:func:`msens.magnetics.coil_read.read_coil`); with eddy
+    currents, the solved coil's exact S_c(ω), D_c(ω) plus the tables' difference of the two
+    windings (:func:`msens.magnetics.eddy_coil_read.read_response`), the difference being
+    carried here as the constant ``correction`` added to every design's table quadrature.
+    """
+    store = Store.default()
+    p = unit.coil.particle
+    model = read_model(store, static_free_key(geometry))
+    if model is None or model[0].get(p) != unit.coil:
+        return None
+    coils, inductance = model
+    solved = solved_geometry(geometry, coils)
+    if not all(fits(design_unit(unit, d.values, geometry.tube).coil, geometry, solved)
+               for d in designs):
+        return None
+    static = read_tables(store, static_free_key(geometry), coils, inductance, [p])
+    if p not in static.tables:
+        return None
+    layout = {"particles": static.particles, "approach_contacts": static.approach_contacts,
+              "count": static.count, "grid": static.grids[p]}
+    if not study.field.eddy_currents:
+        return CoilContext(table=static.tables[p], **layout, **common)
+    eddy = eddy_settings(study)
+    response = dynamic_report(geometry, options=eddy.options,
+                              steel=eddy.steel).responses[p]
+    free = eddy_free_key(geometry, eddy.options, response.frequencies, eddy.steel, None, None)
+    eddy_model = read_model(store, free)
+    if eddy_model is None or eddy_model[0] != coils:
+        return None
+    table = read_eddy_table(store, tables_key(geometry, coils, eddy.options,
+                                              response.frequencies, eddy.steel, None), p)
+    if table is None:
+        return None
+    v, a = table.profiles(unit.coil, geometry, np.zeros(1))
+    correction = np.concatenate([np.asarray(response.villari) - v[0],
+                                 np.asarray(response.approach) - a[0]], axis=1)
+    harmonic = table.harmonic
+    return CoilContext(table=LinkageTable(harmonic.r, harmonic.z, harmonic.cumulative[0].real),
+                       **{**layout, "particles": table.particles,
+                          "approach_contacts": table.approach_contacts, "count": table.count},
+                       **common, harmonic=harmonic,
+                       inductance_w=np.asarray(response.inductance), correction=correction)
+
+
 def save_context(ctx: CoilContext, path: Path) -> None:
     """Atomic .npz of a context."""
     w = ctx.wave
@@ -182,6 +258,8 @@ def save_context(ctx: CoilContext, path: Path) -> None:
     extra = {} if ctx.harmonic is None else {
         "frequencies": ctx.harmonic.frequencies, "harmonic": ctx.harmonic.cumulative,
         "inductance_w": ctx.inductance_w}
+    if ctx.correction is not None:
+        extra["correction"] = ctx.correction
     np.savez(buf, r=ctx.table.r, z=ctx.table.z, cumulative=ctx.table.cumulative,
              particles=ctx.particles, approach_contacts=ctx.approach_contacts,
              contacts=w.contacts, t=w.rates.t, force_rate=w.rates.force,
@@ -208,7 +286,8 @@ def load_context(path: Path) -> CoilContext:
                            f["approach_contacts"], int(s[0]), wave, float(s[1]), float(s[2]),
                            InductanceGrid(f["grid_r"], f["grid_z"], f["grid_kernel"]),
                            coil_from(json.loads(str(f["coil"]))), harmonic,
-                           f["inductance_w"] if harmonic is not None else None)
+                           f["inductance_w"] if harmonic is not None else None,
+                           f["correction"] if "correction" in f.files else None)
 
 
 def _windings(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
@@ -268,11 +347,15 @@ def evaluate(ctx: CoilContext, unit: SensorUnit, designs: Sequence[Design],
                                             link.real)
         _, vi, ai = contact_profiles(ctx.particles, ctx.approach_contacts, ctx.count,
                                      link.imag)
+        villari, approach = vr + 1j * vi, ar + 1j * ai
+        if ctx.correction is not None:
+            villari += ctx.correction[None, :, :contacts.size]
+            approach += ctx.correction[None, :, contacts.size:]
         rows = dynamic_design_rows(coils, resistance, inductance, ctx.harmonic.frequencies,
-                                   vr + 1j * vi, ar + 1j * ai,
+                                   villari, approach,
                                    scale[:, None] * ctx.inductance_w[None], ctx.wave,
                                    electronics, threads)
-        s_vil, dl = vr[:, 0], ar[:, 0]
+        s_vil, dl = villari[:, 0].real, approach[:, 0].real
     # the run's transducer covers the same contacts
     internal(bool(np.array_equal(contacts, ctx.wave.contacts)),
              "internal: coil-sweep table and the run's transducer cover different contacts")
@@ -316,7 +399,7 @@ def run_coil_sweep(study: Study, geometry: SensorGeometry, particle: int,
     shared files).
     """
     unit = next(u for u in geometry.sensors if u.coil.particle == particle)
-    ckey = content_key("coil-context/5", study, geometry, particle,
+    ckey = content_key("coil-context/6", study, geometry, particle,
                        _coil_box(unit, designs, geometry))
     cname = f"context-{ckey}.npz"
     cpath = cache.store.find_file(cname)

@@ -125,7 +125,7 @@ def _refuse(*args, **kwargs):
 
 @pytest.mark.parametrize("eddy", [False, True], ids=["magnetostatic", "eddy"])
 def test_a_coil_sweep_on_the_main_study_reads_the_runs_window_tables(tmp_path, monkeypatch,
-                                                                      eddy):
+                                                                      caplog, eddy):
     """Issue 33: designs inside the coil's window are read from the run's stored (here
     committed) tables, as ``msens run`` reads a changed coil, so a design is the run of that
     coil: with eddy currents to the CSV's 10 digits (the solved coil's exact response plus
@@ -141,7 +141,9 @@ def test_a_coil_sweep_on_the_main_study_reads_the_runs_window_tables(tmp_path, m
     spec = tmp_path / "sweep.toml"
     spec.write_text('schema = "msens.sweep/1"\nname = "window"\nsensor = 13\n[coil]\n'
                     'turns = [1100, 800]\naxial_offset_m = [0.0, 1e-3]\n')
-    api.design(study, spec, tmp_path / "out", progress=False)
+    with caplog.at_level("INFO", logger="msens.design.coil_sweep"):
+        api.design(study, spec, tmp_path / "out", progress=False)
+    assert "reading the run's tables" in caplog.text
     rows = {(int(r["coil_turns"]), float(r["coil_axial_offset_m"])): r
             for r in _rows(tmp_path / "out" / "designs.csv")}
     for turns, offset in ((1100, 0.0), (800, 1e-3)):

@@ -65,6 +65,7 @@ from msens.magnetics.coil_read import (
     scaled_inductance,
     solved_geometry,
 )
+from msens.magnetics.coil_read import table_name as static_table_name
 from msens.magnetics.dynamic import eddy_sources
 from msens.magnetics.dynamic_cache import dynamic_report
 from msens.magnetics.eddy_coil_read import free_key as eddy_free_key
@@ -168,8 +169,16 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
               "coil": unit.coil}
     window = _window_context(study, geometry, unit, designs, common)
     if window is not None:
+        logging.getLogger(__name__).info(
+            "coil sweep: every design lies in the coil's window; reading the run's tables of "
+            "it (each design is read as msens run reads that coil)")
         return window
     r_rng, z_rng = _coil_box(unit, designs, geometry)
+    logging.getLogger(__name__).info(
+        "coil sweep: tabulating the sources over the designs' box (r %.2f-%.2f mm, z "
+        "%.2f-%.2f mm, %.2f mm spacing; the run's stored window tables %s)", r_rng[0] * 1e3,
+        r_rng[1] * 1e3, z_rng[0] * 1e3, z_rng[1] * 1e3, TABLE_SPACING * 1e3,
+        "do not hold every design" if _has_window(geometry, unit) else "are not there")
     if not study.field.eddy_currents:
         sol, _ = bias_solution(geometry)
         model = mechanism_potentials(sol, geometry, stress_force=tr.reference_force,
@@ -197,6 +206,12 @@ def build_context(study: Study, geometry: SensorGeometry, particle: int,
                                             (r_rng, z_rng)),
                        **common,
                        harmonic=harmonic, inductance_w=np.asarray(response.inductance))
+
+
+def _has_window(geometry: SensorGeometry, unit: SensorUnit) -> bool:
+    """Whether the store has the run's static tables of ``unit``'s coil window."""
+    return Store.default().find_file(
+        static_table_name(static_free_key(geometry), unit.coil.particle)) is not None
 
 
 def _window_context(study: Study, geometry: SensorGeometry, unit: SensorUnit,

@@ -229,7 +229,8 @@ def _window_context(study: Study, geometry: SensorGeometry, unit: SensorUnit,
     """
     store = Store.default()
     p = unit.coil.particle
-    model = read_model(store, static_free_key(geometry))
+    free = static_free_key(geometry)
+    model = read_model(store, free)
     if model is None or model[0].get(p) != unit.coil:
         return None
     coils, inductance = model
@@ -237,7 +238,7 @@ def _window_context(study: Study, geometry: SensorGeometry, unit: SensorUnit,
     if not all(fits(design_unit(unit, d.values, geometry.tube).coil, geometry, solved)
                for d in designs):
         return None
-    static = read_tables(store, static_free_key(geometry), coils, inductance, [p])
+    static = read_tables(store, free, coils, inductance, [p])
     if p not in static.tables:
         return None
     layout = {"particles": static.particles, "approach_contacts": static.approach_contacts,
@@ -247,8 +248,8 @@ def _window_context(study: Study, geometry: SensorGeometry, unit: SensorUnit,
     eddy = eddy_settings(study)
     response = dynamic_report(geometry, options=eddy.options,
                               steel=eddy.steel).responses[p]
-    free = eddy_free_key(geometry, eddy.options, response.frequencies, eddy.steel, None, None)
-    eddy_model = read_model(store, free)
+    eddy_model = read_model(store, eddy_free_key(geometry, eddy.options,
+                                                 response.frequencies, eddy.steel, None, None))
     if eddy_model is None or eddy_model[0] != coils:
         return None
     table = read_eddy_table(store, tables_key(geometry, coils, eddy.options,

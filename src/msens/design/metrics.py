@@ -34,6 +34,7 @@ from msens.magnetics.emf import ContactRates, emf_from_rates
 from msens.magnetics.frequency_response import interp
 from msens.parallel import thread_map
 from msens.params.units import TWO_PI
+from msens.readout.coil import winding_capacitance
 from msens.readout.electronics import (
     ElectronicsSpec,
     ReadoutCircuit,
@@ -100,27 +101,27 @@ class _Circuits:
 
 def _circuits(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndarray,
               electronics: ElectronicsSpec) -> _Circuits:
-    """Each design's circuit (:func:`msens.readout.mss.readout`, built once per winding) and
-    its figures, vectorised over designs."""
+    """Each design's circuit (:func:`msens.readout.mss.readout`; the winding capacitance
+    computed once per winding) and its figures, vectorised over designs."""
     resistance = np.asarray(resistance, dtype=float)
     inductance = np.asarray(inductance, dtype=float)
-    built: dict = {}
-    c_w = np.empty(len(coils))
-    for k, (c, r, ind) in enumerate(zip(coils, resistance, inductance, strict=True)):
+    for values, name in ((resistance, "resistance"), (inductance, "inductance")):
+        require(bool(np.all(np.isfinite(values) & (values > 0))),
+                f"every design's coil {name} must be finite and > 0, got {values.min()}")
+    per_winding: dict = {}
+    for c in coils:  # designs that differ in their offset alone share a winding
         key = (c.turns, c.length, c.inner_radius, c.wire.name, c.packing_factor)
-        if key not in built:
-            built[key] = readout(c, float(r), float(ind), electronics)
-        c_w[k] = built[key].winding_capacitance
+        if key not in per_winding:
+            per_winding[key] = winding_capacitance(c)
+    c_w = np.array([per_winding[(c.turns, c.length, c.inner_radius, c.wire.name,
+                                 c.packing_factor)] for c in coils])
     load = readout(coils[0], float(resistance[0]), float(inductance[0]), electronics)
     internal(load.cable_resistance == 0.0,
              "internal: a coil sweep's read-out circuit with a cable resistance")
-    for r, ind in ((resistance, "resistance"), (inductance, "inductance")):
-        require(bool(np.all(np.isfinite(r) & (r > 0))),
-                f"every design's coil {ind} must be finite and > 0, got {r.min()}")
     capacitance = c_w + load.load_capacitance
-    conductance = (0.0 if math.isinf(load.input_resistance) else 1.0 / load.input_resistance)
     return _Circuits(load, resistance, inductance, c_w,
-                     resonance_figures(resistance, inductance, capacitance, conductance),
+                     resonance_figures(resistance, inductance, capacitance,
+                                       load.input_conductance),
                      figure_noise_rms_of(capacitance, electronics))
 
 
@@ -156,8 +157,8 @@ def design_rows(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.nd
     def chunk(sl: slice) -> list[dict]:
         e = emf_from_rates(wave.rates, sensitivity_villari[sl], s_app[sl])
         spectrum = scipy.fft.rfft(e, n_fft, axis=1)
-        # the chunk's transfer functions at once (bit-identical to transfer_function per
-        # circuit; a sweep may have as many distinct circuits as designs, so none is kept)
+        # the chunk's transfer functions at once, the spectra divided in the same pass (a
+        # sweep may have as many distinct circuits as designs, so none is kept)
         z_s = cs.resistance[sl, None] + s * cs.inductance[sl, None]
         spectrum = coil_transfer_functions(cs.load, cs.winding_capacitance[sl], freq, z_s,
                                            spectrum)
@@ -316,11 +317,11 @@ def _top_basis(spectra: _ChainSpectra, at_top: np.ndarray) -> _TopBasis:
 
 
 def _emf_spectra(spectra: _ChainSpectra, frequencies: np.ndarray, villari: np.ndarray,
-                 approach: np.ndarray, top_basis: _TopBasis | None = None) -> np.ndarray:
+                 approach: np.ndarray, top_basis: _TopBasis) -> np.ndarray:
     """EMF(ω) of many designs, shape (n_d, bins): :func:`msens.magnetics.eddy_readout.
     emf_spectra` of their S_c(ω), D_c(ω) (shape (n_d, n_f, n_c) each), by the matrix
     products of :class:`_ChainSpectra` (equal to it to rounding, tests); above f_n through
-    ``top_basis`` (:func:`_top_basis` of these or more designs) if given."""
+    ``top_basis`` (:func:`_top_basis` of these or more designs)."""
     freqs = np.asarray(frequencies, float)
     sp = spectra
     n_d = villari.shape[0]
@@ -343,10 +344,7 @@ def _emf_spectra(spectra: _ChainSpectra, frequencies: np.ndarray, villari: np.nd
             np.matmul(coef[:, :, k].reshape(n_d, -1), table, out=out[:, sl])
     else:
         at_top = both[1]
-    if top_basis is None:
-        np.matmul(at_top, sp.top_rates, out=out[:, sp.top:])
-    else:
-        np.matmul(at_top @ top_basis.weights, top_basis.rates, out=out[:, sp.top:])
+    np.matmul(at_top @ top_basis.weights, top_basis.rates, out=out[:, sp.top:])
     return out
 
 

@@ -129,6 +129,11 @@ class ReadoutCircuit:
                 f"input_resistance must be > 0 Ω (inf allowed), got {self.input_resistance}")
 
     @property
+    def input_conductance(self) -> float:
+        """G = 1 / R_in, S (0 for an open input)."""
+        return _conductance(self.input_resistance)
+
+    @property
     def load_capacitance(self) -> float:
         """C_B = cable + DAQ input capacitance, F."""
         return self.cable_capacitance + self.input_capacitance
@@ -160,7 +165,7 @@ def _admittances(circuit: ReadoutCircuit, f: np.ndarray):
     """s, series coil impedance Z_s = R + sL, load admittance Y_B = 1/R_in + s C_B."""
     s = 2j * np.pi * f
     z_s = circuit.resistance + s * circuit.inductance
-    y_b = _conductance(circuit.input_resistance) + s * circuit.load_capacitance
+    y_b = circuit.input_conductance + s * circuit.load_capacitance
     return s, z_s, y_b
 
 
@@ -291,7 +296,7 @@ def state_space(circuit: ReadoutCircuit) -> tuple[np.ndarray, np.ndarray, np.nda
     c = circuit
     require(c.inductance > 0, "the circuit's state-space model (time domain, resonance, "
             "bandwidth, total noise) needs coil inductance > 0 H")
-    g_in = _conductance(c.input_resistance)
+    g_in = c.input_conductance
     inv_l = 1.0 / c.inductance
     if c.cable_resistance == 0.0:
         require(c.total_capacitance > 0,
@@ -393,7 +398,7 @@ def resonance_figures(resistance: ArrayLike, inductance: ArrayLike, capacitance:
 
 def _second_order(circuit: ReadoutCircuit) -> ResonanceFigures:
     return resonance_figures(circuit.resistance, circuit.inductance,
-                             circuit.total_capacitance, _conductance(circuit.input_resistance))
+                             circuit.total_capacitance, circuit.input_conductance)
 
 
 def resonance(circuit: ReadoutCircuit) -> tuple[float, float]:

@@ -22,7 +22,6 @@ from msens.params.units import K_B
 from msens.readout.electronics import (
     ReadoutCircuit,
     _admittances,
-    _conductance,
     _linear_recursion,
     _transfer,
     resonance,
@@ -103,7 +102,7 @@ class NoiseModel:
 def _thermal_intensity(circuit: ReadoutCircuit, temperature: float) -> np.ndarray:
     """Two-sided white-noise intensities of the 3 state-space inputs (2kTR, 2kTR_c, 2kT/R_in)."""
     return 2.0 * K_B * temperature * np.array(
-        [circuit.resistance, circuit.cable_resistance, _conductance(circuit.input_resistance)])
+        [circuit.resistance, circuit.cable_resistance, circuit.input_conductance])
 
 
 def thermal_covariance(circuit: ReadoutCircuit, temperature_K: float) -> np.ndarray:
@@ -221,7 +220,7 @@ def thermal_noise_psd(circuit: ReadoutCircuit, temperature_K: float,
     return 4.0 * K_B * temperature_K * (
         r_coil * np.abs(h_coil) ** 2
         + circuit.cable_resistance * np.abs(h_cable) ** 2
-        + _conductance(circuit.input_resistance) * np.abs(z_out) ** 2)
+        + circuit.input_conductance * np.abs(z_out) ** 2)
 
 
 def _band(bandwidth: float | tuple[float, float]) -> tuple[float, float]:

@@ -1,13 +1,14 @@
 """Hidden-effect campaign of ``msens diagnose`` on data from an independent simulator.
 
-Issue 35, item 5: physics-MsS data of the main study (``studies/paper-mss.toml``) made by a
+Issue 35, item 5: physics-MsS data of the main study (``studies/paper-mss.toml``, its
+magnetostatic variant: the simulator has no eddy currents) made by a
 second implementation that is not msens's code path (:mod:`benchmarks.independent`: scipy's
 DOP853 on the chain from its own static equilibrium, contact approaches from the beads'
 positions, the coil flux and a read-out circuit of its own, the field model's tabulated
 outputs perturbed by a seeded 1 %), with one hidden effect per file (every library effect
 that applies to the physics MsS, at random plausible parameters), null files (1-8 shots) and
 effects outside the library. Each file is written as a DAQ export would be read (``.npz``,
-channels ``mss@13``/``mss@18`` in volts, ``#k`` per shot) and diagnosed with the main study
+channels ``mss@13``/``mss@18`` in volts, ``#k`` per shot) and diagnosed with that study
 (:func:`msens.diagnose.diagnose`, as ``msens diagnose`` does).
 
 Prints JSON: per case the truth, the named effect, its fitted parameters and 95 % intervals,
@@ -40,9 +41,7 @@ ACCEPTANCE = {"right_effect": 0.90, "inside_interval": 0.80, "nulls_explained": 
 
 def setup(accuracy: float = field.FIELD_ACCURACY):
     """(study, study numbers, perturbed field tables, nominal world)."""
-    from msens.config.study import default_study_path, load_study
-
-    study = load_study(default_study_path())
+    study = field.main_study()
     s = sim.study_numbers(study)
     tables = field.perturbed(field.read_tables(study), accuracy)
     return study, s, tables, sim.nominal(s, tables)

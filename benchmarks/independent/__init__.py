@@ -1,6 +1,7 @@
 """An independent simulator of the main study's physics MsS (issue 35, item 5).
 
-A second implementation of the physics behind ``msens run`` on ``studies/paper-mss.toml``,
+A second implementation of the physics behind ``msens run`` on ``studies/paper-mss.toml``
+with ``[field] eddy_currents = false`` (its magnetostatic variant, :func:`field.main_study`),
 written apart from msens's code path, to make hidden-effect data that msens did not make:
 
 - :mod:`benchmarks.independent.field`: the field model's *tabulated outputs* read once from

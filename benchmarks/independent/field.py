@@ -100,6 +100,15 @@ class FieldTables:
     pull_by_remanence: np.ndarray
 
 
+def main_study():
+    """The study this simulator implements: the main study's magnetostatic variant
+    (``[field] eddy_currents = false``; the simulator has no eddy currents in the steel, so
+    msens is compared with, and diagnoses its data with, the same physics)."""
+    from msens import api
+
+    return api.load_default(eddy_currents=False)
+
+
 def read_tables(study) -> FieldTables:
     """Read the tabulated outputs of msens's field model for ``study``'s first setup (its
     transducer objects, the contact maps, the remanence family): the one contact with

@@ -103,11 +103,14 @@ def modes(mss):
 def test_modes_of_the_main_study(mss, modes):
     """The contact modes are the contacts' own contributions: they add up to the record
     (the read-out is linear in the sensitivities); the circuit's and the pull's modes are
-    there, and each is of the field model's accuracy."""
+    there, and each is of the field model's accuracy. With eddy currents (the main study)
+    the coil's impedance Z(ω) is one mode in place of R and L."""
     ctx, base, _, _, records0 = mss
     assert len(modes) == len(ctx.setup.sensors)
+    circuit = {"Z", "C_winding"} if ctx.study.field.eddy_currents else {"R", "L", "C_winding"}
     for j, md in enumerate(modes):
-        assert {"R", "L", "C_winding"} <= set(md.names)
+        assert circuit <= set(md.names)
+        assert not ({"R", "L", "Z"} - circuit) & set(md.names)
         assert sum(n.startswith("pull@") for n in md.names) >= 20
         assert sum(n.startswith("pull-nonlinear#") for n in md.names) == PULL_DRAWS
         mapped = base.physics[j].model.transducers[md_particle(base, j)].approach_map

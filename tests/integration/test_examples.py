@@ -15,7 +15,7 @@ pytest.importorskip("pandas")  # replace_parameter.py shows the DataFrames
 
 # script -> text its output must contain; each takes 4-10 s once the chain kernel is compiled
 CASES = {
-    "run_default.py": "top            13    287.8",
+    "run_default.py": "top            13    287.2",
     "replace_parameter.py": "unknown key 'striker.drop_heigth_m'",
     "synth_compare.py": "mss@18",
     "scope_export.py": "scope-mss.csv: 2435 samples",

@@ -41,13 +41,25 @@ def test_builtin_inputs_of_the_main_study(study):
     assert routes["sensor.magnet.remanence_factor"] == FIELD_TABLE
     assert routes["field.reversibility"] == FIELD_SURROGATE
     held = {i.name: i.held_reason for i in inputs.held}
-    assert "eddy_currents = false" in held["field.steel_conductivity_S_per_m"]
+    assert study.field.eddy_currents
+    assert "eddy-current models over the conductivity" in held[
+        "field.steel_conductivity_S_per_m"]
     assert "field.reversibility" not in held
     assert routes["field.steel_conductivity_S_per_m"] == HELD
     # each distribution lies inside the input's physical range, around the study's value
     for i in inputs.inputs:
         lo, hi = i.distribution.support
         assert i.physical[0] <= lo <= i.nominal <= hi <= i.physical[1], i.name
+
+
+def test_the_magnetostatic_variant_holds_the_conductivity_for_its_own_reason():
+    study = api.load_default(eddy_currents=False)
+    assert not study.field.eddy_currents
+    held = {i.name: i.held_reason for i in load_inputs(None, study).held}
+    assert "eddy_currents = false" in held["field.steel_conductivity_S_per_m"]
+    with pytest.raises(InputError, match="eddy_currents = false"):
+        parse_inputs(_file('name = "field.steel_conductivity_S_per_m"\ndistribution = '
+                           '"uniform"\nlower = 5e6\nupper = 7e6'), study, source="u.toml")
 
 
 def test_builtin_inputs_of_paper_table2():
@@ -88,7 +100,7 @@ def test_values_are_the_inverse_cdf(study):
            'upper = 4.6e-4', study="paper-table2"), ["'study'", "paper-table2"]),
     ('schema = "msens.uncertainty/1"\n', ["no [[input]] tables"]),
     (_file('name = "field.steel_conductivity_S_per_m"\ndistribution = "uniform"\n'
-           'lower = 5e6\nupper = 7e6'), ["every input is held", "eddy_currents = false"]),
+           'lower = 5e6\nupper = 7e6'), ["every input is held", "eddy-current models over"]),
     (_file('name = "field.reversibility"\ndistribution = "loguniform"\nlower = 0.05\n'
            'upper = 1.0'), ["physical range", "allowed 0.1..1", "surrogate"]),
 ])

@@ -3,7 +3,7 @@ the hidden-effect campaign of ``msens diagnose`` on its data (issue 35, item 5).
 
 The fast tests are the evidence that the simulator is an independent implementation of the
 same physics: without the field perturbation it reproduces msens's run of the undisturbed
-main study (bead velocity peaks, both coils' DAQ voltage), and with the 1 % perturbation it
+main study's magnetostatic variant (bead velocity peaks, both coils' DAQ voltage), and with the 1 % perturbation it
 stays as close as a 1 % field model error allows. The campaign test (hours: ~1-2 min of
 ``msens diagnose`` per file on 2 cores) asserts the issue's acceptance numbers.
 """
@@ -18,12 +18,11 @@ from benchmarks.independent import field, sim
 @pytest.fixture(scope="module")
 def runs():
     from msens.chain.integrate import simulate
-    from msens.config.study import default_study_path, load_study
     from msens.diagnose.effects import Context
     from msens.diagnose.predict import baseline_state
     from msens.pipeline import run_study
 
-    study = load_study(default_study_path())
+    study = field.main_study()  # magnetostatic, as the simulator
     s = sim.study_numbers(study)
     t = np.arange(round(s.t_end * s.sample_rate) + 1) / s.sample_rate
     result = run_study(study).setups[0]
@@ -97,9 +96,7 @@ def test_rig_record_is_the_run_read_at_the_trigger(runs):
     started at the first recorded instant, after the impact: the coil's resonance then
     rang through the whole record at 5-10 % of the peak.)"""
     t, msens_v, _, _, s = runs
-    from msens.config.study import default_study_path, load_study
-
-    tables = field.read_tables(load_study(default_study_path()))
+    tables = field.read_tables(field.main_study())
     rig = sim.Rig(noise=0.0, gain=(1.0, 1.0), offset=0.0, jitter=0.0, speed_spread=0.0)
     tau, data, names, truth = sim.record(sim.nominal(s, tables), tables, s, rig, seed=5)
     delay = truth["trigger_delays_s"][0]

@@ -74,13 +74,14 @@ def main(argv: list[str] | None = None) -> int:
     report = {"study": "paper-mss", "eddy_currents": args.eddy, "changes": {}}
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        study = "paper-mss"
-        if args.eddy:
+        study = "paper-mss"  # with eddy currents, the main study's default
+        if not args.eddy:
             from msens.config.study import default_study_path
 
-            path = tmp / "paper-mss-eddy.toml"
-            path.write_text(default_study_path().read_text().replace(
-                "[field]", "[field]\neddy_currents = true", 1))
+            path = tmp / "paper-mss-magnetostatic.toml"
+            text = default_study_path().read_text()
+            assert "eddy_currents = true" in text
+            path.write_text(text.replace("eddy_currents = true", "eddy_currents = false", 1))
             study = str(path)
         warm = tmp / "warm-cache"
         default_s, _ = _run(warm, tmp / "default", {}, study)

@@ -55,8 +55,7 @@ axial_offset_m = { start = -1e-3, stop = 1e-3, num = 5 }
 
 def main(eddy: bool = False) -> dict:
     study = load_study(ROOT / "studies" / "paper-mss.toml")
-    if eddy:
-        study = study.replace({"field.eddy_currents": True})
+    study = study.replace({"field.eddy_currents": eddy})  # magnetostatic without --eddy
     spec = parse_sweep(GRID, source="benchmark")
     geometry = geometry_from_study(study)
     designs = []

@@ -3,7 +3,8 @@
 The physics MsS sees the steel's permeability for small signals about the bias point. msens
 offers the differential slope of the B–H curve (default) and its reversible part
 (``[field] small_signal_permeability = "reversible"``, c = 0.1 by default: see
-:data:`msens.params.materials.STEEL_REVERSIBILITY`). This runs ``studies/paper-mss.toml`` four ways
+:data:`msens.params.materials.STEEL_REVERSIBILITY`). This runs ``studies/paper-mss.toml`` four
+ways, each permeability with eddy currents (the study's default) and magnetostatic
 and prints, per coil, the peak DAQ voltage and its time, the peak EMF, the incremental
 inductance, the read-out resonance, and (with eddy currents) the contact approach of the
 coil's lower contact at 10, 30 and 100 kHz relative to static (magnitude, phase in degrees);
@@ -30,12 +31,13 @@ from msens.field.geometry import BEAD_DIAMETER
 from msens.params.materials import SIGMA_1018
 from msens.vocabulary import TIME_LABEL, coil_name
 
-VARIANTS = {
-    "differential": {},
-    "reversible": {"field.small_signal_permeability": "reversible"},
-    "differential + eddy currents": {"field.eddy_currents": True},
-    "reversible + eddy currents": {"field.small_signal_permeability": "reversible",
-                                   "field.eddy_currents": True},
+VARIANTS = {  # the main study computes with eddy currents; each variant says which it takes
+    "differential, eddy currents (default)": {"field.eddy_currents": True},
+    "reversible, eddy currents": {"field.small_signal_permeability": "reversible",
+                                  "field.eddy_currents": True},
+    "differential, magnetostatic": {"field.eddy_currents": False},
+    "reversible, magnetostatic": {"field.small_signal_permeability": "reversible",
+                                  "field.eddy_currents": False},
 }
 
 
@@ -90,9 +92,10 @@ def plot(records: dict, path: str) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6.5, 3.6))
-    styles = {"differential": ("C0", "-"), "reversible": ("C1", "-"),
-              "differential + eddy currents": ("C0", "--"),
-              "reversible + eddy currents": ("C1", "--")}
+    styles = {"differential, eddy currents (default)": ("C0", "-"),
+              "reversible, eddy currents": ("C1", "-"),
+              "differential, magnetostatic": ("C0", "--"),
+              "reversible, magnetostatic": ("C1", "--")}
     for name, rec in records.items():
         keep = rec.t_daq <= 200e-6
         color, ls = styles[name]

@@ -111,9 +111,7 @@ def main(argv: list[str] | None = None) -> dict:
     opts = args.parse_args(argv)
     nodes = reversibility.NODES if opts.nodes == 0 else tuple(
         float(v) for v in np.round(np.geomspace(0.1, 1.0, opts.nodes), 4))
-    study = api.load_default()
-    if opts.eddy:
-        study = study.replace({"field.eddy_currents": True})
+    study = api.load_default(eddy_currents=bool(opts.eddy))
     geometry = geometry_from_study(study)
     setup = run_study(study).setups[0]
     nominal = setup.transducers

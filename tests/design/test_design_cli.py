@@ -136,8 +136,7 @@ def test_a_coil_sweep_on_the_main_study_reads_the_runs_window_tables(tmp_path, m
     monkeypatch.setattr(coil_sweep, "harmonic_tables", _refuse)
     monkeypatch.setattr(coil_sweep, "linkage_table", _refuse)
     study = api.load(ROOT / "studies" / "paper-mss.toml")
-    if eddy:
-        study = study.replace({"field.eddy_currents": True})
+    study = study.replace({"field.eddy_currents": eddy})
     spec = tmp_path / "sweep.toml"
     spec.write_text('schema = "msens.sweep/1"\nname = "window"\nsensor = 13\n[coil]\n'
                     'turns = [1100, 800]\naxial_offset_m = [0.0, 1e-3]\n')

@@ -205,10 +205,8 @@ def test_modes_with_eddy_currents(tmp_path):
     """With eddy currents the contact modes go through the frequency-domain read-out (the
     coil's S_c(ω), D_c(ω) scaled per contact): they still add up to the record exactly; the
     coil's impedance replaces R and L as a mode (slow: 101 modes by FFT, ~15 s)."""
-    path = tmp_path / "eddy.toml"
-    path.write_text(default_study_path().read_text().replace(
-        "[field]", "[field]\neddy_currents = true", 1))
-    study = load_study(path)
+    study = load_study(default_study_path())  # eddy currents: the main study's default
+    assert study.field.eddy_currents
     ctx = Context(study, study.setups[0])
     base = baseline_state(ctx, *baseline_dissipation(study))
     predictor = Predictor(output_times(study))

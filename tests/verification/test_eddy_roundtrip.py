@@ -12,16 +12,15 @@ import pytest
 from tests.integration.test_mss_roundtrip import diagnose_hidden
 
 from msens.cli import main
-from msens.config.study import default_study_path
+from msens.config.study import default_study_path, load_study
 
 pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def study_file(tmp_path_factory):
-    text = default_study_path().read_text()
-    path = tmp_path_factory.mktemp("eddy") / "paper-eddy.toml"
-    path.write_text(text.replace("[field]", "[field]\neddy_currents = true", 1))
+def study_file():
+    path = default_study_path()
+    assert load_study(path).field.eddy_currents  # the main study's default
     return path
 
 

@@ -3,9 +3,10 @@ the hidden-effect campaign of ``msens diagnose`` on its data (issue 35, item 5).
 
 The fast tests are the evidence that the simulator is an independent implementation of the
 same physics: without the field perturbation it reproduces msens's run of the undisturbed
-main study's magnetostatic variant (bead velocity peaks, both coils' DAQ voltage), and with the 1 % perturbation it
-stays as close as a 1 % field model error allows. The campaign test (hours: ~1-2 min of
-``msens diagnose`` per file on 2 cores) asserts the issue's acceptance numbers.
+main study's magnetostatic variant (bead velocity peaks, both coils' DAQ voltage), and with
+the 1 % perturbation it stays as close as a 1 % field model error allows. The campaign test
+(hours: ~1-2 min of ``msens diagnose`` per file on 2 cores) asserts the issue's acceptance
+numbers.
 """
 
 from __future__ import annotations

@@ -354,7 +354,9 @@ class FieldSpec:
     eddy_currents : bool
         Physics MsS with eddy currents in the conducting beads and pole pieces: frequency
         dependent sensitivities and coil impedance (:mod:`msens.magnetics.dynamic`) instead
-        of the magnetostatic transducer. Off by default (see the README for its accuracy).
+        of the magnetostatic transducer. Off when the key is absent; the main study
+        (``studies/paper-mss.toml``) turns it on, and ``false`` is the faster, less exact
+        magnetostatic model (the theory page says what it changes).
     steel_conductivity_s_per_m : float or None
         Electrical conductivity of the beads and pole pieces, S/m; None means
         :data:`msens.params.materials.SIGMA_1018` (AISI 1018, 6 MS/m, cited there).

@@ -84,9 +84,11 @@ def test_diagnose_baseline_with_contact_maps_is_the_run(runs):
                          linear.setups[0].sensors, strict=True):
         if r.mss is None:
             continue
-        np.testing.assert_allclose(p.mss.voltage, r.mss.voltage, rtol=0,
-                                   atol=1e-9 * np.max(np.abs(r.mss.voltage)))
-        assert np.max(np.abs(r.mss.voltage - lin.mss.voltage)) > 0.005
+        peak = np.max(np.abs(r.mss.voltage))
+        np.testing.assert_allclose(p.mss.voltage, r.mss.voltage, rtol=0, atol=1e-9 * peak)
+        # the maps change the record (with eddy currents coil 13 by 4.1 % of its peak, coil
+        # 18, which the pulse reaches through weakly nonlinear contacts, by 0.65 %)
+        assert np.max(np.abs(r.mss.voltage - lin.mss.voltage)) > 0.003 * peak
 
 
 def test_remanence_variants_read_the_contact_maps(runs):

@@ -108,13 +108,12 @@ def _circuits(coils: Sequence[Coil], resistance: np.ndarray, inductance: np.ndar
     for values, name in ((resistance, "resistance"), (inductance, "inductance")):
         require(bool(np.all(np.isfinite(values) & (values > 0))),
                 f"every design's coil {name} must be finite and > 0, got {values.min()}")
-    per_winding: dict = {}
-    for c in coils:  # designs that differ in their offset alone share a winding
-        key = (c.turns, c.length, c.inner_radius, c.wire.name, c.packing_factor)
-        if key not in per_winding:
-            per_winding[key] = winding_capacitance(c)
-    c_w = np.array([per_winding[(c.turns, c.length, c.inner_radius, c.wire.name,
-                                 c.packing_factor)] for c in coils])
+    # designs that differ in their offset alone share a winding
+    windings = [(c.turns, c.length, c.inner_radius, c.wire.name, c.packing_factor)
+                for c in coils]
+    per_winding = {w: winding_capacitance(c)
+                   for w, c in dict(zip(windings, coils, strict=True)).items()}
+    c_w = np.array([per_winding[w] for w in windings])
     load = readout(coils[0], float(resistance[0]), float(inductance[0]), electronics)
     internal(load.cable_resistance == 0.0,
              "internal: a coil sweep's read-out circuit with a cable resistance")

@@ -194,6 +194,17 @@ def test_table2_shows_per_cent_errors_with_visible_error_bars(table2_result, res
         plots.close(fig)
 
 
+def test_table2_writes_a_rounded_zero_without_a_minus(result):
+    rows = [dict(r) for r in result.rows()]
+    rows[0]["tof_us"] = 0.9998 * rows[0]["reference"]["experiment_tof_us"]  # -0.02 %
+    fig = plots.table2(rows, result.study.name)
+    try:
+        texts = [t.get_text() for t in fig.axes[0].texts]
+        assert "+0.0 %" in texts and not any(t.startswith("-0.0") for t in texts)
+    finally:
+        plots.close(fig)
+
+
 def test_mss_voltage_shows_what_the_readout_does(result):
     fig = plots_mss.mss_voltages(result)
     try:

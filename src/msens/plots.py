@@ -269,7 +269,8 @@ def table2(rows: list[dict], study: str | None = None) -> Figure:
         ax.plot(ours, y - 0.15, "o", color="C3", ms=6, zorder=3, label="model (msens)")
         for yi, v in zip(y, ours, strict=True):
             if np.isfinite(v):
-                ax.annotate(f"{v:+.1f} %", (v, yi - 0.15), xytext=(6, 0),
+                # a value that rounds to zero is written "+0.0 %", never "-0.0 %"
+                ax.annotate(f"{round(v, 1) + 0.0:+.1f} %", (v, yi - 0.15), xytext=(6, 0),
                             textcoords="offset points", va="center", fontsize=7,
                             color="C3")
         lim = np.nanmax(np.abs(np.concatenate([ours, paper, std, [1.0]])))

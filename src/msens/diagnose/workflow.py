@@ -265,7 +265,9 @@ def objective_at(waveform: Waveform, result: SetupResult, per_shot: ShotFits | N
     # the likelihood's variance: the noise and the model's own uncertainty (physics MsS)
     _log.info("field-model modes of the records (each contact, the circuit, each bead's "
               "pull; ~60 chain runs)")
-    objective.add_model_uncertainty(records, record_modes(state, predictor))
+    with heartbeat(_log, "field-model modes"):
+        modes = record_modes(state, predictor)
+    objective.add_model_uncertainty(records, modes)
     return objective
 
 
@@ -388,7 +390,10 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
                   effect.name, ", ".join(fit.at_bound))
         return winner, wfit, b.objective
     intervals = dict(fit.intervals)
-    changes = field_draws(fit.state, predictor) if fit.curvature is not None else None
+    changes = None
+    if fit.curvature is not None:
+        with heartbeat(_log, f"{effect.name}: draws of the field model's errors"):
+            changes = field_draws(fit.state, predictor)
     if changes is not None:
         _log.info("%s: its intervals over %d draws of the field model's errors", effect.name,
                   len(changes))

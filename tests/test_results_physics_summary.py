@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from msens import api
 from msens.config.study import default_study_path
 from msens.magnetics.eddy_readout import mechanism_emfs
-from msens.magnetics.emf import contact_rates, emf_from_rates
+from msens.magnetics.emf import (
+    contact_columns,
+    contact_rates,
+    emf_from_rates,
+    open_contact_rates,
+    rigid_translation_rates,
+)
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +67,11 @@ def test_rigid_translation_is_below_one_percent_of_the_approach_signal(result):
         # whole-chain translation against the coil's own contact: small but not zero
         assert 0 < abs(rigid["sensitivity_Wb_per_m"]) < 0.01 * np.max(
             np.abs(tr.dlambda_dapproach))
-        assert 0 < rigid["fraction_of_peak"] < 0.01
+        # 0.2 % of the peak magnetostatic; with eddy currents (the main study) about 1.1 %:
+        # the whole chain's translation nearly cancels statically, and the eddy currents
+        # delay its parts differently (|D| of the lowest contact 6.6e-3 Wb/m at 0 Hz,
+        # 3.5e-2 at 10 kHz)
+        assert 0 < rigid["fraction_of_peak"] < 0.02
 
 
 def test_open_contacts_carry_a_small_part_of_the_signal(result):
@@ -69,3 +81,38 @@ def test_open_contacts_carry_a_small_part_of_the_signal(result):
         opened = coil["mechanism_share"]["approach"]["open_contacts"]
         assert 0 < opened["energy_share"] < 0.05
         assert 0 < opened["peak_emf_V"] < 0.2 * coil["mechanism_share"]["approach"]["peak_emf_V"]
+
+
+@pytest.mark.parametrize("eddy", [True, False], ids=["eddy", "magnetostatic"])
+def test_open_contacts_and_translation_read_through_the_runs_model(result, eddy):
+    # with eddy currents the open-contact and rigid-translation parts go through the coil's
+    # frequency response, as the EMF does: the open and the closed contacts' parts add up
+    # to the contact-approach EMF, and the summary reports those parts
+    if not eddy:
+        result = api.run(api.load_default(eddy_currents=False))
+    summary = api.physics_summary(result)
+    setup, h = result.setups[0], result.setups[0].history
+    for coil, sensor in zip(summary["coils"], setup.sensors, strict=True):
+        tr = setup.transducers[sensor.sensor.particle]
+        rates = contact_rates(h.t, h.force, tr.contacts, tr.contact_stiffness,
+                              approach=h.approach, equivalent=tr.equivalent_approach)
+        delta = contact_columns(h.approach, tr.contacts)
+        closed = dataclasses.replace(rates, force=0.0 * rates.force,  # δ_c ≥ 0
+                                     approach=np.where(delta >= 0.0, rates.approach, 0.0))
+        response = setup.responses[sensor.sensor.particle] if eddy else None
+
+        def approach(r, response=response, tr=tr):
+            if response is not None:
+                return mechanism_emfs(response, r)["approach"]
+            return emf_from_rates(r, tr.sensitivity_villari, tr.dlambda_dapproach, "approach")
+
+        opened = approach(open_contact_rates(rates, delta))
+        whole = approach(rates)
+        np.testing.assert_allclose(opened + approach(closed), whole, rtol=0,
+                                   atol=1e-12 * np.max(np.abs(whole)))
+        share = coil["mechanism_share"]["approach"]
+        assert share["open_contacts"]["peak_emf_V"] == pytest.approx(
+            np.max(np.abs(opened)), rel=1e-12)
+        rigid = approach(rigid_translation_rates(tr, rates))
+        assert share["rigid_translation"]["peak_emf_V"] == pytest.approx(
+            np.max(np.abs(rigid)), rel=1e-12)

@@ -500,34 +500,42 @@ def mechanism_share(tr, history, response=None) -> dict:
     fraction of the contact-approach peak, and the part of it from contacts while they are open
     (extrapolated linearly: :func:`msens.magnetics.emf.open_contact_emf`), its peak and
     share of the contact-approach energy. With an eddy-current ``response`` the two mechanisms'
-    EMFs are the frequency-domain ones (:func:`msens.magnetics.eddy_readout.mechanism_emfs`); the
-    rigid-translation and open-contact parts stay magnetostatic estimates."""
+    EMFs are the frequency-domain ones (:func:`msens.magnetics.eddy_readout.mechanism_emfs`), and
+    so are the rigid-translation and open-contact parts (their rates through the same
+    response)."""
     from msens.magnetics.emf import (
         contact_columns,
         contact_rates,
         emf_from_rates,
-        open_contact_emf,
-        rigid_translation_emf,
+        open_contact_rates,
+        rigid_translation_rates,
     )
 
     rates = contact_rates(history.t, history.force, tr.contacts, tr.contact_stiffness,
                           approach=history.approach, equivalent=tr.equivalent_approach)
     if response is None:
+        def approach_emf(r):
+            return emf_from_rates(r, tr.sensitivity_villari, tr.dlambda_dapproach, "approach")
+
         emfs = {m: emf_from_rates(rates, tr.sensitivity_villari, tr.dlambda_dapproach, m)
                 for m in ("villari", "approach")}
     else:
         from msens.magnetics.eddy_readout import mechanism_emfs
+
+        def approach_emf(r):
+            return mechanism_emfs(response, r)["approach"]
 
         emfs = mechanism_emfs(response, rates)
     energy = {m: float(np.trapezoid(e**2, history.t)) for m, e in emfs.items()}
     total = sum(energy.values()) or 1.0
     out = {m: {"peak_emf_V": float(np.max(np.abs(e))), "energy_share": energy[m] / total}
            for m, e in emfs.items()}
-    opened = open_contact_emf(tr, rates, contact_columns(history.approach, tr.contacts))
+    opened = approach_emf(open_contact_rates(rates,
+                                             contact_columns(history.approach, tr.contacts)))
     out["approach"]["open_contacts"] = {
         "peak_emf_V": float(np.max(np.abs(opened))),
         "energy_share": float(np.trapezoid(opened**2, history.t)) / (energy["approach"] or 1.0)}
-    rigid = rigid_translation_emf(tr, rates)
+    rigid = approach_emf(rigid_translation_rates(tr, rates))
     out["approach"]["rigid_translation"] = {
         "sensitivity_Wb_per_m": float(tr.dlambda_dapproach[-1]),
         "peak_emf_V": float(np.max(np.abs(rigid))),

@@ -18,16 +18,40 @@ from msens.magnetics.transducer import Mechanism, Transducer
 from msens.readout.mss import ContactRates, contact_columns, contact_rates, emf_from_rates
 
 
-def rigid_translation_emf(transducer: Transducer, rates: ContactRates) -> np.ndarray:
-    """The part of the contact-approach EMF that is the beads' rigid translation, V.
+def rigid_translation_rates(transducer: Transducer, rates: ContactRates) -> ContactRates:
+    """The beads' rigid translation as contact rates: the lowest modelled contact's approach
+    rate carries the speed of the coil's bead, every other rate is zero.
 
     Each approach source moves every modelled bead above its contact rigidly, so summed over
     contacts the sources move bead p by u_p = Σ_{c ≥ p} δ_c (the wall does not move): the
     beads' translation in the coil's and magnet's field gradients is contained in the
     contact-approach EMF. Its size is the sensitivity to translating all modelled beads
     together, T = ∂Λ/∂δ of the lowest modelled contact (no contact changes then), times the
-    speed of the coil's bead: -T du_p/dt. Beads near the coil move together to within a few
-    contact approaches, so this estimates the translation part of the signal.
+    speed of the coil's bead, du_p/dt. Beads near the coil move together to within a few
+    contact approaches, so this estimates the translation part of the signal. Read through a
+    transducer's sensitivities (:func:`rigid_translation_emf`) or an eddy-current frequency
+    response (:func:`msens.magnetics.eddy_readout.mechanism_emfs`, its ``"approach"`` part).
+
+    Parameters
+    ----------
+    transducer : Transducer
+    rates : ContactRates
+        Rates of ``transducer.contacts`` (:func:`contact_rates`).
+
+    Returns
+    -------
+    ContactRates
+    """
+    contacts = np.asarray(transducer.contacts)
+    below = contacts >= transducer.particle
+    approach = np.zeros_like(rates.approach)
+    approach[:, -1] = np.sum(rates.approach[:, below], axis=1)
+    return ContactRates(rates.t, np.zeros_like(rates.force), approach)
+
+
+def rigid_translation_emf(transducer: Transducer, rates: ContactRates) -> np.ndarray:
+    """The part of the contact-approach EMF that is the beads' rigid translation, V:
+    -T du_p/dt (:func:`rigid_translation_rates`).
 
     Parameters
     ----------
@@ -39,19 +63,38 @@ def rigid_translation_emf(transducer: Transducer, rates: ContactRates) -> np.nda
     -------
     ndarray, shape (nt,)
     """
-    contacts = np.asarray(transducer.contacts)
-    below = contacts >= transducer.particle
-    speed = np.sum(rates.approach[:, below], axis=1)
-    return -float(transducer.dlambda_dapproach[-1]) * speed
+    return emf_from_rates(rigid_translation_rates(transducer, rates),
+                          transducer.sensitivity_villari, transducer.dlambda_dapproach,
+                          "approach")
+
+
+def open_contact_rates(rates: ContactRates, approach: np.ndarray) -> ContactRates:
+    """The contact-approach rates of contacts while they are open (δ_c < 0); every other
+    rate is zero.
+
+    The approach sources are linearised about the static load; for an open gap they are
+    extrapolated linearly (a gap changes the field mesh's topology). The EMF of these rates
+    (:func:`open_contact_emf`, or through an eddy-current frequency response) is how much
+    of the signal rests on that extrapolation.
+
+    Parameters
+    ----------
+    rates : ContactRates
+    approach : ndarray, shape (nt, n_c)
+        δ_c(t) of the same contacts, m.
+
+    Returns
+    -------
+    ContactRates
+    """
+    return ContactRates(rates.t, np.zeros_like(rates.force),
+                        np.where(np.asarray(approach) < 0.0, rates.approach, 0.0))
 
 
 def open_contact_emf(transducer: Transducer, rates: ContactRates,
                      approach: np.ndarray) -> np.ndarray:
-    """The part of the contact-approach EMF from contacts while they are open (δ_c < 0), V.
-
-    The approach sources are linearised about the static load; for an open gap they are
-    extrapolated linearly (a gap changes the field mesh's topology). This is how much of the
-    signal rests on that extrapolation.
+    """The part of the contact-approach EMF from contacts while they are open (δ_c < 0), V
+    (:func:`open_contact_rates`).
 
     Parameters
     ----------
@@ -65,8 +108,8 @@ def open_contact_emf(transducer: Transducer, rates: ContactRates,
     -------
     ndarray, shape (nt,)
     """
-    parts = -rates.approach * np.asarray(transducer.dlambda_dapproach)[None, :]
-    return np.where(np.asarray(approach) < 0.0, parts, 0.0).sum(axis=1)
+    return emf_from_rates(open_contact_rates(rates, approach), transducer.sensitivity_villari,
+                          transducer.dlambda_dapproach, "approach")
 
 
 def emf(transducer: Transducer, t: np.ndarray, force: np.ndarray,
@@ -101,5 +144,7 @@ __all__ = [
     "emf",
     "emf_from_rates",
     "open_contact_emf",
+    "open_contact_rates",
     "rigid_translation_emf",
+    "rigid_translation_rates",
 ]  # the first four from msens.readout.mss, where they live

@@ -50,19 +50,8 @@ def rigid_translation_rates(transducer: Transducer, rates: ContactRates) -> Cont
 
 
 def rigid_translation_emf(transducer: Transducer, rates: ContactRates) -> np.ndarray:
-    """The part of the contact-approach EMF that is the beads' rigid translation, V:
-    -T du_p/dt (:func:`rigid_translation_rates`).
-
-    Parameters
-    ----------
-    transducer : Transducer
-    rates : ContactRates
-        Rates of ``transducer.contacts`` (:func:`contact_rates`).
-
-    Returns
-    -------
-    ndarray, shape (nt,)
-    """
+    """The part of the contact-approach EMF that is the beads' rigid translation, V, shape
+    (nt,): -T du_p/dt, with the arguments and T of :func:`rigid_translation_rates`."""
     return emf_from_rates(rigid_translation_rates(transducer, rates),
                           transducer.sensitivity_villari, transducer.dlambda_dapproach,
                           "approach")

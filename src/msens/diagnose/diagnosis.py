@@ -76,7 +76,9 @@ INTERVAL_DEFINITION = ("95 % interval of each continuous parameter from the curv
                        "uncertainty); for a named effect on a physics MsS, refitted with "
                        "the field-model modes of its own fitted record and widened by the "
                        "spread of the optimum over joint draws of the field model's "
-                       "errors; clipped to the searched range; integer parameters "
+                       "errors and of the discrepancy its residual shows (in place of the "
+                       "reduced chi^2's widening); clipped to the searched range; integer "
+                       "parameters "
                        "have none. at_bound: the optimum is within 0.5 % of the searched "
                        "span from one of its ends, or from an end of its physical range "
                        "inside it")

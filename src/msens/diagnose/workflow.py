@@ -39,7 +39,8 @@ Steps:
    On a physics MsS (first pass) the named effect is then fitted again under the
    likelihood of its own fitted record (the field model's modes taken there, not at the
    baseline), and its intervals widened by the spread of that fit over joint draws of the
-   field model's errors (:func:`_named_refit`).
+   field model's errors and of the discrepancy its residual shows beyond the likelihood's
+   variance (:func:`_named_refit`, :mod:`msens.diagnose.discrepancy`).
 7. *Verdict.* Whether the final model explains the data: its residual against the noise, for
    the record and for each window, by an F test (:mod:`msens.diagnose.verdict`);
    ``explained`` false says that the named effect (or the baseline) still misses, and where.
@@ -66,6 +67,7 @@ from msens.calibrate import DissipationFit
 from msens.compare import model_processing, setup_spec_channels
 from msens.config.schema import SetupSpec
 from msens.config.study import Study
+from msens.diagnose import discrepancy
 from msens.diagnose.candidates import (
     THRESHOLD,
     candidate_effects,
@@ -314,8 +316,9 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     cands, misfit0 = score_candidates(fits, rss0, objective.n_obs, ctx, base)
     winner, wfit = decide(cands, fits, threshold)
     log_decision(cands, winner, threshold)
+    wrong: list = []
     if wfit is not None and not added and any(m is not None for m in objective.field_modes):
-        winner, wfit, objective = _named_refit(waveform, b, winner, wfit, weights)
+        winner, wfit, objective, wrong = _named_refit(waveform, b, winner, wfit, weights)
     after = wfit.state if wfit is not None else base
     refit: tuple[tuple[str, dict], ...] = ()
     if wfit is not None and added:
@@ -348,7 +351,8 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
         simulations=predictor.simulations, elapsed_s=time.perf_counter() - start,
         verdict=verdict(float(rss1.sum()), n, windows, ens.dof),
         noise={**ens.to_json(names), **(per_shot.to_json() if per_shot else {}),
-               "model_uncertainty": _model_uncertainty_json(objective, names)},
+               "model_uncertainty": _model_uncertainty_json(objective, names),
+               **({"discrepancy": _discrepancy_json(wrong, names)} if wrong else {})},
         before=base, after=after, overlay=_overlay(objective, records0, records1, base_result),
         calibration=_calibration(objective, records1, base_result, names))
 
@@ -375,7 +379,9 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
 
     Returns
     -------
-    (winner, fit, objective)
+    (winner, fit, objective, discrepancies)
+        ``discrepancies``: per channel, the discrepancy the refit leaves
+        (:mod:`msens.diagnose.discrepancy`; empty without a refit or a curvature).
     """
     ctx, predictor = b.ctx, b.predictor
     effect = get_effect(wfit.effect)
@@ -388,19 +394,41 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
     if fit.at_bound:
         _log.info("the refit of %s ends at a bound (%s): the first fit is kept",
                   effect.name, ", ".join(fit.at_bound))
-        return winner, wfit, b.objective
+        return winner, wfit, b.objective, []
     intervals = dict(fit.intervals)
-    changes = None
-    if fit.curvature is not None:
-        with heartbeat(_log, f"{effect.name}: draws of the field model's errors"):
-            changes = field_draws(fit.state, predictor)
+    if fit.curvature is None:
+        return (dataclasses.replace(winner, parameters=dict(fit.parameters),
+                                    intervals=intervals), fit, obj, [])
+    with heartbeat(_log, f"{effect.name}: draws of the field model's errors"):
+        changes = field_draws(fit.state, predictor)
+    extra = np.zeros_like(fit.curvature)
     if changes is not None:
         _log.info("%s: its intervals over %d draws of the field model's errors", effect.name,
                   len(changes))
-        intervals = widened(effect, ctx, b.base, fit, field_spread(
-            effect, ctx, b.base, predictor, obj, weights, fit, changes))
+        extra = extra + field_spread(effect, ctx, b.base, predictor, obj, weights, fit, changes)
+    with heartbeat(_log, f"{effect.name}: draws of the residual's discrepancy"):
+        wrong, estimates = discrepancy.model_changes(obj, predictor.records([fit.state])[0])
+        if any(e.share > 0.0 for e in estimates):
+            extra = extra + field_spread(effect, ctx, b.base, predictor, obj, weights, fit,
+                                         wrong)
+    _log.info("%s: discrepancy %s of the residual's power", effect.name,
+              ", ".join(f"{100 * e.share:.0f} %" for e in estimates))
+    # the discrepancy's draws hold the misfit beyond the likelihood's variance, which the
+    # curvature's widening by the reduced chi^2 would count again
+    intervals = widened(effect, ctx, b.base, dataclasses.replace(fit, widening=1.0), extra)
     return (dataclasses.replace(winner, parameters=dict(fit.parameters), intervals=intervals),
-            fit, obj)
+            fit, obj, estimates)
+
+
+def _discrepancy_json(estimates: list, names: list[str]) -> dict:
+    """The named fit's residual split into what the likelihood expects and the discrepancy
+    beyond it (:mod:`msens.diagnose.discrepancy`)."""
+    return {"definition": "the named effect's final residual: the part of its power above "
+                          "the level the likelihood's variance gives white residuals "
+                          "(noise and diagonal model variance), and that part's rms; its "
+                          "draws widen the named parameters' intervals",
+            "channels": [{"channel": n, **e.to_json()}
+                         for n, e in zip(names, estimates, strict=True)]}
 
 
 def _model_uncertainty_json(objective: WaveformObjective, names: list[str]) -> dict:

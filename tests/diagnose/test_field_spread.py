@@ -8,7 +8,14 @@ import numpy as np
 import pytest
 
 from msens.diagnose.effects.base import Parameter
-from msens.diagnose.fit import EffectFit, curvature_covariance, field_spread, fit_effect, widened
+from msens.diagnose.fit import (
+    EffectFit,
+    curvature_covariance,
+    field_spread,
+    fit_effect,
+    linearisation_spread,
+    widened,
+)
 
 T = np.linspace(0.0, 1.0, 400)
 #: Two record shapes (one sensor) that a linear model adds with its parameters' weights.
@@ -119,3 +126,16 @@ def test_a_refit_near_an_earlier_fit():
                      near={"a0": -1.9, "a1": 1.9, "n": 2})
     assert far.parameters["a0"] == pytest.approx(whole.parameters["a0"], abs=1e-6)
     assert far.evaluations == whole.evaluations
+
+
+def test_linearisation_spread_is_the_move_between_the_two_fits():
+    """The move from the first fit to the refit, in search variables (log10 for a log
+    parameter; integer parameters left out), as the outer product d d^T."""
+    effect = Linear((Parameter("a0", 1e-3, 1e3, log=True), Parameter("a1", -5.0, 5.0),
+                     Parameter("n", 1, 4, integer=True)))
+    got = linearisation_spread(effect, None, None, {"a0": 10.0, "a1": 0.5, "n": 2},
+                               {"a0": 20.0, "a1": 0.2, "n": 3})
+    d = np.array([np.log10(2.0), -0.3])
+    np.testing.assert_allclose(got, np.outer(d, d), rtol=1e-12)
+    assert not np.any(linearisation_spread(effect, None, None, {"a0": 3.0, "a1": 1.0, "n": 1},
+                                           {"a0": 3.0, "a1": 1.0, "n": 1}))

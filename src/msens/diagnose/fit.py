@@ -493,6 +493,23 @@ def widened(effect: Effect, ctx: Context, base: ModelState, fit: EffectFit,
     return interval_map(space, x, fit.widening * fit.curvature + extra)
 
 
+def linearisation_spread(effect: Effect, ctx: Context, base: ModelState, first: dict,
+                         refit: dict) -> np.ndarray:
+    """Covariance (k, k; search variables of the continuous parameters) of the move between
+    two fits of one effect under the same data and two linearisations of the field
+    model's uncertainty: ``first`` with the modes taken at the baseline's record, ``refit``
+    with those of its own fitted record.
+
+    Both likelihoods hold the field model's errors to first order about a record, and an
+    effect that moves the pulse moves the shapes those errors take; the exact likelihood's
+    optimum is not known better than the two linear ones agree, so their difference d
+    enters as the outer product d d^T (one standard deviation of that size)."""
+    space = [p for p in effect.space(ctx, base) if not p.integer]
+    d = np.array([_to_x(p, float(refit[p.name])) - _to_x(p, float(first[p.name]))
+                  for p in space])
+    return np.outer(d, d)
+
+
 def recentred(effect: Effect, ctx: Context, base: ModelState, intervals: dict,
               old: dict, new: dict) -> dict:
     """``intervals`` of a fit at ``old`` moved to ``new`` (a joint refit's values) by the

@@ -86,6 +86,7 @@ from msens.diagnose.fit import (
     EffectFit,
     field_spread,
     fit_effect,
+    linearisation_spread,
     recentred,
     refit_jointly,
     widened,
@@ -374,7 +375,12 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
     BOOTSTRAP_DRAWS` joint draws of every field-model quantity (:func:`~msens.diagnose.
     field_modes.field_draws`, :func:`~msens.diagnose.fit.field_spread`): the pull's effect
     is not linear near lightly loaded contacts, its errors and the sensitivities' combine,
-    and the modes hold only their linear parts and a few draws. A refit that ends at a
+    and the modes hold only their linear parts and a few draws. They also add the spread
+    over draws of the discrepancy the refit's residual shows beyond the likelihood's
+    variance (:mod:`msens.diagnose.discrepancy`; this replaces the reduced chi^2's
+    widening), and the move between the first fit and the refit
+    (:func:`~msens.diagnose.fit.linearisation_spread`: the two linearisations of the field
+    model's uncertainty bracket the exact likelihood's optimum). A refit that ends at a
     bound of its search keeps the first fit.
 
     Returns
@@ -413,6 +419,7 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
                                          wrong)
     _log.info("%s: discrepancy %s of the residual's power", effect.name,
               ", ".join(f"{100 * e.share:.0f} %" for e in estimates))
+    extra = extra + linearisation_spread(effect, ctx, b.base, wfit.parameters, fit.parameters)
     # the discrepancy's draws hold the misfit beyond the likelihood's variance, which the
     # curvature's widening by the reduced chi^2 would count again
     intervals = widened(effect, ctx, b.base, dataclasses.replace(fit, widening=1.0), extra)

@@ -65,6 +65,9 @@ def test_mss_hidden_chain_effect(bench, effect, seed, shots):
     d, truth = _case(bench, effect, seed, shots)
     assert d.effect == effect, (d.effect, truth[effect], d.parameters)
     assert parameters_recovered(d.parameters, truth[effect], 0.10), (truth[effect], d.parameters)
+    # the named refit's residual, split into the likelihood's white part and a discrepancy
+    shares = [c["share_of_residual"] for c in d.noise["discrepancy"]["channels"]]
+    assert len(shares) == 2 and all(0.0 <= s <= 1.0 for s in shares), shares
 
 
 @pytest.mark.campaign

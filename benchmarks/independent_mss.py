@@ -86,7 +86,8 @@ def score(case: cs.Case, d) -> dict:
            "candidates": [{"effect": c.effect, "score": c.score, "parameters": c.parameters,
                            "at_bound": list(c.at_bound), "plausible": c.plausible,
                            "significant": c.significant} for c in d.candidates[:4]],
-           "summary": d.summary(), "diagnose_s": d.elapsed_s}
+           "summary": d.summary(), "diagnose_s": d.elapsed_s,
+           "discrepancy": d.noise.get("discrepancy")}
     if case.kind == "effect":
         right = d.effect == case.effect
         checks = {}

@@ -17,7 +17,7 @@ times; and the totals against the issue's acceptance numbers. Each case's result
 ``<out>/results/<case>.json`` and reused by a later run (the campaign can be resumed).
 
 Run: ``python benchmarks/independent_mss.py [--cases a,b,...] [--seed 35] [--out DIR]
-[--generate-only]`` (``--cases`` takes case names or kinds: effect, null, outside).
+[--generate-only] [--field-seed N]`` (``--cases`` takes case names or kinds: effect, null, outside).
 """
 
 from __future__ import annotations
@@ -39,11 +39,11 @@ ACCEPTANCE = {"right_effect": 0.90, "inside_interval": 0.80, "nulls_explained": 
               "outside_named_confidently": 0, "named_at_bound": 0}
 
 
-def setup(accuracy: float = field.FIELD_ACCURACY):
+def setup(accuracy: float = field.FIELD_ACCURACY, field_seed: int = field.FIELD_SEED):
     """(study, study numbers, perturbed field tables, nominal world)."""
     study = field.main_study()
     s = sim.study_numbers(study)
-    tables = field.perturbed(field.read_tables(study), accuracy)
+    tables = field.perturbed(field.read_tables(study), accuracy, seed=field_seed)
     return study, s, tables, sim.nominal(s, tables)
 
 
@@ -152,12 +152,13 @@ def select(all_cases: list[cs.Case], wanted: str | None) -> list[cs.Case]:
 
 
 def run(wanted: str | None = None, seed: int = 35, out: Path = Path("out/independent-mss"),
-        generate_only: bool = False, reuse: bool = True) -> dict:
+        generate_only: bool = False, reuse: bool = True,
+        field_seed: int = field.FIELD_SEED) -> dict:
     """Generate the cases, diagnose each, return ``{"cases": [...], "totals": {...}}``."""
     from msens.diagnose import diagnose
     from msens.io import read_waveform
 
-    study, s, tables, base = setup()
+    study, s, tables, base = setup(field_seed=field_seed)
     chosen = select(cs.campaign(s, seed), wanted)
     data, results_dir = out / "data", out / "results"
     data.mkdir(parents=True, exist_ok=True)
@@ -167,7 +168,8 @@ def run(wanted: str | None = None, seed: int = 35, out: Path = Path("out/indepen
         kept = results_dir / f"{case.name}.json"
         if reuse and kept.exists() and not generate_only:
             entry = json.loads(kept.read_text())
-            if entry.get("seed") == case.seed:
+            if entry.get("seed") == case.seed and entry.get("field_seed",
+                                                              field.FIELD_SEED) == field_seed:
                 results.append(entry)
                 continue
         path, rig_truth, gen_s = generate(case, s, tables, base, data)
@@ -176,7 +178,8 @@ def run(wanted: str | None = None, seed: int = 35, out: Path = Path("out/indepen
                   file=sys.stderr, flush=True)
             continue
         d = diagnose(read_waveform(path), study)
-        entry = {**score(case, d), "seed": case.seed, "rig": rig_truth, "generate_s": gen_s,
+        entry = {**score(case, d), "seed": case.seed, "field_seed": field_seed,
+                 "rig": rig_truth, "generate_s": gen_s,
                  "file": str(path)}
         kept.write_text(json.dumps(entry, indent=1, default=float))
         print(json.dumps({k: entry[k] for k in ("case", "named", "parameters", "intervals",
@@ -193,8 +196,11 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--out", type=Path, default=Path("out/independent-mss"))
     ap.add_argument("--generate-only", action="store_true")
     ap.add_argument("--fresh", action="store_true", help="ignore kept results")
+    ap.add_argument("--field-seed", type=int, default=field.FIELD_SEED,
+                    help="seed of the field tables' perturbation (one draw for all files)")
     args = ap.parse_args(argv)
-    res = run(args.cases, args.seed, args.out, args.generate_only, reuse=not args.fresh)
+    res = run(args.cases, args.seed, args.out, args.generate_only, reuse=not args.fresh,
+              field_seed=args.field_seed)
     print(json.dumps(res, indent=1, default=float))
     return res
 

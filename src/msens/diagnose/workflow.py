@@ -317,9 +317,9 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     cands, misfit0 = score_candidates(fits, rss0, objective.n_obs, ctx, base)
     winner, wfit = decide(cands, fits, threshold)
     log_decision(cands, winner, threshold)
-    wrong: list = []
+    discrepancies: list = []
     if wfit is not None and not added and any(m is not None for m in objective.field_modes):
-        winner, wfit, objective, wrong = _named_refit(waveform, b, winner, wfit, weights)
+        winner, wfit, objective, discrepancies = _named_refit(waveform, b, winner, wfit, weights)
     after = wfit.state if wfit is not None else base
     refit: tuple[tuple[str, dict], ...] = ()
     if wfit is not None and added:
@@ -353,7 +353,8 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
         verdict=verdict(float(rss1.sum()), n, windows, ens.dof),
         noise={**ens.to_json(names), **(per_shot.to_json() if per_shot else {}),
                "model_uncertainty": _model_uncertainty_json(objective, names),
-               **({"discrepancy": _discrepancy_json(wrong, names)} if wrong else {})},
+               **({"discrepancy": _discrepancy_json(discrepancies, names)}
+                  if discrepancies else {})},
         before=base, after=after, overlay=_overlay(objective, records0, records1, base_result),
         calibration=_calibration(objective, records1, base_result, names))
 
@@ -413,10 +414,10 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
                   len(changes))
         extra = extra + field_spread(effect, ctx, b.base, predictor, obj, weights, fit, changes)
     with heartbeat(_log, f"{effect.name}: draws of the residual's discrepancy"):
-        wrong, estimates = discrepancy.model_changes(obj, predictor.records([fit.state])[0])
+        draws, estimates = discrepancy.model_changes(obj, predictor.records([fit.state])[0])
         if any(e.share > 0.0 for e in estimates):
             extra = extra + field_spread(effect, ctx, b.base, predictor, obj, weights, fit,
-                                         wrong)
+                                         draws)
     _log.info("%s: discrepancy %s of the residual's power", effect.name,
               ", ".join(f"{100 * e.share:.0f} %" for e in estimates))
     extra = extra + linearisation_spread(effect, ctx, b.base, wfit.parameters, fit.parameters)

@@ -421,7 +421,7 @@ def parameter_intervals(x0: np.ndarray, cov: np.ndarray, lower: np.ndarray,
 
 
 def field_spread(effect: Effect, ctx: Context, base: ModelState, predictor: Predictor,
-                 objective, weights: np.ndarray, fit: EffectFit, changes: np.ndarray
+                 objective, weights: np.ndarray, fit: EffectFit, *change_sets: np.ndarray
                  ) -> np.ndarray:
     """Covariance of a fit's continuous parameters over changes of the model's records:
     how far the optimum moves when the model is off by each of ``changes``.
@@ -431,7 +431,8 @@ def field_spread(effect: Effect, ctx: Context, base: ModelState, predictor: Pred
     the criterion's gradient at x0 with and without d: central differences over one
     standard deviation of each variable (one batch of 2k model runs; every change is then
     only a re-evaluation of the criterion). The second moment of those moves over the
-    changes is returned: with changes drawn from the field model's accuracy
+    changes is returned (summed over independent sets of changes, which share the model
+    runs): with changes drawn from the field model's accuracy
     (:func:`msens.diagnose.field_modes.field_draws`), the part of the parameters'
     uncertainty that comes from the field model.
 
@@ -441,8 +442,9 @@ def field_spread(effect: Effect, ctx: Context, base: ModelState, predictor: Pred
         As for :func:`fit_effect`.
     fit : EffectFit
         The effect's fit (with its ``curvature``).
-    changes : ndarray, shape (draws, sensors, nt)
-        Changes of the model's records (the records' units).
+    *change_sets : ndarray, shape (draws, sensors, nt)
+        Changes of the model's records (the records' units); each set's second moment is
+        taken over its own draws.
 
     Returns
     -------
@@ -480,8 +482,11 @@ def field_spread(effect: Effect, ctx: Context, base: ModelState, predictor: Pred
         return (f[1::2] - f[0::2]) / np.where(steps > 0, steps, 1.0)
 
     g0 = gradient(0.0)
-    moves = np.array([-0.5 * fit.curvature @ (gradient(d) - g0) for d in changes])
-    return moves.T @ moves / len(moves)
+    total = np.zeros_like(fit.curvature)
+    for changes in change_sets:
+        moves = np.array([-0.5 * fit.curvature @ (gradient(d) - g0) for d in changes])
+        total += moves.T @ moves / len(moves)
+    return total
 
 
 def widened(effect: Effect, ctx: Context, base: ModelState, fit: EffectFit,

@@ -406,20 +406,17 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
     if fit.curvature is None:
         return (dataclasses.replace(winner, parameters=dict(fit.parameters),
                                     intervals=intervals), fit, obj, [])
-    with heartbeat(_log, f"{effect.name}: draws of the field model's errors"):
+    with heartbeat(_log, f"{effect.name}: draws of the field model's errors and the "
+                         "residual's discrepancy"):
         changes = field_draws(fit.state, predictor)
-    extra = np.zeros_like(fit.curvature)
-    if changes is not None:
-        _log.info("%s: its intervals over %d draws of the field model's errors", effect.name,
-                  len(changes))
-        extra = extra + field_spread(effect, ctx, b.base, predictor, obj, weights, fit, changes)
-    with heartbeat(_log, f"{effect.name}: draws of the residual's discrepancy"):
         draws, estimates = discrepancy.model_changes(obj, predictor.records([fit.state])[0])
-        if any(e.share > 0.0 for e in estimates):
-            extra = extra + field_spread(effect, ctx, b.base, predictor, obj, weights, fit,
-                                         draws)
-    _log.info("%s: discrepancy %s of the residual's power", effect.name,
-              ", ".join(f"{100 * e.share:.0f} %" for e in estimates))
+        sets = [c for c in (changes, draws) if c is not None and np.any(c)]
+        _log.info("%s: its intervals over %d draws of the field model's errors and %d of "
+                  "the residual's discrepancy (%s of its power)", effect.name,
+                  0 if changes is None else len(changes), len(draws),
+                  ", ".join(f"{100 * e.share:.0f} %" for e in estimates))
+        extra = (field_spread(effect, ctx, b.base, predictor, obj, weights, fit, *sets)
+                 if sets else np.zeros_like(fit.curvature))
     extra = extra + linearisation_spread(effect, ctx, b.base, wfit.parameters, fit.parameters)
     # the discrepancy's draws hold the misfit beyond the likelihood's variance, which the
     # curvature's widening by the reduced chi^2 would count again

@@ -90,6 +90,12 @@ class RecordModes:
     records: np.ndarray
     accuracy: float
 
+    def without(self, names) -> RecordModes:
+        """These modes less those named in ``names``."""
+        keep = [i for i, n in enumerate(self.names) if n not in names]
+        return RecordModes(names=tuple(self.names[i] for i in keep),
+                           records=self.records[keep], accuracy=self.accuracy)
+
     def to_json(self) -> dict:
         """Names and RMS size of each mode (V), for reports."""
         rms = np.sqrt(np.mean(self.records**2, axis=1)) if self.records.size else []

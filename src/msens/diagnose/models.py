@@ -12,8 +12,10 @@ artifact store (:mod:`msens.store`), and a model lives as long as its run.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
+
+import numpy as np
 
 from msens.config.fieldsetup import EddySettings
 from msens.errors import internal
@@ -109,7 +111,8 @@ class FieldModel:
                                           spec.remanence_factor).reading_maps_of(tr)
         if spec.offset_m != 0.0:
             tr = tr.shifted(spec.offset_m)
-        return MssSensor(tr, readout(spec.coil, tr.resistance_ohm, tr.inductance_H,
+        return MssSensor(tr, readout(spec.coil, tr.resistance_ohm,
+                                     tr.inductance_H * spec.inductance_factor,
                                      spec.electronics))
 
     def _response(self, spec: PhysicsMss) -> FrequencyResponse:
@@ -120,9 +123,16 @@ class FieldModel:
         if spec.remanence_factor != 1.0:
             internal(spec.offset_m == 0.0,
                      "internal: no eddy-current offset profiles at another remanence")
-            return self.response_family().response(spec.particle, spec.remanence_factor)
-        nominal = self.responses[spec.particle]
-        return nominal if spec.offset_m == 0.0 else nominal.shifted(spec.offset_m)
+            resp = self.response_family().response(spec.particle, spec.remanence_factor)
+        else:
+            resp = self.responses[spec.particle]
+            resp = resp if spec.offset_m == 0.0 else resp.shifted(spec.offset_m)
+        f = spec.inductance_factor
+        if f == 1.0:
+            return resp
+        z = np.asarray(resp.impedance)
+        return replace(resp, impedance=resp.resistance_ohm + f * (z - resp.resistance_ohm),
+                       static_inductance_H=f * resp.static_inductance_H)
 
 
 @dataclass(frozen=True)
@@ -143,6 +153,10 @@ class PhysicsMss:
         Axial offset of the coil from its nominal position, m (+ toward the striker).
     remanence_factor : float
         Remanence of every bias magnet over its nominal value.
+    inductance_factor : float
+        The coil's inductance over the field model's (with eddy currents: its impedance
+        beyond the copper resistance, ``R_dc + f (Z - R_dc)``): a nuisance within the field
+        model's accuracy, profiled by :mod:`msens.diagnose.inductance`.
     """
 
     model: FieldModel
@@ -151,6 +165,7 @@ class PhysicsMss:
     electronics: ElectronicsSpec
     offset_m: float = 0.0
     remanence_factor: float = 1.0
+    inductance_factor: float = 1.0
 
 
 class ModelBank:

@@ -25,6 +25,7 @@ Two objectives share one interface (``rss(records) -> (sensors,)``: chi^2 per se
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from dataclasses import dataclass
 
@@ -37,7 +38,7 @@ from msens.config.schema import MssModel, ReferenceRow, SetupSpec
 from msens.diagnose.likelihood import model_uncertainty, variance_split
 from msens.diagnose.noise import MIN_PRETRIGGER, Ensemble, ensemble
 from msens.diagnose.predict import feature_records, model_features_of, signal
-from msens.errors import InputError
+from msens.errors import InputError, internal
 from msens.io.waveform import Channel, Waveform
 from msens.readout.sensors import SensorKind
 from msens.results import SetupResult
@@ -225,6 +226,7 @@ class WaveformObjective:
         #: Each sensor's model uncertainty.
         self.model_uncertainty = tuple(unc)
         self.field_modes = tuple(modes) if modes is not None else ()
+        self._before = (self.shots, self._weights, np.array(records, copy=True))
         diagonal = not all(u.relative_amplitude == 0.0 and u.relative_timing == 0.0
                            for u in unc)
         if not diagonal and not any(m is not None for m in self.field_modes):
@@ -246,6 +248,17 @@ class WaveformObjective:
             out.append(shot)
         self.shots = out
         self._weights = self.shots[0].w.mean(axis=1)
+
+    def without_modes(self, names) -> WaveformObjective:
+        """A copy of this likelihood whose field-model modes leave out those named in
+        ``names`` (e.g. quantities profiled exactly instead: :mod:`msens.diagnose.
+        inductance`); the model variance and the other modes are the same."""
+        internal(hasattr(self, "_before"), "internal: no model uncertainty to leave out of")
+        new = copy.copy(self)
+        new.shots, new._weights, records = self._before
+        new.add_model_uncertainty(records, tuple(
+            None if m is None else m.without(names) for m in self.field_modes))
+        return new
 
     def variance_split(self) -> dict:
         """Per sensor and overall: the noise's and the model uncertainty's shares of the

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -32,6 +32,8 @@ GH3_WEIGHTS = (1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0)
 #: Output memory of one simulate_batch call, bytes (forces and approaches, runs x nt x
 #: contacts doubles each): bounds the runs per call.
 BATCH_BYTES = 2**27
+#: Chain runs a predictor keeps (the most recent), by state and contacts read.
+RECENT_RUNS = 12
 
 
 @dataclass
@@ -48,6 +50,7 @@ class Predictor:
 
     t: np.ndarray
     simulations: int = 0
+    _recent: dict = field(default_factory=dict, repr=False, compare=False)
 
     def records(self, states: Sequence[ModelState]) -> np.ndarray:
         """Dynamic sensor forces (N) after the states' record operations; for a state with a
@@ -87,7 +90,21 @@ class Predictor:
         needs: dict[int, list[ModelState]] = {}
         for k, s in zip(keys, states, strict=True):
             needs.setdefault(unique[k], []).append(s)
-        forces = self._simulate(order, [_read_contacts(needs[i]) for i in range(len(order))])
+        wanted = [_read_contacts(needs[i]) for i in range(len(order))]
+        tags = [(k, w.tobytes()) for k, w in zip(unique, wanted, strict=True)]
+        found = {t: self._recent[t] for t in tags if t in self._recent}
+        missing = [i for i, t in enumerate(tags) if t not in found]
+        if missing:
+            runs = self._simulate([order[i] for i in missing], [wanted[i] for i in missing])
+            found.update({tags[i]: r for i, r in zip(missing, runs, strict=True)})
+        forces = [found[t] for t in tags]
+        # the last few chain runs are kept: a state read again with another read-out (e.g.
+        # a coil's inductance profiled, :mod:`msens.diagnose.inductance`) is not rerun
+        for t in tags[-RECENT_RUNS:]:
+            self._recent.pop(t, None)
+            self._recent[t] = found[t]
+        while len(self._recent) > RECENT_RUNS:
+            self._recent.pop(next(iter(self._recent)))
         dt = float(self.t[1] - self.t[0])
         out = np.empty((len(states), len(states[0].particles), self.t.size))
         # a coil read once per chain run and spec (a coil offset moves one sensor; a record

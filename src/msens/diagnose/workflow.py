@@ -67,7 +67,7 @@ from msens.calibrate import DissipationFit
 from msens.compare import model_processing, setup_spec_channels
 from msens.config.schema import SetupSpec
 from msens.config.study import Study
-from msens.diagnose import discrepancy
+from msens.diagnose import discrepancy, inductance
 from msens.diagnose.candidates import (
     THRESHOLD,
     candidate_effects,
@@ -307,6 +307,8 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     """
     start = time.perf_counter()
     b = waveform_baseline(waveform, study, fit=fit, added=added)
+    if not added and any(m is not None for m in b.objective.field_modes):
+        b = _with_inductance(waveform, b)
     ctx, predictor, plain, base = b.ctx, b.predictor, b.plain, b.base
     setup, gc, gw, per_shot = ctx.setup, b.gamma_contact, b.gamma_wall, b.per_shot
     base_result, objective, records0 = b.result, b.objective, b.records
@@ -354,9 +356,28 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
         noise={**ens.to_json(names), **(per_shot.to_json() if per_shot else {}),
                "model_uncertainty": _model_uncertainty_json(objective, names),
                **({"discrepancy": _discrepancy_json(discrepancies, names)}
-                  if discrepancies else {})},
+                  if discrepancies else {}),
+               **({"coil_inductance": _inductance_json(after, names)}
+                  if any(f is not None for f in inductance.factors(after)) else {})},
         before=base, after=after, overlay=_overlay(objective, records0, records1, base_result),
         calibration=_calibration(objective, records1, base_result, names))
+
+
+def _with_inductance(waveform: Waveform, b: WaveformBaseline) -> WaveformBaseline:
+    """The baseline with each coil's inductance profiled (:mod:`msens.diagnose.inductance`)
+    and the likelihood's model uncertainty taken there; unchanged when every factor stays
+    1 or ends at the end of its search (not an error within the field model's accuracy)."""
+    with heartbeat(_log, "the coils' inductance profiled"):
+        base = inductance.profile(b.base, b.predictor,
+                                  b.objective.without_modes(inductance.MODES))
+    found = [f for f in inductance.factors(base) if f is not None]
+    _log.info("the coils' inductance profiled: factors %s of the field model's",
+              ", ".join(f"{f:.4f}" for f in found))
+    if all(f == 1.0 for f in found):
+        return b
+    records = b.predictor.records([base])[0]
+    objective = objective_at(waveform, b.result, b.per_shot, b.predictor, base, records)
+    return dataclasses.replace(b, plain=base, base=base, objective=objective, records=records)
 
 
 def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
@@ -423,6 +444,17 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
     intervals = widened(effect, ctx, b.base, dataclasses.replace(fit, widening=1.0), extra)
     return (dataclasses.replace(winner, parameters=dict(fit.parameters), intervals=intervals),
             fit, obj, estimates)
+
+
+def _inductance_json(state: ModelState, names: list[str]) -> dict:
+    """Each coil's profiled inductance factor in the final model
+    (:mod:`msens.diagnose.inductance`)."""
+    return {"definition": "each coil's inductance (with eddy currents its impedance beyond "
+                          "the copper) over the field model's, profiled as a nuisance with "
+                          f"a Gaussian prior of {inductance.FIELD_ACCURACY:.0%} and searched "
+                          f"within +-{inductance.SPAN:g} of it",
+            "factors": {n: f for n, f in zip(names, inductance.factors(state), strict=True)
+                        if f is not None}}
 
 
 def _discrepancy_json(estimates: list, names: list[str]) -> dict:

@@ -22,6 +22,10 @@ Steps:
    pre-trigger noise for one shot. Residuals are measured against it (chi^2). Flooring the
    noise by the best candidate's residual would make every winner look like noise; it is
    not done.
+   On a physics MsS each coil's inductance (with eddy currents its impedance) is then
+   profiled as a nonlinear nuisance of the baseline (:mod:`msens.diagnose.inductance`: the
+   read-out's resonance moves by about its width for a few per cent of error), and the
+   likelihood's field-model modes are taken at the profiled baseline.
 5. *Which.* Every applicable effect of the library is fitted (batched grid + bounded
    refinement, :func:`~msens.diagnose.fit.fit_effect`) and scored by the drop of the Bayesian
    information criterion against the baseline,
@@ -307,7 +311,7 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     """
     start = time.perf_counter()
     b = waveform_baseline(waveform, study, fit=fit, added=added)
-    if not added and any(m is not None for m in b.objective.field_modes):
+    if any(m is not None for m in b.objective.field_modes):
         b = _with_inductance(waveform, b)
     ctx, predictor, plain, base = b.ctx, b.predictor, b.plain, b.base
     setup, gc, gw, per_shot = ctx.setup, b.gamma_contact, b.gamma_wall, b.per_shot
@@ -377,7 +381,9 @@ def _with_inductance(waveform: Waveform, b: WaveformBaseline) -> WaveformBaselin
         return b
     records = b.predictor.records([base])[0]
     objective = objective_at(waveform, b.result, b.per_shot, b.predictor, base, records)
-    return dataclasses.replace(b, plain=base, base=base, objective=objective, records=records)
+    found_all = inductance.factors(base)
+    return dataclasses.replace(b, plain=inductance.with_factors(b.plain, found_all),
+                               base=base, objective=objective, records=records)
 
 
 def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,

@@ -87,7 +87,8 @@ def score(case: cs.Case, d) -> dict:
                            "at_bound": list(c.at_bound), "plausible": c.plausible,
                            "significant": c.significant} for c in d.candidates[:4]],
            "summary": d.summary(), "diagnose_s": d.elapsed_s,
-           "discrepancy": d.noise.get("discrepancy")}
+           "discrepancy": d.noise.get("discrepancy"),
+           "coil_inductance": (d.noise.get("coil_inductance") or {}).get("factors")}
     if case.kind == "effect":
         right = d.effect == case.effect
         checks = {}

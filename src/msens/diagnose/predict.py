@@ -198,6 +198,11 @@ def observe_state(state: ModelState, force: np.ndarray, contacts: np.ndarray | N
     return out
 
 
+def same_run(a: ModelState, b: ModelState) -> bool:
+    """Whether two states run the same chain (they differ in their read-out only)."""
+    return _sim_key(a) == _sim_key(b) and a.velocity_spread == b.velocity_spread
+
+
 def _sim_key(state: ModelState) -> tuple:
     c = state.chain
     return (c.mass.tobytes(), c.stiffness.tobytes(), c.damping.tobytes(),

@@ -98,7 +98,13 @@ from msens.diagnose.fit import (
 from msens.diagnose.likelihood import variance_split
 from msens.diagnose.noise import shot_matrix
 from msens.diagnose.objective import FeatureObjective, WaveformObjective, check_channels
-from msens.diagnose.predict import Predictor, baseline_state, positions, setup_result
+from msens.diagnose.predict import (
+    Predictor,
+    baseline_state,
+    positions,
+    same_run,
+    setup_result,
+)
 from msens.diagnose.shots import ShotFits, fit_shots
 from msens.diagnose.verdict import verdict
 from msens.diagnose.where import feature_residuals, feature_table, window_residuals, worst_window
@@ -419,6 +425,11 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
     """
     ctx, predictor = b.ctx, b.predictor
     effect = get_effect(wfit.effect)
+    if same_run(wfit.state, b.base) and any(
+            f is not None and f != 1.0 for f in inductance.factors(b.base)):
+        b, wfit = _readout_inductance(b, effect, wfit, weights)
+        winner = dataclasses.replace(winner, parameters=dict(wfit.parameters),
+                                     intervals=dict(wfit.intervals))
     _log.info("refit of %s with the model uncertainty of its own fitted record", effect.name)
     obj = objective_at(waveform, b.result, b.per_shot, predictor, wfit.state,
                        predictor.records([wfit.state])[0])
@@ -450,6 +461,31 @@ def _named_refit(waveform: Waveform, b: WaveformBaseline, winner: Candidate,
     intervals = widened(effect, ctx, b.base, dataclasses.replace(fit, widening=1.0), extra)
     return (dataclasses.replace(winner, parameters=dict(fit.parameters), intervals=intervals),
             fit, obj, estimates)
+
+
+def _readout_inductance(b: WaveformBaseline, effect, wfit: EffectFit, weights: np.ndarray
+                        ) -> tuple[WaveformBaseline, EffectFit]:
+    """An effect of the read-out alone (the cable's capacitance, the DAQ's filter) trades
+    off against the coils' inductance: both move the read-out's resonance, so the baseline's
+    profiled inductance takes up part of such an effect and biases its fit. The effect is
+    fitted again on the baseline with the field model's inductance, and of the two the one
+    with the lower chi^2 plus the inductance factors' prior (the likelihood without the
+    linear inductance modes, :mod:`msens.diagnose.inductance`) is kept, with its baseline."""
+    free = b.objective.without_modes(inductance.MODES)
+    nominal = inductance.with_factors(b.base, tuple(
+        None if f is None else 1.0 for f in inductance.factors(b.base)))
+    with heartbeat(_log, f"{effect.name} on the field model's inductance"):
+        other = fit_effect(effect, b.ctx, nominal, b.predictor, free, weights,
+                           near=dict(wfit.parameters))
+    crit = [float(free.rss(r).sum()) + float(inductance.prior_terms(s).sum())
+            for r, s in zip(b.predictor.records([wfit.state, other.state]),
+                            (wfit.state, other.state), strict=True)]
+    _log.info("%s of the read-out: criterion %.1f with the profiled inductance, %.1f with "
+              "the field model's", effect.name, *crit)
+    if other.at_bound or crit[1] >= crit[0]:
+        return b, wfit
+    plain = inductance.with_factors(b.plain, inductance.factors(nominal))
+    return dataclasses.replace(b, base=nominal, plain=plain), other
 
 
 def _inductance_json(state: ModelState, names: list[str]) -> dict:

@@ -68,6 +68,13 @@ def prior_terms(state: ModelState, accuracy: float = FIELD_ACCURACY) -> np.ndarr
                      for f in factors(state)] or [0.0] * len(state.particles))
 
 
+def criterion(objective, records: np.ndarray, state: ModelState,
+              accuracy: float = FIELD_ACCURACY) -> float:
+    """The profile's criterion of ``state`` whose records are ``records``: chi^2 under
+    ``objective`` (the likelihood without :data:`MODES`) plus its factors' prior terms."""
+    return float(objective.rss(records).sum()) + float(prior_terms(state, accuracy).sum())
+
+
 def profile(state: ModelState, predictor: Predictor, objective,
             accuracy: float = FIELD_ACCURACY) -> ModelState:
     """``state`` with each coil's inductance factor at the optimum of the criterion of the
@@ -86,7 +93,7 @@ def profile(state: ModelState, predictor: Predictor, objective,
     -------
     ModelState
     """
-    edge = (SPAN - 0.5 * 2 * SPAN / (GRID - 1)) * accuracy
+    edge = (SPAN - SPAN / (GRID - 1)) * accuracy  # half a grid step inside the end
     for j, spec in enumerate(state.physics):
         if spec is None:
             continue
@@ -99,14 +106,17 @@ def profile(state: ModelState, predictor: Predictor, objective,
                 out.append(with_factors(state, tuple(now)))
             return out
 
-        def crit(records: np.ndarray, f: float) -> float:
-            return float(objective.rss(records).sum()) + ((f - 1.0) / accuracy) ** 2
+        def crit(f: float) -> float:
+            (s,) = at([f])
+            return criterion(objective, predictor.records([s])[0], s, accuracy)
 
         grid = 1.0 + accuracy * np.linspace(-SPAN, SPAN, GRID)
-        values = [crit(r, f) for r, f in zip(predictor.records(at(grid)), grid, strict=True)]
+        states = at(grid)
+        values = [criterion(objective, r, s, accuracy)
+                  for r, s in zip(predictor.records(states), states, strict=True)]
         k = int(np.argmin(values))
         best, f_best = float(grid[k]), values[k]
-        opt = minimize_scalar(lambda f: crit(predictor.records(at([f]))[0], f),
+        opt = minimize_scalar(crit,
                               bounds=(grid[max(k - 1, 0)], grid[min(k + 1, GRID - 1)]),
                               method="bounded", options={"xatol": 0.02 * accuracy})
         if opt.fun < f_best:
@@ -118,4 +128,5 @@ def profile(state: ModelState, predictor: Predictor, objective,
     return state
 
 
-__all__ = ["GRID", "MODES", "SPAN", "factors", "prior_terms", "profile", "with_factors"]
+__all__ = ["GRID", "MODES", "SPAN", "criterion", "factors", "prior_terms", "profile",
+           "with_factors"]

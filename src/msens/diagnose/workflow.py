@@ -380,15 +380,14 @@ def _with_inductance(waveform: Waveform, b: WaveformBaseline) -> WaveformBaselin
     with heartbeat(_log, "the coils' inductance profiled"):
         base = inductance.profile(b.base, b.predictor,
                                   b.objective.without_modes(inductance.MODES))
-    found = [f for f in inductance.factors(base) if f is not None]
+    found = inductance.factors(base)
     _log.info("the coils' inductance profiled: factors %s of the field model's",
-              ", ".join(f"{f:.4f}" for f in found))
-    if all(f == 1.0 for f in found):
+              ", ".join(f"{f:.4f}" for f in found if f is not None))
+    if all(f in (None, 1.0) for f in found):
         return b
     records = b.predictor.records([base])[0]
     objective = objective_at(waveform, b.result, b.per_shot, b.predictor, base, records)
-    found_all = inductance.factors(base)
-    return dataclasses.replace(b, plain=inductance.with_factors(b.plain, found_all),
+    return dataclasses.replace(b, plain=inductance.with_factors(b.plain, found),
                                base=base, objective=objective, records=records)
 
 
@@ -477,7 +476,7 @@ def _readout_inductance(b: WaveformBaseline, effect, wfit: EffectFit, weights: n
     with heartbeat(_log, f"{effect.name} on the field model's inductance"):
         other = fit_effect(effect, b.ctx, nominal, b.predictor, free, weights,
                            near=dict(wfit.parameters))
-    crit = [float(free.rss(r).sum()) + float(inductance.prior_terms(s).sum())
+    crit = [inductance.criterion(free, r, s)
             for r, s in zip(b.predictor.records([wfit.state, other.state]),
                             (wfit.state, other.state), strict=True)]
     _log.info("%s of the read-out: criterion %.1f with the profiled inductance, %.1f with "
@@ -494,7 +493,8 @@ def _inductance_json(state: ModelState, names: list[str]) -> dict:
     return {"definition": "each coil's inductance (with eddy currents its impedance beyond "
                           "the copper) over the field model's, profiled as a nuisance with "
                           f"a Gaussian prior of {inductance.FIELD_ACCURACY:.0%} and searched "
-                          f"within +-{inductance.SPAN:g} of it",
+                          f"within +-{inductance.SPAN * inductance.FIELD_ACCURACY:.0%} of 1 "
+                          "(an optimum at the end of the search is set back to 1)",
             "factors": {n: f for n, f in zip(names, inductance.factors(state), strict=True)
                         if f is not None}}
 

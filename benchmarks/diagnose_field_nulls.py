@@ -17,7 +17,8 @@ Prints JSON, one line per file: the decision, whether explained, the best signif
 candidate's score and the best negligible change's, the draw's size relative to the
 record's peak, seconds. The last line holds the totals.
 
-Run: ``python benchmarks/diagnose_field_nulls.py [--files 12] [--seed 1000]``.
+Run: ``python benchmarks/diagnose_field_nulls.py [--files 12] [--seed 1000]
+[--eddy-currents]`` (the stages are logged on stderr).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import logging
 import sys
 from pathlib import Path
 
@@ -43,6 +45,16 @@ from msens.pipeline import output_times
 from msens.synth import RigEffects, synthesize
 
 
+def null_world(eddy_currents: bool = False):
+    """(study, context, baseline state, predictor, the baseline's run) of the main study
+    (by default its magnetostatic variant)."""
+    study = api.load_default(eddy_currents=eddy_currents)
+    ctx = Context(study, study.setups[0])
+    base = baseline_state(ctx, *baseline_dissipation(study))
+    predictor = Predictor(output_times(study))
+    return study, ctx, base, predictor, setup_result(ctx, base, predictor)
+
+
 def null_file(ctx: Context, base, predictor: Predictor, result, seed: int):
     """One null file: the baseline's records moved by one field-model draw, with noise.
     Returns (waveform, the draw's largest change over the records' peak)."""
@@ -59,15 +71,16 @@ def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--files", type=int, default=12)
     ap.add_argument("--seed", type=int, default=1000, help="the first file's seed")
+    ap.add_argument("--eddy-currents", action="store_true",
+                    help="the main study itself (eddy currents; default: its magnetostatic "
+                         "variant, the independent simulator's physics)")
     a = ap.parse_args(argv)
-    study = api.load_default(eddy_currents=False)
-    ctx = Context(study, study.setups[0])
-    base = baseline_state(ctx, *baseline_dissipation(study))
-    predictor = Predictor(output_times(study))
-    result = setup_result(ctx, base, predictor)
+    logging.basicConfig(format="%(name)s: %(message)s")  # the stages on stderr
+    logging.getLogger("msens").setLevel(logging.INFO)
+    study, *world = null_world(eddy_currents=a.eddy_currents)
     lines = []
     for seed in range(a.seed, a.seed + a.files):
-        wf, size = null_file(ctx, base, predictor, result, seed)
+        wf, size = null_file(*world, seed)
         d = diagnose(wf, study)
         live = [c for c in d.candidates if c.plausible and not c.at_bound]
         line = {"seed": seed, "named": d.effect, "explained": d.explained,

@@ -13,23 +13,22 @@ import numpy as np
 import pytest
 
 
+@pytest.fixture(scope="module")
+def world():
+    from benchmarks.diagnose_field_nulls import null_world
+
+    return null_world()
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [1000, 1007])
-def test_field_model_errors_alone_name_nothing(seed):
+def test_field_model_errors_alone_name_nothing(world, seed):
     from benchmarks.diagnose_field_nulls import null_file
 
-    from msens import api
     from msens.diagnose import diagnose
-    from msens.diagnose.effects import Context
-    from msens.diagnose.predict import Predictor, baseline_state, setup_result
-    from msens.diagnose.workflow import baseline_dissipation
-    from msens.pipeline import output_times
 
-    study = api.load_default(eddy_currents=False)
-    ctx = Context(study, study.setups[0])
-    base = baseline_state(ctx, *baseline_dissipation(study))
-    predictor = Predictor(output_times(study))
-    wf, size = null_file(ctx, base, predictor, setup_result(ctx, base, predictor), seed)
+    study, *rest = world
+    wf, size = null_file(*rest, seed)
     assert size > 0.02  # the draw moves the records by more than their noise (1 %)
     d = diagnose(wf, study)
     assert d.effect == "none"

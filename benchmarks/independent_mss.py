@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import sys
 import time
 from pathlib import Path
@@ -158,6 +159,7 @@ def run(wanted: str | None = None, seed: int = 35, out: Path = Path("out/indepen
     """Generate the cases, diagnose each, return ``{"cases": [...], "totals": {...}}``."""
     from msens.diagnose import diagnose
     from msens.io import read_waveform
+    from msens.io.atomic import atomic_write_text
 
     study, s, tables, base = setup(field_seed=field_seed)
     chosen = select(cs.campaign(s, seed), wanted)
@@ -173,6 +175,7 @@ def run(wanted: str | None = None, seed: int = 35, out: Path = Path("out/indepen
                                                               field.FIELD_SEED) == field_seed:
                 results.append(entry)
                 continue
+        print(f"{case.name}: generating {case.shots} shot(s)", file=sys.stderr, flush=True)
         path, rig_truth, gen_s = generate(case, s, tables, base, data)
         if generate_only:
             print(json.dumps({"case": case.name, "file": str(path), "generate_s": gen_s}),
@@ -182,7 +185,7 @@ def run(wanted: str | None = None, seed: int = 35, out: Path = Path("out/indepen
         entry = {**score(case, d), "seed": case.seed, "field_seed": field_seed,
                  "rig": rig_truth, "generate_s": gen_s,
                  "file": str(path)}
-        kept.write_text(json.dumps(entry, indent=1, default=float))
+        atomic_write_text(kept, json.dumps(entry, indent=1, default=float))
         print(json.dumps({k: entry[k] for k in ("case", "named", "parameters", "intervals",
                                                 "explained", "diagnose_s")}, default=float),
               file=sys.stderr, flush=True)
@@ -200,6 +203,8 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--field-seed", type=int, default=field.FIELD_SEED,
                     help="seed of the field tables' perturbation (one draw for all files)")
     args = ap.parse_args(argv)
+    logging.basicConfig(format="%(name)s: %(message)s")  # the diagnoses' stages on stderr
+    logging.getLogger("msens").setLevel(logging.INFO)
     res = run(args.cases, args.seed, args.out, args.generate_only, reuse=not args.fresh,
               field_seed=args.field_seed)
     print(json.dumps(res, indent=1, default=float))

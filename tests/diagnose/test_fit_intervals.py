@@ -11,6 +11,7 @@ import pytest
 from msens.diagnose.candidates import decide
 from msens.diagnose.diagnosis import Candidate, Diagnosis
 from msens.diagnose.effects.base import Effect, Parameter
+from msens.diagnose.effects.static_precompression import STRIDES
 from msens.diagnose.fit import (
     Z_LEVEL,
     at_bounds,
@@ -206,7 +207,9 @@ def test_coarse_to_fine_search_finds_the_exhaustive_optimum_for_less():
                       grid_points=6, strides=lambda ctx: strides)
 
     full = fit_effect(effect({}), None, None, _IntPredictor(), _IntObjective(), np.ones(1))
-    fast = fit_effect(effect({"first_contact": 3, "contact_count": 2}), None, None,
+    # the strides of static_precompression on physics MsS data
+    fast = fit_effect(effect({"first_contact": STRIDES["first_contact"],
+                              "contact_count": STRIDES["contact_count"]}), None, None,
                       _IntPredictor(), _IntObjective(), np.ones(1))
     for fit in (full, fast):
         assert (fit.parameters["first_contact"], fit.parameters["contact_count"]) == (17, 4)
@@ -214,7 +217,7 @@ def test_coarse_to_fine_search_finds_the_exhaustive_optimum_for_less():
         lo, hi = fit.intervals["force_n"]
         assert lo == pytest.approx(2.5 - Z_LEVEL * 0.05, rel=2e-3)
         assert hi == pytest.approx(2.5 + Z_LEVEL * 0.05, rel=2e-3)
-    assert fast.evaluations < 0.3 * full.evaluations
+    assert fast.evaluations < 0.4 * full.evaluations  # 324 of 1023
 
 
 def test_a_fit_at_the_edge_of_its_physical_range_is_flagged():

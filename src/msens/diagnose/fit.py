@@ -6,8 +6,9 @@ The criterion minimised is the weighted residual sum over sensors, sum_c RSS_c /
 a bounded Brent search (one parameter) or Nelder–Mead (several) between the grid neighbours
 of the best point. Integer parameters: every combination (one batch; states that need no new
 simulation share one), or, for an effect with ``strides`` (costly states), every stride-th
-value with a coarser continuous grid first and then every value between the best coarse
-point's neighbours; continuous parameters beside them are refined at the best combination.
+value first and then every value between the best coarse point's neighbours (the
+continuous grid in full in both); continuous parameters beside them are refined at the best
+combinations.
 
 Honest parameters: at the optimum the curvature of the criterion (a chi^2: the residual over
 the likelihood's variance, :mod:`msens.diagnose.likelihood`) gives each continuous parameter
@@ -184,10 +185,11 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
     if near is not None:
         strides = {}
     if strides:
-        # coarse to fine: the integer parameters with a stride on every stride-th value and
-        # the continuous ones on a coarser grid, then every integer between the best coarse
-        # point's neighbours with the full continuous grid
-        coarse = [_grid(p, max(3, effect.grid_points // 2)) if not p.integer else
+        # coarse to fine: the integer parameters with a stride on every stride-th value,
+        # then every integer between the best coarse point's neighbours; the continuous
+        # ones on their full grid in both (a coarser one leaves gaps in which the effect
+        # resembles nothing tried, and the coarse stage then picks another basin)
+        coarse = [grids[i] if not p.integer else
                   _stride_grid(grids[i], strides.get(p.name, 1))
                   for i, p in enumerate(space)]
         cpts = list(itertools.product(*coarse))

@@ -6,9 +6,9 @@ The criterion minimised is the weighted residual sum over sensors, sum_c RSS_c /
 a bounded Brent search (one parameter) or Nelder–Mead (several) between the grid neighbours
 of the best point. Integer parameters: every combination (one batch; states that need no new
 simulation share one), or, for an effect with ``strides`` (costly states), every stride-th
-value first and then every value between the best coarse point's neighbours (the
-continuous grid in full in both); continuous parameters beside them are refined at the best
-combinations.
+value first and then every value from the best coarse point's neighbours to its
+neighbours (the continuous grid in full in both); continuous parameters beside them are
+refined at the best combinations.
 
 Honest parameters: at the optimum the curvature of the criterion (a chi^2: the residual over
 the likelihood's variance, :mod:`msens.diagnose.likelihood`) gives each continuous parameter
@@ -186,9 +186,11 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
         strides = {}
     if strides:
         # coarse to fine: the integer parameters with a stride on every stride-th value,
-        # then every integer between the best coarse point's neighbours; the continuous
-        # ones on their full grid in both (a coarser one leaves gaps in which the effect
-        # resembles nothing tried, and the coarse stage then picks another basin)
+        # then every integer from the best coarse point's neighbours to its neighbours
+        # (they were tried only with the other parameters' coarse values: a run of three
+        # contacts can look best as one contact at its end); the continuous ones on their
+        # full grid in both (a coarser one leaves gaps in which the effect resembles
+        # nothing tried, and the coarse stage then picks another basin)
         coarse = [grids[i] if not p.integer else
                   _stride_grid(grids[i], strides.get(p.name, 1))
                   for i, p in enumerate(space)]
@@ -196,7 +198,7 @@ def fit_effect(effect: Effect, ctx: Context, base: ModelState, predictor: Predic
         ccrit = [float(weights @ r) for r in evaluate(cpts)]
         cbest = cpts[int(np.argmin(ccrit))]
         grids = [g if not p.integer or p.name not in strides else
-                 g[np.abs(g - cbest[i]) < strides[p.name]]
+                 g[np.abs(g - cbest[i]) <= strides[p.name]]
                  for i, (p, g) in enumerate(zip(space, grids, strict=True))]
         points = cpts + list(itertools.product(*grids))
     rss = evaluate(points)

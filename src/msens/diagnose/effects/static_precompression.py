@@ -16,9 +16,10 @@ physics MsS data (the magnets' pull from the field model) a static compression e
 the chain is searched too, coarse to fine: each trial state there needs the MsS read-out
 (~0.1-0.4 s, against milliseconds for a chain alone), so the 27 x 6 x 6 = 972 combinations
 of the exhaustive grid are replaced by every second first contact, the shortest and longest
-run and the 6 forces (14 x 2 x 6 = 168), then the contacts next to the best of them with
-every count and force (<= 3 x 6 x 6 = 108; count and force trade off along a ridge, so no
-count is skipped there): about 280 states and the refinement.
+run and the 6 forces (14 x 2 x 6 = 168), then the contacts within two of the best of them
+with every count and force (<= 5 x 6 x 6 = 180; count and force trade off along a ridge, so
+no count is skipped there, and a run of three contacts can look best as one contact at its
+end): about 350 states and the refinement.
 
 Why every second contact and every force in the coarse stage: the chi^2 is sharp in the
 run's place and has several basins. On a physics MsS record with 0.5 N on c3-c4 (the

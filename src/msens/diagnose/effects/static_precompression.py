@@ -22,11 +22,13 @@ no count is skipped there, and a run of three contacts can look best as one cont
 end): about 350 states and the refinement.
 
 Why every second contact and every force in the coarse stage: the chi^2 is sharp in the
-run's place and has several basins. On a physics MsS record with 0.5 N on c3-c4 (the
-independent simulator's, 4 shots) the best chi^2 drop with the first contact at c3 was
-~7,700, at c2 or c4 less than half of that, at c6 ~100, and a run at c27 reached ~1,900. A
-stride of three with three forces over the searched decades (0.05, 1.2 and 30 N: nothing
-like 0.5 N) picked the run at c27 or c6; this search finds c3.
+run's place and has several basins. One contact away from the true first contact a run's
+chi^2 drop falls to less than half, three away to almost nothing, and a run at the other
+end of the chain can reach a quarter of it. A coarse stage must therefore try a first
+contact next to the true one, with a force near the true one: with every third contact and
+three forces over the searched decades (0.05, 1.2 and 30 N) it tried nothing like a 0.5 N
+run near the striker and picked another basin (the independent campaign in the
+validation pages).
 """
 
 from __future__ import annotations

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Mapping, Sequence
@@ -13,7 +14,7 @@ from tqdm import tqdm
 from msens.diagnose.diagnosis import Candidate
 from msens.diagnose.effects import Context, Effect, ModelState, registry
 from msens.diagnose.effects import get as get_effect
-from msens.diagnose.fit import EffectFit, fit_effect
+from msens.diagnose.fit import Z_LEVEL, EffectFit, _to_x, fit_effect
 from msens.diagnose.predict import Predictor
 from msens.errors import InputError
 from msens.progress import heartbeat
@@ -158,3 +159,54 @@ def decide(cands: list[Candidate], fits: list[EffectFit], threshold: float
         if c.nameable and c.score - max(negligible, 0.0) > threshold and c.score > pinned:
             return c, next(f for f in fits if f.effect == c.effect)
     return None, None
+
+
+def floor_evidence(effect: Effect, ctx: Context, base: ModelState, params: Mapping[str, float],
+                   intervals: Mapping[str, tuple[float, float]]) -> tuple[float, str]:
+    """How strongly the named change is beyond its practical-significance floor, under the
+    uncertainty of its reported intervals.
+
+    For each parameter with a baseline value, a floor > 0, a reported interval and a fitted
+    change beyond its floor: the chi^2 rise from the fit to the floor's edge (the
+    negligible change of the same kind nearest the fit), in the quadratic approximation the
+    interval stands for, ``(Z dx / h)^2``, with dx the distance from the fit to the edge
+    and h the interval's half-width on the edge's side (in the search variable: log10 for
+    scale parameters; ``Z`` the interval's normal quantile). On a physics MsS the intervals
+    hold the field model's errors and the residual's discrepancy, so this is the evidence
+    against a negligible change once the model's own uncertainty is counted; the raw
+    chi^2 of the fit counts noise only.
+
+    Returns
+    -------
+    (float, str)
+        The largest rise over those parameters (inf when none has an interval: nothing to
+        weigh) and a sentence on it.
+    """
+    ref = effect.baseline(ctx, base)
+    best, why = np.inf, ""
+    rises = []
+    for p in effect.space(ctx, base):
+        b, iv = ref.get(p.name), intervals.get(p.name)
+        v = float(params[p.name])
+        if b is None or p.floor <= 0.0 or iv is None or abs(v - b) < p.floor:
+            continue
+        edge = b + p.floor if v > b else b - p.floor
+        end = iv[0] if v > b else iv[1]
+        if p.log and (edge <= 0.0 or end <= 0.0):
+            continue  # the floor's edge or the interval reaches zero: no log distance
+        x, h = _to_x(p, v), abs(_to_x(p, v) - _to_x(p, end))
+        rise = np.inf if h == 0.0 else float((Z_LEVEL * (x - _to_x(p, edge)) / h) ** 2)
+        rises.append((rise, f"{p.name} = {v:.4g} (interval [{iv[0]:.4g}, {iv[1]:.4g}]) "
+                            f"against the floor's edge {edge:.4g} ({p.floor_reason})"))
+    if rises:
+        best, why = max(rises, key=lambda r: r[0])
+    return best, why
+
+
+def demoted(c: Candidate, rise: float, why: str, threshold: float) -> Candidate:
+    """``c`` as a negligible change: a named fit whose floor's edge lies within the model's
+    uncertainty (:func:`floor_evidence` at most ``threshold``) is not significant, and, as
+    every negligible change does, its score then blocks the lesser candidates."""
+    note = (f"within the model's uncertainty of its floor: chi^2 rise {rise:.3g} <= "
+            f"{threshold:g} from the fit to the floor's edge, {why}")
+    return dataclasses.replace(c, significant=False, notes=(*c.notes, note))

@@ -76,7 +76,9 @@ from msens.diagnose.candidates import (
     THRESHOLD,
     candidate_effects,
     decide,
+    demoted,
     fit_candidates,
+    floor_evidence,
     log_decision,
     score_candidates,
     with_added,
@@ -327,11 +329,18 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
     fits = fit_candidates(candidate_effects(ctx, effects, added), ctx, base, predictor,
                            objective, weights)
     cands, misfit0 = score_candidates(fits, rss0, objective.n_obs, ctx, base)
-    winner, wfit = decide(cands, fits, threshold)
-    log_decision(cands, winner, threshold)
     discrepancies: list = []
-    if wfit is not None and not added and any(m is not None for m in objective.field_modes):
-        winner, wfit, objective, discrepancies = _named_refit(waveform, b, winner, wfit, weights)
+    while True:
+        winner, wfit = decide(cands, fits, threshold)
+        objective, discrepancies = b.objective, []
+        if wfit is not None and not added and any(m is not None
+                                                  for m in objective.field_modes):
+            winner, wfit, objective, discrepancies = _named_refit(waveform, b, winner, wfit,
+                                                                  weights)
+        cands, settled = _settled(cands, winner, ctx, base, threshold)
+        if settled:
+            break
+    log_decision(cands, winner, threshold)
     after = wfit.state if wfit is not None else base
     refit: tuple[tuple[str, dict], ...] = ()
     if wfit is not None and added:
@@ -371,6 +380,26 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
                   if any(f is not None for f in inductance.factors(after)) else {})},
         before=base, after=after, overlay=_overlay(objective, records0, records1, base_result),
         calibration=_calibration(objective, records1, base_result, names))
+
+
+def _settled(cands: list[Candidate], winner: Candidate | None, ctx: Context,
+             base: ModelState, threshold: float) -> tuple[list[Candidate], bool]:
+    """(candidates, whether the decision stands): the winner, with its final parameters
+    and intervals, must be beyond its practical-significance floor by the threshold's
+    evidence once the model's uncertainty is counted (:func:`~msens.diagnose.candidates.
+    floor_evidence`); otherwise it is demoted to a negligible change
+    (:func:`~msens.diagnose.candidates.demoted`) and the decision is made again."""
+    if winner is None:
+        return cands, True
+    rise, why = floor_evidence(get_effect(winner.effect), ctx, base, winner.parameters,
+                               winner.intervals)
+    if rise > threshold:
+        return cands, True
+    _log.info("%s not named: its fit is within the model's uncertainty of its floor "
+              "(chi^2 rise %.3g <= %g to the floor's edge, %s)", winner.effect, rise,
+              threshold, why)
+    return [demoted(c, rise, why, threshold) if c.effect == winner.effect else c
+            for c in cands], False
 
 
 def _with_inductance(waveform: Waveform, b: WaveformBaseline) -> WaveformBaseline:
@@ -618,7 +647,11 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
     fits = fit_candidates(candidate_effects(ctx, effects, added), ctx, base, predictor,
                            objective, weights)
     cands, misfit0 = score_candidates(fits, rss0, objective.n_obs, ctx, base)
-    winner, wfit = decide(cands, fits, threshold)
+    while True:
+        winner, wfit = decide(cands, fits, threshold)
+        cands, settled = _settled(cands, winner, ctx, base, threshold)
+        if settled:
+            break
     log_decision(cands, winner, threshold)
     after = wfit.state if wfit is not None else base
     records1 = predictor.records([after])[0]

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from msens.diagnose.candidates import decide
+from msens.diagnose.candidates import decide, demoted, floor_evidence
 from msens.diagnose.diagnosis import Candidate, Diagnosis
 from msens.diagnose.effects.base import Effect, Parameter
 from msens.diagnose.effects.static_precompression import STRIDES
@@ -118,6 +118,53 @@ def test_a_fit_pinned_at_a_bound_is_flagged():
     assert fit.parameters["x_m"] == pytest.approx(1.0, abs=1e-3)
     assert fit.at_bound == ("x_m",)
     assert fit.intervals["x_m"][1] == pytest.approx(1.0)
+
+
+def _wall() -> Effect:
+    """A wall modulus searched in log10 from a 200 GPa baseline, floor 5 %, with an
+    integer parameter without a baseline."""
+    return Effect(name="wall", description="a toy wall",
+                  space=lambda ctx, base: (Parameter("e_pa", 2e9, 1e12, log=True, floor=10e9),
+                                           Parameter("k", 1, 3, integer=True)),
+                  baseline=lambda ctx, base: {"e_pa": 200e9, "k": None},
+                  apply=lambda ctx, base, p: p)
+
+
+def test_floor_evidence_is_the_chi2_rise_to_the_floors_edge_under_the_interval():
+    e = _wall()
+    # 150 GPa, interval half-width 0.02 decades toward the baseline: the edge 190 GPa is
+    # log10(190/150) = 0.1027 decades away, (1.96 * 0.1027 / 0.02)^2 = 101
+    iv = (150e9 * 10**-0.02, 150e9 * 10**0.02)
+    rise, why = floor_evidence(e, None, None, {"e_pa": 150e9, "k": 2}, {"e_pa": iv})
+    assert rise == pytest.approx((Z_LEVEL * np.log10(190 / 150) / 0.02) ** 2, rel=1e-9)
+    assert "e_pa" in why and "1.9e+11" in why
+    # 184 GPa with an interval reaching 189 GPa: the edge 1.1 half-widths away, ~4.6
+    rise, _ = floor_evidence(e, None, None, {"e_pa": 184e9, "k": 2},
+                             {"e_pa": (178e9, 189e9)})
+    half = np.log10(189 / 184)
+    assert rise == pytest.approx((Z_LEVEL * np.log10(190 / 184) / half) ** 2, rel=1e-9)
+    assert rise < 10.0
+    # the interval covers the edge: a rise below the interval's own level (Z^2)
+    rise, _ = floor_evidence(e, None, None, {"e_pa": 184e9, "k": 2},
+                             {"e_pa": (170e9, 195e9)})
+    assert rise < Z_LEVEL**2
+    # within the floor, or no interval: nothing to weigh
+    assert floor_evidence(e, None, None, {"e_pa": 195e9, "k": 1},
+                          {"e_pa": (190e9, 200e9)})[0] == np.inf
+    assert floor_evidence(e, None, None, {"e_pa": 150e9, "k": 1}, {})[0] == np.inf
+
+
+def test_a_demoted_winner_becomes_a_negligible_change_that_blocks_lesser_ones():
+    fits = [SimpleNamespace(effect="wall_stiffness"), SimpleNamespace(effect="tube_friction")]
+    wall, drag = _cand("wall_stiffness", 136.0), _cand("tube_friction", 60.0)
+    assert decide([wall, drag], fits, 10.0)[0] is wall
+    weak = demoted(wall, 4.6, "e_pa = 1.84e11", 10.0)
+    assert not weak.significant and "within the model's uncertainty" in weak.notes[-1]
+    # nothing practical is missing: the demoted wall (136) scores above the drag (60)
+    assert decide([weak, drag], fits, 10.0) == (None, None)
+    # a lesser candidate that still beats it by the threshold is named
+    strong = dataclasses.replace(drag, score=150.0)
+    assert decide([weak, strong], fits, 10.0)[0] is strong
 
 
 def _cand(effect: str, score: float, **kw) -> Candidate:

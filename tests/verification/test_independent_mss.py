@@ -108,11 +108,13 @@ def test_rig_record_is_the_run_read_at_the_trigger(runs):
         assert np.max(np.abs(data[:, j] - expected)) < 2e-3 * peak, names[j]
 
 
-#: Files of the campaign: one of each kind the acceptance counts, and the 0.5 N run on c3-c4
-#: that the static compression's coarse search once missed for a run at c6 or c27 (their
-#: diagnosis: 50-105 s each, two at a time on the 2 cores).
+#: Files of the campaign: one of each kind the acceptance counts; the 0.5 N run on c3-c4
+#: that the static compression's coarse search once missed for a run at c6 or c27; and the
+#: sensor resonance, which a wall 8 % softer imitates within the field model's errors of
+#: the wall's 5 % floor (named before the floor was weighed under the final interval)
+#: (their diagnosis: 50-160 s each, two at a time on the 2 cores).
 CASES = ("null-1", "striker_velocity-1", "magnetic_precompression-1", "outside-brass_bead",
-         "static_precompression-1")
+         "static_precompression-1", "outside-sensor_resonance")
 
 
 @pytest.mark.slow

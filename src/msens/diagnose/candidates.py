@@ -196,8 +196,9 @@ def floor_evidence(effect: Effect, ctx: Context, base: ModelState, params: Mappi
             continue  # the floor's edge or the interval reaches zero: no log distance
         x, h = _to_x(p, v), abs(_to_x(p, v) - _to_x(p, end))
         rise = np.inf if h == 0.0 else float((Z_LEVEL * (x - _to_x(p, edge)) / h) ** 2)
+        reason = f" ({p.floor_reason})" if p.floor_reason else ""
         rises.append((rise, f"{p.name} = {v:.4g} (interval [{iv[0]:.4g}, {iv[1]:.4g}]) "
-                            f"against the floor's edge {edge:.4g} ({p.floor_reason})"))
+                            f"against the floor's edge {edge:.4g}{reason}"))
     if rises:
         best, why = max(rises, key=lambda r: r[0])
     return best, why

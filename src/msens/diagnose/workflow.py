@@ -45,6 +45,12 @@ Steps:
    baseline), and its intervals widened by the spread of that fit over joint draws of the
    field model's errors and of the discrepancy its residual shows beyond the likelihood's
    variance (:func:`_named_refit`, :mod:`msens.diagnose.discrepancy`).
+   The named effect must then be beyond its floor by the threshold's evidence under those
+   final intervals (:func:`~msens.diagnose.candidates.floor_evidence`): the raw chi^2
+   counts the noise only, and a fit 8 % from the baseline with a 5 % floor can be decisive
+   against the noise and yet within the field model's errors of the floor. Otherwise it is
+   demoted to a negligible change (:func:`~msens.diagnose.candidates.demoted`) and the
+   decision is made again (:func:`_settled`).
 7. *Verdict.* Whether the final model explains the data: its residual against the noise, for
    the record and for each window, by an F test (:mod:`msens.diagnose.verdict`);
    ``explained`` false says that the named effect (or the baseline) still misses, and where.

@@ -102,7 +102,8 @@ def format_diagnosis(report: Mapping) -> str:
     for c in report["candidates"]:
         pars = _parameters_text(c["parameters"], c.get("intervals", {}))
         flag = ("" if c.get("plausible", True) else "  [implausible]") + \
-            ("" if c.get("significant", True) else "  [below floor]") + \
+            ("" if c.get("significant", True) else
+             "  [near floor]" if c.get("near_floor") else "  [below floor]") + \
             ("  [at bound]" if c.get("at_bound") else "")
         lines.append(f"{c['effect']:<24} {c['score']:>13.1f} {c['misfit']:>10.4g}  {pars}"
                      + flag)
@@ -121,6 +122,10 @@ def format_diagnosis(report: Mapping) -> str:
     if any(c.get("intervals") for c in report["candidates"]):
         lines.append("[lo, hi]: 95 % interval from the curvature of the fit; [at bound]: the "
                      "fit sits at an end of its searched range and is not named")
+    if any(c.get("near_floor") for c in report["candidates"]):
+        lines.append("[near floor]: beyond its floor, but the floor is inside its interval's "
+                     "model uncertainty (a chi^2 rise to it of at most the threshold): a "
+                     "negligible change, not named")
     return "\n".join(lines)
 
 

@@ -160,6 +160,14 @@ def test_a_demoted_winner_becomes_a_negligible_change_that_blocks_lesser_ones():
     assert decide([wall, drag], fits, 10.0)[0] is wall
     weak = demoted(wall, 4.6, "e_pa = 1.84e11", 10.0)
     assert not weak.significant and "within the model's uncertainty" in weak.notes[-1]
+    assert weak.near_floor and weak.to_json()["near_floor"] is True
+    report = {"setup": "mss", "mode": "waveform", "disagreement": {"where": "x"},
+              "candidates": [weak.to_json(), drag.to_json()],
+              "passes": [{"effect": "none", "parameters": {}, "misfit_before": 1.0,
+                          "misfit_after": 1.0, "explained": True}]}
+    text = format_diagnosis(report)
+    assert "wall_stiffness" in text and "[near floor]" in text
+    assert "[below floor]" not in text and "[near floor]: beyond its floor" in text
     # nothing practical is missing: the demoted wall (136) scores above the drag (60)
     assert decide([weak, drag], fits, 10.0) == (None, None)
     # a lesser candidate that still beats it by the threshold is named

@@ -210,4 +210,5 @@ def demoted(c: Candidate, rise: float, why: str, threshold: float) -> Candidate:
     every negligible change does, its score then blocks the lesser candidates."""
     note = (f"within the model's uncertainty of its floor: chi^2 rise {rise:.3g} <= "
             f"{threshold:g} from the fit to the floor's edge, {why}")
-    return dataclasses.replace(c, significant=False, notes=(*c.notes, note))
+    return dataclasses.replace(c, significant=False, near_floor=True,
+                               notes=(*c.notes, note))

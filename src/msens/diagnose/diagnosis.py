@@ -37,6 +37,10 @@ class Candidate:
     at_bound : tuple of str
         Parameters whose fit is at an end of their searched range: the candidate is not
         named (the search, not the data, stopped it).
+    near_floor : bool
+        Beyond its floor, but not by the threshold's evidence under its final intervals
+        (:func:`msens.diagnose.candidates.floor_evidence`): not significant, a negligible
+        change.
     """
 
     effect: str
@@ -51,6 +55,7 @@ class Candidate:
     notes: tuple[str, ...] = ()
     intervals: dict = field(default_factory=dict)
     at_bound: tuple[str, ...] = ()
+    near_floor: bool = False
 
     @property
     def nameable(self) -> bool:
@@ -64,7 +69,8 @@ class Candidate:
                 "intervals": intervals_json(self.parameters, self.intervals, self.at_bound),
                 "at_bound": bool(self.at_bound),
                 "n_parameters": self.n_parameters, "plausible": self.plausible,
-                "significant": self.significant, "notes": list(self.notes)}
+                "significant": self.significant, "near_floor": self.near_floor,
+                "notes": list(self.notes)}
 
 
 #: What the reported intervals are.

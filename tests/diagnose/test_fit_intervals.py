@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from msens.diagnose.candidates import decide, demoted, floor_evidence
+from msens.diagnose.candidates import decide, demoted, floor_evidence, settle
 from msens.diagnose.diagnosis import Candidate, Diagnosis
 from msens.diagnose.effects.base import Effect, Parameter
 from msens.diagnose.effects.static_precompression import STRIDES
@@ -173,6 +173,24 @@ def test_a_demoted_winner_becomes_a_negligible_change_that_blocks_lesser_ones():
     # a lesser candidate that still beats it by the threshold is named
     strong = dataclasses.replace(drag, score=150.0)
     assert decide([weak, strong], fits, 10.0)[0] is strong
+
+
+def test_settle_demotes_a_wall_within_the_models_uncertainty_of_its_floor():
+    # the library's wall on a 200 GPa wall: floor 10 GPa, edge 190 GPa
+    ctx = SimpleNamespace(study=SimpleNamespace(chain=SimpleNamespace(
+        wall=SimpleNamespace(youngs_modulus_pa=200e9))))
+    drag = _cand("tube_friction", 60.0)
+    wall = dataclasses.replace(_cand("wall_stiffness", 136.0),
+                               parameters={"wall_youngs_modulus_pa": 183.6e9},
+                               intervals={"wall_youngs_modulus_pa": (178.2e9, 189.2e9)})
+    # the sensor resonance's wall: 1.1 half-widths from the edge, rise 5
+    cands, settled = settle([wall, drag], wall, ctx, None, 10.0)
+    assert not settled and cands[0].near_floor and not cands[0].significant
+    assert cands[1] is drag
+    # a narrower interval, [180, 187] GPa: 1.9 half-widths, rise 13: the name stands
+    sure = dataclasses.replace(wall, intervals={"wall_youngs_modulus_pa": (180e9, 187e9)})
+    assert settle([sure, drag], sure, ctx, None, 10.0) == ([sure, drag], True)
+    assert settle([drag], None, ctx, None, 10.0) == ([drag], True)
 
 
 def _cand(effect: str, score: float, **kw) -> Candidate:

@@ -183,7 +183,6 @@ def floor_evidence(effect: Effect, ctx: Context, base: ModelState, params: Mappi
         weigh) and a sentence on it.
     """
     ref = effect.baseline(ctx, base)
-    best, why = np.inf, ""
     rises = []
     for p in effect.space(ctx, base):
         b, iv = ref.get(p.name), intervals.get(p.name)
@@ -199,9 +198,7 @@ def floor_evidence(effect: Effect, ctx: Context, base: ModelState, params: Mappi
         reason = f" ({p.floor_reason})" if p.floor_reason else ""
         rises.append((rise, f"{p.name} = {v:.4g} (interval [{iv[0]:.4g}, {iv[1]:.4g}]) "
                             f"against the floor's edge {edge:.4g}{reason}"))
-    if rises:
-        best, why = max(rises, key=lambda r: r[0])
-    return best, why
+    return max(rises, key=lambda r: r[0], default=(np.inf, ""))
 
 
 def demoted(c: Candidate, rise: float, why: str, threshold: float) -> Candidate:
@@ -212,3 +209,22 @@ def demoted(c: Candidate, rise: float, why: str, threshold: float) -> Candidate:
             f"{threshold:g} from the fit to the floor's edge, {why}")
     return dataclasses.replace(c, significant=False, near_floor=True,
                                notes=(*c.notes, note))
+
+
+def settle(cands: list[Candidate], winner: Candidate | None, ctx: Context, base: ModelState,
+           threshold: float) -> tuple[list[Candidate], bool]:
+    """(candidates, whether the decision stands): the winner, with its final parameters
+    and intervals, must be beyond its practical-significance floor by the threshold's
+    evidence once the model's uncertainty is counted (:func:`floor_evidence`); otherwise
+    it is :func:`demoted` in the candidates and the caller decides again."""
+    if winner is None:
+        return cands, True
+    rise, why = floor_evidence(get_effect(winner.effect), ctx, base, winner.parameters,
+                               winner.intervals)
+    if rise > threshold:
+        return cands, True
+    _log.info("%s not named: its fit is within the model's uncertainty of its floor "
+              "(chi^2 rise %.3g <= %g to the floor's edge, %s)", winner.effect, rise,
+              threshold, why)
+    return [demoted(c, rise, why, threshold) if c.effect == winner.effect else c
+            for c in cands], False

@@ -49,8 +49,8 @@ Steps:
    final intervals (:func:`~msens.diagnose.candidates.floor_evidence`): the raw chi^2
    counts the noise only, and a fit 8 % from the baseline with a 5 % floor can be decisive
    against the noise and yet within the field model's errors of the floor. Otherwise it is
-   demoted to a negligible change (:func:`~msens.diagnose.candidates.demoted`) and the
-   decision is made again (:func:`_settled`).
+   demoted to a negligible change and the decision is made again
+   (:func:`~msens.diagnose.candidates.settle`).
 7. *Verdict.* Whether the final model explains the data: its residual against the noise, for
    the record and for each window, by an F test (:mod:`msens.diagnose.verdict`);
    ``explained`` false says that the named effect (or the baseline) still misses, and where.
@@ -82,11 +82,10 @@ from msens.diagnose.candidates import (
     THRESHOLD,
     candidate_effects,
     decide,
-    demoted,
     fit_candidates,
-    floor_evidence,
     log_decision,
     score_candidates,
+    settle,
     with_added,
 )
 from msens.diagnose.diagnosis import Candidate, Diagnosis
@@ -343,7 +342,7 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
                                                   for m in objective.field_modes):
             winner, wfit, objective, discrepancies = _named_refit(waveform, b, winner, wfit,
                                                                   weights)
-        cands, settled = _settled(cands, winner, ctx, base, threshold)
+        cands, settled = settle(cands, winner, ctx, base, threshold)
         if settled:
             break
     log_decision(cands, winner, threshold)
@@ -386,26 +385,6 @@ def diagnose(waveform: Waveform, study: Study, *, fit: DissipationFit | None = N
                   if any(f is not None for f in inductance.factors(after)) else {})},
         before=base, after=after, overlay=_overlay(objective, records0, records1, base_result),
         calibration=_calibration(objective, records1, base_result, names))
-
-
-def _settled(cands: list[Candidate], winner: Candidate | None, ctx: Context,
-             base: ModelState, threshold: float) -> tuple[list[Candidate], bool]:
-    """(candidates, whether the decision stands): the winner, with its final parameters
-    and intervals, must be beyond its practical-significance floor by the threshold's
-    evidence once the model's uncertainty is counted (:func:`~msens.diagnose.candidates.
-    floor_evidence`); otherwise it is demoted to a negligible change
-    (:func:`~msens.diagnose.candidates.demoted`) and the decision is made again."""
-    if winner is None:
-        return cands, True
-    rise, why = floor_evidence(get_effect(winner.effect), ctx, base, winner.parameters,
-                               winner.intervals)
-    if rise > threshold:
-        return cands, True
-    _log.info("%s not named: its fit is within the model's uncertainty of its floor "
-              "(chi^2 rise %.3g <= %g to the floor's edge, %s)", winner.effect, rise,
-              threshold, why)
-    return [demoted(c, rise, why, threshold) if c.effect == winner.effect else c
-            for c in cands], False
 
 
 def _with_inductance(waveform: Waveform, b: WaveformBaseline) -> WaveformBaseline:
@@ -655,7 +634,7 @@ def diagnose_reference(study: Study, setup_name: str, *, fit: DissipationFit | N
     cands, misfit0 = score_candidates(fits, rss0, objective.n_obs, ctx, base)
     while True:
         winner, wfit = decide(cands, fits, threshold)
-        cands, settled = _settled(cands, winner, ctx, base, threshold)
+        cands, settled = settle(cands, winner, ctx, base, threshold)
         if settled:
             break
     log_decision(cands, winner, threshold)
